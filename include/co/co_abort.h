@@ -1,0 +1,60 @@
+/**
+ * @file co_abort.h
+ * @brief SDO abort codes (CiA 301 §7.2.4.3.17), one list that the enum and the name table expand from.
+ *
+ * Functions that can refuse an access return uint32_t: 0 for success, otherwise one of these codes.
+ * The same code goes on the wire in an SDO abort frame (bytes 4..7, little-endian).
+ */
+#ifndef CO_ABORT_H
+#define CO_ABORT_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define CO_ABORT_LIST(X)                                                                      \
+    X(TOGGLE, 0x05030000UL, "toggle bit not alternated")                                      \
+    X(TIMEOUT, 0x05040000UL, "SDO protocol timed out")                                        \
+    X(COMMAND, 0x05040001UL, "command specifier not valid or unknown")                        \
+    X(OUT_OF_MEMORY, 0x05040005UL, "out of memory")                                           \
+    X(UNSUPPORTED_ACCESS, 0x06010000UL, "unsupported access to an object")                    \
+    X(WRITE_ONLY, 0x06010001UL, "attempt to read a write-only object")                        \
+    X(READ_ONLY, 0x06010002UL, "attempt to write a read-only object")                         \
+    X(NO_OBJECT, 0x06020000UL, "object does not exist")                                       \
+    X(NOT_MAPPABLE, 0x06040041UL, "object cannot be mapped to the PDO")                       \
+    X(PDO_LENGTH, 0x06040042UL, "number and length of mapped objects exceed PDO length")      \
+    X(PARAM_INCOMPATIBLE, 0x06040043UL, "general parameter incompatibility")                  \
+    X(INTERNAL_INCOMPATIBLE, 0x06040047UL, "general internal incompatibility in the device")  \
+    X(HARDWARE, 0x06060000UL, "access failed due to a hardware error")                        \
+    X(TYPE_MISMATCH, 0x06070010UL, "data type does not match, length does not match")         \
+    X(LENGTH_HIGH, 0x06070012UL, "data type does not match, length too high")                 \
+    X(LENGTH_LOW, 0x06070013UL, "data type does not match, length too low")                   \
+    X(NO_SUBINDEX, 0x06090011UL, "sub-index does not exist")                                  \
+    X(INVALID_VALUE, 0x06090030UL, "invalid value for parameter")                             \
+    X(VALUE_HIGH, 0x06090031UL, "value of parameter written too high")                        \
+    X(VALUE_LOW, 0x06090032UL, "value of parameter written too low")                          \
+    X(MAX_LESS_MIN, 0x06090036UL, "maximum value is less than minimum value")                 \
+    X(GENERAL, 0x08000000UL, "general error")                                                 \
+    X(STORE, 0x08000020UL, "data cannot be transferred or stored to the application")         \
+    X(LOCAL_CONTROL, 0x08000021UL, "data cannot be transferred because of local control")     \
+    X(DEVICE_STATE, 0x08000022UL, "data cannot be transferred because of the device state")   \
+    X(NO_DATA, 0x08000024UL, "no data available")
+
+#define CO_ABORT_X_ENUM(name, code, text) CO_ABORT_##name = code,
+/** Abort codes as named constants (CO_ABORT_NO_OBJECT, ...). 0 means "no abort". */
+enum co_abort_code {
+    CO_ABORT_NONE = 0,
+    CO_ABORT_LIST(CO_ABORT_X_ENUM)
+    CO_ABORT_LAST_ = 0x7FFFFFFF
+};
+#undef CO_ABORT_X_ENUM
+
+/** Text of an abort code, or "unknown abort code". For logs; never NULL. */
+const char *co_abort_text(uint32_t code);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CO_ABORT_H */

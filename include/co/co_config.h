@@ -1,0 +1,85 @@
+/**
+ * @file co_config.h
+ * @brief Compile-time knobs of the core, each with one default.
+ *
+ * Override any of them by defining it on the compiler command line, or by defining CO_CONFIG_HEADER
+ * as the name of a header that defines them (included first). Sizes here fix the size of co_node_t.
+ */
+#ifndef CO_CONFIG_H
+#define CO_CONFIG_H
+
+#ifdef CO_CONFIG_HEADER
+#include CO_CONFIG_HEADER
+#endif
+
+/** Most receive PDOs one node can have (the OD may declare fewer). */
+#ifndef CO_RPDO_MAX
+#define CO_RPDO_MAX 4U
+#endif
+
+/** Most transmit PDOs one node can have (the OD may declare fewer). */
+#ifndef CO_TPDO_MAX
+#define CO_TPDO_MAX 4U
+#endif
+
+/** Most heartbeat-consumer entries (0x1016 sub-indices) one node can monitor. */
+#ifndef CO_HB_CONSUMER_MAX
+#define CO_HB_CONSUMER_MAX 127U
+#endif
+
+/** Errors that can be active at once (they define 0x1001 and are cleared one by one). */
+#ifndef CO_EMCY_ACTIVE_MAX
+#define CO_EMCY_ACTIVE_MAX 8U
+#endif
+
+/** EMCY frames that can wait for the inhibit time 0x1015 or for leaving Stopped. */
+#ifndef CO_EMCY_QUEUE_LEN
+#define CO_EMCY_QUEUE_LEN 8U
+#endif
+
+/** Frames that can wait for a busy port (all services share this queue). */
+#ifndef CO_TX_QUEUE_LEN
+#define CO_TX_QUEUE_LEN 16U
+#endif
+
+/** Retry interval for frames the port refused with CO_ERR_BUSY, in µs. */
+#ifndef CO_TX_RETRY_US
+#define CO_TX_RETRY_US 1000U
+#endif
+
+/** 1: segmented SDO transfer is compiled in (a device switches it on with CO_OPT_SDO_SEGMENTED). */
+#ifndef CO_CONFIG_SDO_SEGMENTED
+#define CO_CONFIG_SDO_SEGMENTED 1
+#endif
+
+/** Largest object a segmented SDO transfer can move, in bytes. */
+#ifndef CO_SDO_BUF_SIZE
+#define CO_SDO_BUF_SIZE 64U
+#endif
+
+/** Segmented SDO transfer timeout (no frame from the client), in µs. */
+#ifndef CO_SDO_TIMEOUT_US
+#define CO_SDO_TIMEOUT_US 1000000U
+#endif
+
+/** 1: node guarding and life guarding (0x100C/0x100D) are compiled in. */
+#ifndef CO_CONFIG_NODE_GUARDING
+#define CO_CONFIG_NODE_GUARDING 1
+#endif
+
+/** 1: the SYNC consumer and synchronous PDOs are compiled in. */
+#ifndef CO_CONFIG_SYNC
+#define CO_CONFIG_SYNC 1
+#endif
+
+/** 1: LSS fastscan (0x51) is compiled in. */
+#ifndef CO_CONFIG_LSS_FASTSCAN
+#define CO_CONFIG_LSS_FASTSCAN 1
+#endif
+
+/** 1: writable PDO mapping (the CiA 301 mapping procedure) is compiled in. */
+#ifndef CO_CONFIG_PDO_DYNAMIC_MAPPING
+#define CO_CONFIG_PDO_DYNAMIC_MAPPING 1
+#endif
+
+#endif /* CO_CONFIG_H */

@@ -1,0 +1,333 @@
+/**
+ * @file co_node.h
+ * @brief One CANopen slave node: configuration, lifecycle, frame input, processing, hooks.
+ *
+ * A node is one co_node_t in caller-owned memory plus a values block of od->values_size bytes. The core
+ * allocates nothing and has no writable globals, so any number of nodes (of the same or different
+ * devices) live in one process. Time is always an argument.
+ *
+ * Main loop:
+ *   co_node_init(&node, &cfg, now);
+ *   for (;;) {
+ *       while (a frame f arrived at time t) co_node_rx(&node, &f, t);
+ *       next = co_node_process(&node, now);      // absolute deadline, or CO_NEVER
+ *       sleep until next or until a frame arrives;
+ *   }
+ * Call co_node_process() also after the application changed OD values (change-of-state TPDOs are detected
+ * there) and after co_emcy_raise()/co_emcy_clear().
+ *
+ * The fields of co_node_t are visible so it can be allocated statically; treat them as read-only.
+ */
+#ifndef CO_NODE_H
+#define CO_NODE_H
+
+#include "co_config.h"
+#include "co_od.h"
+#include "co_port.h"
+#include "co_types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Reset kinds (NMT 0x81 reset node = application, 0x82 = communication). */
+typedef enum co_reset {
+    CO_RESET_APPLICATION = 0, /**< 0x2000-0x9FFF re-initialised, then a communication reset follows. */
+    CO_RESET_COMMUNICATION = 1 /**< 0x1000-0x1FFF re-initialised, pending node-ID adopted. */
+} co_reset_t;
+
+/** Things worth a log line, reported through co_hooks_t.on_event. */
+typedef enum co_event_kind {
+    CO_EV_NMT_STATE = 1,      /**< value = new state, code = previous state. */
+    CO_EV_SDO_ABORT,          /**< index/sub of the request, code = abort code sent. */
+    CO_EV_EMCY,               /**< value = error code, code = error register; sent (or queued while Stopped). */
+    CO_EV_STORE,              /**< 0x1010 sub or LSS store; code = 0 or abort code. */
+    CO_EV_RESTORE,            /**< 0x1011 sub; code = 0 or abort code. */
+    CO_EV_NVM_LOADED,         /**< value = co_nvm_status_t of the parameter area after a reset. */
+    CO_EV_LSS_NODE_ID,        /**< value = new pending node-ID. */
+    CO_EV_LSS_BIT_TIMING,     /**< value = new pending bit-timing index. */
+    CO_EV_LSS_ACTIVATE,       /**< value = kbit/s switched to. */
+    CO_EV_HB_TIMEOUT,         /**< value = monitored node-ID whose heartbeat is missing. */
+    CO_EV_GUARD_TIMEOUT,      /**< life guarding: no guard request within the node life time. */
+    CO_EV_TX_DROPPED          /**< a frame could not be queued or sent; value = CAN-ID. */
+} co_event_kind_t;
+
+typedef struct co_event {
+    co_event_kind_t kind;
+    uint16_t index;
+    uint8_t sub;
+    uint32_t value;
+    uint32_t code;
+} co_event_t;
+
+/**
+ * Device behaviour hooks. Each gets ctx = co_node_cfg_t.hooks_ctx. All are optional (NULL).
+ * They run inside co_node_rx/co_node_process/co_od_* calls: they may read and write OD values with the
+ * co_od_* functions of the same node, raise/clear EMCY, but must not call co_node_rx/co_node_process.
+ */
+typedef struct co_hooks {
+    /**
+     * An object is about to be written (by SDO, RPDO or a co_od_write with CO_ORIGIN_LOCAL), after all of
+     * the core's checks passed. Return 0 to accept (the value is then stored at once), or an SDO abort
+     * code to refuse (e.g. CO_ABORT_VALUE_HIGH, CO_ABORT_DEVICE_STATE); RPDO refusals are dropped silently.
+     */
+    uint32_t (*on_write)(void *ctx, co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
+                         size_t len, co_od_origin_t origin);
+    /** An object is about to be read by SDO or sampled for a TPDO: refresh a live value here. */
+    void (*on_read)(void *ctx, co_node_t *node, const co_od_entry_t *entry);
+    /** The NMT state changed (after the change; boot-up reports INITIALISING -> PRE_OPERATIONAL). */
+    void (*on_nmt_change)(void *ctx, co_node_t *node, co_nmt_state_t from, co_nmt_state_t to);
+    /** An OD area was re-initialised from stored values/defaults (before the boot-up frame). */
+    void (*on_reset)(void *ctx, co_node_t *node, co_reset_t what);
+    /** Something worth logging happened. */
+    void (*on_event)(void *ctx, co_node_t *node, const co_event_t *event);
+} co_hooks_t;
+
+/** Options, per node (usually per device type). */
+enum co_node_option {
+    CO_OPT_NMT_ACCEPT_LONG = 0x01U,   /**< Accept NMT frames with DLC > 2 (extra bytes ignored). Default: DLC == 2 only. */
+    CO_OPT_SDO_SEGMENTED = 0x02U,     /**< Segmented SDO transfer (needs CO_CONFIG_SDO_SEGMENTED). */
+    CO_OPT_LSS_NO_UNCONFIGURE = 0x04U /**< LSS configure node-ID refuses 0xFF (only 1..127), as Bürkert devices do. */
+};
+
+/** Number of entries of an LSS bit-timing table (CiA 305 indices 0..9). */
+#define CO_LSS_BIT_TIMING_COUNT 10U
+
+typedef struct co_node_cfg {
+    const co_od_t *od;          /**< The device's generated object dictionary. */
+    void *values;               /**< Caller-owned block of od->values_size bytes (this node's values). */
+    const co_port_t *port;      /**< The port (send mandatory, the rest optional). */
+    void *port_ctx;             /**< Passed to every port function. */
+    const co_hooks_t *hooks;    /**< Device behaviour, or NULL. */
+    void *hooks_ctx;            /**< Passed to every hook. */
+    uint8_t node_id;            /**< Node-ID when none is stored by LSS: 1..127, or 0xFF (unconfigured). */
+    uint8_t bit_timing;         /**< Bit-timing index when none is stored by LSS. */
+    /** kbit/s per LSS bit-timing index (0 = not supported); NULL = the CiA 305 table without index 9. */
+    const uint16_t *bit_rates_kbit;
+    uint32_t options;           /**< co_node_option bits. */
+} co_node_cfg_t;
+
+/** What the last load of the parameter area found. */
+typedef enum co_nvm_status {
+    CO_NVM_NONE = 0,     /**< Nothing stored (or no storage): defaults used. */
+    CO_NVM_LOADED = 1,   /**< Stored values loaded. */
+    CO_NVM_CORRUPT = 2,  /**< A blob was there but its header, length or CRC is wrong: defaults used. */
+    CO_NVM_FOREIGN = 3   /**< A valid blob of another object dictionary: defaults used. */
+} co_nvm_status_t;
+
+/* ---- Service state (read-only for the application) ------------------------------------------------ */
+
+typedef struct co_txq {
+    co_frame_t frame[CO_TX_QUEUE_LEN];
+    uint8_t head;
+    uint8_t count;
+} co_txq_t;
+
+typedef struct co_hb_producer {
+    co_time_us_t due;           /**< Next heartbeat, CO_NEVER when 0x1017 = 0. */
+} co_hb_producer_t;
+
+typedef struct co_guard {
+    uint8_t toggle;             /**< 0x00 or 0x80: bit 7 of the next guard reply. */
+    bool armed;                 /**< A guard request was seen: life guarding runs. */
+    bool failed;                /**< Life-guarding event raised, not yet cleared. */
+    co_time_us_t deadline;      /**< Life-guarding deadline. */
+} co_guard_t;
+
+typedef struct co_hb_consumer_slot {
+    co_time_us_t deadline;      /**< When the monitored heartbeat is late. */
+    uint8_t node_id;            /**< 0 = slot unused. */
+    uint8_t state;              /**< 0 unused, 1 waiting for the first heartbeat, 2 monitoring, 3 timed out. */
+    uint8_t remote_state;       /**< Last NMT state byte received from that node. */
+} co_hb_consumer_slot_t;
+
+typedef struct co_hb_consumer {
+    co_hb_consumer_slot_t slot[CO_HB_CONSUMER_MAX];
+    uint8_t count;              /**< Slots in use = sub-indices of 0x1016 (capped at CO_HB_CONSUMER_MAX). */
+} co_hb_consumer_t;
+
+typedef struct co_emcy_error {
+    uint16_t code;
+    uint8_t reg;                /**< Error register bits this error sets. */
+    uint8_t msef[5];            /**< Manufacturer-specific error field sent with it. */
+} co_emcy_error_t;
+
+typedef struct co_emcy {
+    co_emcy_error_t active[CO_EMCY_ACTIVE_MAX];
+    uint8_t n_active;
+    co_frame_t queue[CO_EMCY_QUEUE_LEN];
+    uint8_t q_head;
+    uint8_t q_count;
+    co_time_us_t next_allowed;  /**< Inhibit time 0x1015: earliest time of the next EMCY. */
+    uint32_t lost;              /**< EMCY frames dropped because the queue was full. */
+} co_emcy_t;
+
+typedef struct co_sdo_server {
+    uint8_t state;              /**< 0 idle, 1 segmented download, 2 segmented upload. */
+    uint8_t toggle;
+    uint8_t sub;
+    uint16_t index;
+    uint32_t size;              /**< Bytes of the transfer (download: indicated, or 0 if not). */
+    uint32_t pos;
+    co_time_us_t deadline;
+    uint8_t buf[CO_SDO_BUF_SIZE];
+} co_sdo_server_t;
+
+typedef struct co_sync {
+    co_time_us_t timeout_due;   /**< 1.5 x 0x1006 after the last SYNC, or CO_NEVER. */
+    co_time_us_t window_end;    /**< End of the synchronous window 0x1007 after the last SYNC. */
+    bool timeout_error;
+    bool length_error;
+} co_sync_t;
+
+typedef struct co_pdo_map {
+    const co_od_entry_t *entry; /**< NULL for a dummy entry (RPDO) */
+    uint8_t len;                /**< Bytes. */
+} co_pdo_map_t;
+
+typedef struct co_rpdo {
+    uint32_t cob_id;            /**< 0x1400+n sub 1 as configured. */
+    co_pdo_map_t map[8];
+    co_time_us_t deadline;      /**< Event-timer deadline monitoring, CO_NEVER when off. */
+    uint8_t n_map;
+    uint8_t map_len;            /**< Mapped bytes. */
+    uint8_t type;
+    bool valid;                 /**< COB-ID valid and mapping non-empty. */
+    bool sync_pending;          /**< Synchronous RPDO received, applied at the next SYNC. */
+    uint8_t sync_len;
+    uint8_t sync_data[8];
+    bool length_error;
+    bool timeout_error;
+} co_rpdo_t;
+
+typedef struct co_tpdo {
+    uint32_t cob_id;
+    co_pdo_map_t map[8];
+    co_time_us_t next_allowed;  /**< End of the inhibit time. */
+    co_time_us_t event_due;     /**< Event timer, CO_NEVER when off. */
+    uint32_t inhibit_us;
+    uint32_t event_us;
+    uint8_t n_map;
+    uint8_t map_len;
+    uint8_t type;
+    uint8_t sync_start;
+    uint8_t sync_count;         /**< SYNCs since the last synchronous transmission. */
+    bool valid;
+    bool sent_once;             /**< last[] holds what was sent last. */
+    bool event;                 /**< Application event (co_tpdo_trigger) or a change waiting for the inhibit time. */
+    bool sync_started;          /**< The SYNC start value was reached (or none is set). */
+    uint8_t last[8];
+} co_tpdo_t;
+
+typedef struct co_lss_slave {
+    uint8_t state;              /**< 0 waiting, 1 configuration. */
+    uint8_t pending_node_id;
+    uint8_t pending_bit_timing;
+    uint8_t active_bit_timing;
+    uint8_t select_step;        /**< Switch-state-selective: next expected cs 0x40..0x43. */
+    uint8_t ident_step;         /**< Identify remote slave: next expected cs 0x46..0x4B. */
+    bool ident_match;
+    uint8_t fastscan_pos;       /**< LSSSub the slave expects next. */
+    uint32_t select[4];
+    uint32_t ident_low;
+    bool switch_pending;        /**< Activate bit timing in progress. */
+    co_time_us_t switch_at;
+    co_time_us_t silent_until;  /**< No frame is sent before this time (activate bit timing). */
+} co_lss_slave_t;
+
+typedef struct co_node_stats {
+    uint32_t rx_frames;
+    uint32_t tx_frames;
+    uint32_t tx_dropped;        /**< Frames lost: queue full or the port reported CO_ERR_IO. */
+    uint32_t tx_suppressed;     /**< Frames not sent during the LSS bit-rate switch silence. */
+    uint32_t sdo_aborts;
+} co_node_stats_t;
+
+struct co_node {
+    const co_od_t *od;
+    uint8_t *values;
+    const co_port_t *port;
+    void *port_ctx;
+    const co_hooks_t *hooks;
+    void *hooks_ctx;
+    const uint16_t *bit_rates_kbit;
+    uint32_t options;
+    co_time_us_t now;           /**< Time of the call in progress (co_node_rx / co_node_process / API). */
+    uint8_t node_id;            /**< Active node-ID, 0xFF while unconfigured. */
+    uint8_t default_node_id;
+    uint8_t default_bit_timing;
+    co_nmt_state_t nmt_state;
+    co_nvm_status_t nvm_status;
+    co_node_stats_t stats;
+    co_txq_t txq;
+    co_hb_producer_t hb;
+#if CO_CONFIG_NODE_GUARDING
+    co_guard_t guard;
+#endif
+    co_hb_consumer_t hbc;
+    co_emcy_t emcy;
+    co_sdo_server_t sdo;
+#if CO_CONFIG_SYNC
+    co_sync_t sync;
+#endif
+    uint8_t n_rpdo;
+    uint8_t n_tpdo;
+    co_rpdo_t rpdo[CO_RPDO_MAX];
+    co_tpdo_t tpdo[CO_TPDO_MAX];
+    co_lss_slave_t lss;
+};
+
+/**
+ * Powers the node on: loads the LSS configuration and stored parameters through the port, initialises
+ * every object, and (when the node-ID is configured) sends the boot-up frame and enters Pre-operational.
+ * An unconfigured node (0xFF) runs only the LSS slave until a master gives it a node-ID.
+ * @return CO_OK, CO_ERR_ARG (NULL pointers, node-ID 0 or 128..254, no send function), CO_ERR_RANGE (the
+ *         OD declares more PDOs or heartbeat-consumer entries than co_config.h allows).
+ */
+co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now);
+
+/** Feeds one received frame (with its arrival time). Frames for other nodes/services are ignored. O(PDOs). */
+void co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
+
+/**
+ * Runs every timed service and sends what is due. Never blocks.
+ * @return the absolute time when it must be called again at the latest (CO_NEVER if nothing is pending).
+ */
+co_time_us_t co_node_process(co_node_t *node, co_time_us_t now);
+
+/** Performs a reset as NMT 0x81 (CO_RESET_APPLICATION) or 0x82 (CO_RESET_COMMUNICATION) would. */
+void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now);
+
+/** Current NMT state. */
+co_nmt_state_t co_node_state(const co_node_t *node);
+
+/** Active node-ID (0xFF while unconfigured). */
+uint8_t co_node_id(const co_node_t *node);
+
+/**
+ * Raises an error: sets its bits in 0x1001 (bit 0 always), records it in 0x1003 (newest first) and sends
+ * an EMCY frame `code | 0x1001 | msef[0..4]` (subject to the inhibit time 0x1015; queued while Stopped).
+ * Raising an error that is already active (same code and msef[0..1]) does nothing.
+ * @param msef 5 manufacturer-specific bytes, or NULL for zeros. @return false if the active list is full.
+ */
+bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8_t *msef);
+
+/**
+ * Clears an active error (same code and msef[0..1]); sends the error-reset EMCY `0x0000 | 0x1001 | msef`
+ * with the error register of the errors that remain. @return false when no such error was active.
+ */
+bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef);
+
+/** True when an error with this code (any msef) is active. */
+bool co_emcy_is_active(const co_node_t *node, uint16_t code);
+
+/** Asks TPDO n (0-based) to be sent: at once for event-driven types (inhibit time permitting), at the next SYNC for type 0. */
+void co_tpdo_trigger(co_node_t *node, uint8_t n);
+
+/** Sets the pending node-ID (as LSS configure node-ID does); it becomes active at the next communication reset. */
+bool co_lss_set_pending_node_id(co_node_t *node, uint8_t node_id);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CO_NODE_H */

@@ -1,0 +1,65 @@
+/**
+ * @file co_port.h
+ * @brief The port: what the core needs from the platform (a CAN controller, non-volatile memory, a bit rate).
+ *
+ * Every function gets the ctx pointer given in co_node_cfg_t.port_ctx, so one port implementation can serve
+ * many nodes, buses or storage files. The core calls these functions only from co_node_init(),
+ * co_node_rx() and co_node_process() (and the co_* API functions), never from anywhere else; a port
+ * needs no locking as long as those are called from one context.
+ */
+#ifndef CO_PORT_H
+#define CO_PORT_H
+
+#include "co_types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Non-volatile storage areas. Each area holds one blob that the core replaces as a whole. */
+typedef enum co_nvm_area {
+    CO_NVM_PARAMS = 0, /**< Object values saved with 0x1010 (a few hundred bytes for the shipped devices). */
+    CO_NVM_LSS = 1     /**< LSS configuration: node-ID and bit-timing index (12 bytes). */
+} co_nvm_area_t;
+
+typedef struct co_port {
+    /**
+     * Sends one frame. Must not block. Return CO_OK when the frame is queued in the controller or the
+     * OS, CO_ERR_BUSY when there is no room now (the core keeps the frame and calls again at the next
+     * co_node_process(); the frame is not lost), CO_ERR_IO when it can never be sent (the frame is
+     * dropped and counted in co_node_t.stats.tx_dropped). Mandatory.
+     */
+    co_status_t (*send)(void *ctx, const co_frame_t *frame);
+
+    /**
+     * Writes len bytes at offset into the staging copy of an area. A sequence of writes followed by
+     * nvm_commit() replaces the area; a sequence without a commit must leave the stored blob as it was.
+     * NULL when the device has no storage: 0x1010 then answers 0x06060000 and LSS store answers "not
+     * supported".
+     */
+    co_status_t (*nvm_write)(void *ctx, co_nvm_area_t area, uint32_t offset, const void *data, size_t len);
+
+    /**
+     * Makes the staged blob of total_len bytes the area's content, atomically: after a power loss at any
+     * moment, a later nvm_read() sees either the whole old blob or the whole new one. NULL with nvm_write.
+     */
+    co_status_t (*nvm_commit)(void *ctx, co_nvm_area_t area, uint32_t total_len);
+
+    /**
+     * Reads len bytes at offset from the committed blob of an area. CO_ERR_NO_DATA when nothing is
+     * stored or the blob is shorter than offset + len. The core checks its own header and CRC, so a
+     * damaged blob is detected by the core (co_node_t.nvm_status). NULL: nothing is ever stored.
+     */
+    co_status_t (*nvm_read)(void *ctx, co_nvm_area_t area, uint32_t offset, void *data, size_t len);
+
+    /**
+     * Switches the CAN controller to a new bit rate (LSS activate bit timing, or a stored LSS bit timing
+     * at power-on). NULL when the bit rate is fixed; the core then only records the value.
+     */
+    co_status_t (*set_bit_rate)(void *ctx, uint32_t kbit_per_s);
+} co_port_t;
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* CO_PORT_H */

@@ -1,0 +1,206 @@
+/*
+ * EMCY producer (CiA 301 §7.2.7): error code, error register 0x1001, pre-defined error field 0x1003,
+ * COB-ID 0x1014, inhibit time 0x1015. Errors are kept in a small active list so the error register
+ * can be recomputed when one of several errors clears. Frames are queued while the NMT state forbids
+ * EMCY (Stopped, Initialising) or the inhibit time runs, and sent in order afterwards.
+ */
+#include "priv/co_priv.h"
+
+static const uint8_t zero_msef[5] = {0U, 0U, 0U, 0U, 0U};
+
+static bool same_error(const co_emcy_error_t *a, uint16_t code, const uint8_t *msef)
+{
+    return a->code == code && a->msef[0] == msef[0] && a->msef[1] == msef[1];
+}
+
+static uint8_t error_register(const co_node_t *node)
+{
+    uint8_t reg = 0U;
+    for (uint8_t i = 0U; i < node->emcy.n_active; i++) {
+        reg |= node->emcy.active[i].reg;
+    }
+    /* Bit 0 (generic) is set whenever any error is present (CiA 301; see docs/decisions.md). */
+    return node->emcy.n_active > 0U ? (uint8_t)(reg | 0x01U) : 0U;
+}
+
+static void update_register(co_node_t *node)
+{
+    const co_od_entry_t *e = co_od_find(node->od, 0x1001U, 0U);
+    if (e != NULL) {
+        co_od_entry_set_u32(node, e, error_register(node));
+    }
+}
+
+/* 0x1003: newest error at sub 1, older ones move up, the oldest falls out when the array is full. */
+static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
+{
+    const uint8_t size = co_od_sub_count(node->od, 0x1003U);
+    const co_od_entry_t *count_e = co_od_find(node->od, 0x1003U, 0U);
+    if (size == 0U || count_e == NULL) {
+        return;
+    }
+    uint8_t count = (uint8_t)co_od_entry_u32(node, count_e);
+    if (count > size) {
+        count = size;
+    }
+    for (uint8_t i = (count < size) ? count : (uint8_t)(size - 1U); i >= 1U; i--) {
+        const co_od_entry_t *from = co_od_find(node->od, 0x1003U, i);
+        const co_od_entry_t *to = co_od_find(node->od, 0x1003U, (uint8_t)(i + 1U));
+        if (from != NULL && to != NULL) {
+            co_od_entry_set_u32(node, to, co_od_entry_u32(node, from));
+        }
+    }
+    const co_od_entry_t *first = co_od_find(node->od, 0x1003U, 1U);
+    if (first != NULL) {
+        co_od_entry_set_u32(node, first, (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24));
+    }
+    co_od_entry_set_u32(node, count_e, count < size ? (uint32_t)count + 1U : size);
+}
+
+static void enqueue(co_node_t *node, uint16_t code, const uint8_t *msef)
+{
+    co_emcy_t *em = &node->emcy;
+    co_frame_t f = {0U, 8U, 0U, {0U}};
+    co_put_u16(f.data, code);
+    f.data[2] = error_register(node);
+    memcpy(&f.data[3], msef, 5U);
+    if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way */
+        em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
+        em->q_count--;
+        em->lost++;
+    }
+    em->queue[(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN] = f;
+    em->q_count++;
+    co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, f.data[2]);
+}
+
+bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8_t *msef)
+{
+    co_emcy_t *em = &node->emcy;
+    const uint8_t *m = msef != NULL ? msef : zero_msef;
+    for (uint8_t i = 0U; i < em->n_active; i++) {
+        if (same_error(&em->active[i], code, m)) {
+            return true;
+        }
+    }
+    if (em->n_active >= CO_EMCY_ACTIVE_MAX) {
+        return false;
+    }
+    co_emcy_error_t *a = &em->active[em->n_active++];
+    a->code = code;
+    a->reg = reg_bits;
+    memcpy(a->msef, m, 5U);
+    update_register(node);
+    push_history(node, code, m);
+    enqueue(node, code, m);
+    return true;
+}
+
+bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef)
+{
+    co_emcy_t *em = &node->emcy;
+    const uint8_t *m = msef != NULL ? msef : zero_msef;
+    for (uint8_t i = 0U; i < em->n_active; i++) {
+        if (same_error(&em->active[i], code, m)) {
+            em->active[i] = em->active[em->n_active - 1U];
+            em->n_active--;
+            update_register(node);
+            enqueue(node, 0x0000U, m); /* error reset, with the register of what remains */
+            return true;
+        }
+    }
+    return false;
+}
+
+bool co_emcy_is_active(const co_node_t *node, uint16_t code)
+{
+    for (uint8_t i = 0U; i < node->emcy.n_active; i++) {
+        if (node->emcy.active[i].code == code) {
+            return true;
+        }
+    }
+    return false;
+}
+
+void co_emcy_reset(co_node_t *node)
+{
+    /* Communication reset: the error state starts afresh (0x1001/0x1003 were re-initialised with the
+     * 0x1000 area); device errors that persist are raised again by the device's on_reset hook. */
+    node->emcy.n_active = 0U;
+    node->emcy.q_count = 0U;
+    node->emcy.q_head = 0U;
+    node->emcy.next_allowed = 0U;
+    update_register(node);
+}
+
+co_time_us_t co_emcy_process(co_node_t *node)
+{
+    co_emcy_t *em = &node->emcy;
+    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
+        return CO_NEVER; /* kept until the node leaves Stopped */
+    }
+    while (em->q_count > 0U) {
+        if (node->now < em->next_allowed) {
+            return em->next_allowed;
+        }
+        co_frame_t f = em->queue[em->q_head];
+        em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
+        em->q_count--;
+        const uint32_t cob = co_od_u32_or(node, 0x1014U, 0U, 0x80U + (uint32_t)node->node_id);
+        if ((cob & CO_COBID_INVALID) != 0U) {
+            continue; /* EMCY disabled */
+        }
+        f.id = cob & CO_COBID_CAN_ID;
+        co_node_send(node, &f);
+        em->next_allowed = node->now + (co_time_us_t)co_od_u32_or(node, 0x1015U, 0U, 0U) * 100U;
+    }
+    return CO_NEVER;
+}
+
+uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    (void)len;
+    if (e->index != 0x1014U) {
+        return CO_ABORT_NONE;
+    }
+    const uint32_t v = co_get_u32(data);
+    const uint32_t cur = co_od_entry_u32(node, e);
+    if ((v & 0x7FFFF800UL) != 0U) {
+        return CO_ABORT_INVALID_VALUE; /* 29-bit or reserved bits */
+    }
+    if ((v & CO_COBID_INVALID) == 0U) {
+        if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
+            return CO_ABORT_INVALID_VALUE;
+        }
+        if ((cur & CO_COBID_INVALID) == 0U && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
+            return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while bit 31 is set */
+        }
+    }
+    return CO_ABORT_NONE;
+}
+
+uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e)
+{
+    if (e->sub == 0U) {
+        return CO_ABORT_NONE;
+    }
+    const uint32_t count = co_od_u32_or(node, 0x1003U, 0U, 0U);
+    return e->sub > count ? CO_ABORT_NO_DATA : CO_ABORT_NONE;
+}
+
+bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    (void)len;
+    if (data[0] != 0U) {
+        return false; /* only 0 (clear the history) may be written to 0x1003:00 */
+    }
+    const uint8_t size = co_od_sub_count(node->od, 0x1003U);
+    for (uint8_t i = 1U; i <= size; i++) {
+        const co_od_entry_t *s = co_od_find(node->od, 0x1003U, i);
+        if (s != NULL) {
+            co_od_entry_set_u32(node, s, 0U);
+        }
+    }
+    co_od_entry_set_u32(node, e, 0U);
+    return true;
+}

@@ -1,0 +1,64 @@
+/*
+ * Node guarding and life guarding, slave side (CiA 301 §7.2.8.3.2.1). The master sends a remote frame on
+ * 0x700+node-ID; the slave answers with its state and a toggle bit. If guard time 0x100C x life time factor
+ * 0x100D is non-zero, a missing request for that long is a life-guarding event (EMCY 0x8130).
+ * Disabled while the heartbeat producer runs (0x1017 != 0): the two are mutually exclusive.
+ */
+#include "priv/co_priv.h"
+
+#if CO_CONFIG_NODE_GUARDING
+
+static const uint8_t guard_msef[5] = {0x01U, 0U, 0U, 0U, 0U}; /* distinguishes life guarding from HB consumers */
+
+static co_time_us_t life_time_us(const co_node_t *node)
+{
+    const uint32_t guard_ms = co_od_u32_or(node, 0x100CU, 0U, 0U);
+    const uint32_t factor = co_od_u32_or(node, 0x100DU, 0U, 0U);
+    return (co_time_us_t)guard_ms * factor * 1000U;
+}
+
+void co_guard_reset(co_node_t *node)
+{
+    node->guard.toggle = 0U;
+    node->guard.armed = false;
+    node->guard.failed = false;
+    node->guard.deadline = CO_NEVER;
+}
+
+void co_guard_rx(co_node_t *node, const co_frame_t *f)
+{
+    (void)f;
+    if (co_od_u32_or(node, 0x1017U, 0U, 0U) != 0U) {
+        return; /* heartbeat producer active: node guarding disabled */
+    }
+    const co_frame_t reply = {0x700U + node->node_id, 1U, 0U, {(uint8_t)(node->guard.toggle | (uint8_t)node->nmt_state)}};
+    co_node_send(node, &reply);
+    node->guard.toggle ^= 0x80U;
+    const co_time_us_t life = life_time_us(node);
+    node->guard.armed = life != 0U;
+    node->guard.deadline = life != 0U ? node->now + life : CO_NEVER;
+    if (node->guard.failed) {
+        node->guard.failed = false;
+        (void)co_emcy_clear(node, 0x8130U, guard_msef);
+    }
+}
+
+co_time_us_t co_guard_process(co_node_t *node)
+{
+    if (!node->guard.armed || node->guard.failed) {
+        return CO_NEVER;
+    }
+    if (co_od_u32_or(node, 0x1017U, 0U, 0U) != 0U) {
+        node->guard.armed = false;
+        return CO_NEVER;
+    }
+    if (node->now >= node->guard.deadline) {
+        node->guard.failed = true;
+        co_node_event(node, CO_EV_GUARD_TIMEOUT, 0x100CU, 0U, 0U, 0U);
+        (void)co_emcy_raise(node, 0x8130U, 0x10U, guard_msef);
+        return CO_NEVER;
+    }
+    return node->guard.deadline;
+}
+
+#endif /* CO_CONFIG_NODE_GUARDING */

@@ -1,0 +1,46 @@
+/*
+ * Heartbeat producer (CiA 301 §7.2.8.3.2.2): 0x700+node-ID [1] state, every 0x1017 ms (0 = off).
+ * Deadlines are absolute: a late call does not shift the following heartbeats (no drift).
+ */
+#include "priv/co_priv.h"
+
+static co_time_us_t period_us(const co_node_t *node)
+{
+    return (co_time_us_t)co_od_u32_or(node, 0x1017U, 0U, 0U) * 1000U;
+}
+
+void co_hb_reset(co_node_t *node)
+{
+    const co_time_us_t p = period_us(node);
+    node->hb.due = p != 0U ? node->now + p : CO_NEVER;
+}
+
+co_time_us_t co_hb_process(co_node_t *node)
+{
+    const co_time_us_t p = period_us(node);
+    if (p == 0U || node->hb.due == CO_NEVER) {
+        return node->hb.due = (p != 0U ? node->now + p : CO_NEVER);
+    }
+    if (node->now >= node->hb.due) {
+        const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)node->nmt_state}};
+        co_node_send(node, &f);
+        /* Next deadline on the original grid; periods missed entirely (a very late call) are skipped. */
+        node->hb.due += p * (1U + (node->now - node->hb.due) / p);
+    }
+    return node->hb.due;
+}
+
+uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    (void)node;
+    (void)e;
+    (void)data;
+    (void)len;
+    return CO_ABORT_NONE; /* range limits come from the OD; device-specific steps from the device hook */
+}
+
+void co_hb_written(co_node_t *node, const co_od_entry_t *e)
+{
+    (void)e;
+    co_hb_reset(node); /* a new period starts now */
+}

@@ -1,0 +1,116 @@
+/*
+ * Heartbeat consumer (CiA 301 §7.2.8.3.2.2, object 0x1016): each sub-index names a node-ID (bits 23..16)
+ * and a time in ms (bits 15..0). Monitoring of a node starts with its first heartbeat (a boot-up does not
+ * start it); a missing heartbeat raises EMCY 0x8130, the next heartbeat clears it again.
+ */
+#include "priv/co_priv.h"
+
+static void slot_msef(uint8_t node_id, uint8_t msef[5])
+{
+    msef[0] = 0x02U; /* heartbeat consumer */
+    msef[1] = node_id;
+    msef[2] = msef[3] = msef[4] = 0U;
+}
+
+static void slot_configure(co_node_t *node, uint8_t i)
+{
+    co_hb_consumer_slot_t *s = &node->hbc.slot[i];
+    const uint32_t v = co_od_u32_or(node, 0x1016U, (uint8_t)(i + 1U), 0U);
+    const uint8_t id = (uint8_t)(v >> 16);
+    if (s->state == 3U) {
+        uint8_t msef[5];
+        slot_msef(s->node_id, msef);
+        (void)co_emcy_clear(node, 0x8130U, msef);
+    }
+    s->node_id = (id >= 1U && id <= 127U && (v & 0xFFFFU) != 0U) ? id : 0U;
+    s->state = s->node_id != 0U ? 1U : 0U;
+    s->deadline = CO_NEVER;
+    s->remote_state = 0U;
+}
+
+void co_hbc_reset(co_node_t *node)
+{
+    uint8_t n = co_od_sub_count(node->od, 0x1016U);
+    node->hbc.count = n;
+    for (uint8_t i = 0U; i < n; i++) {
+        node->hbc.slot[i].state = 0U;
+        slot_configure(node, i);
+    }
+}
+
+bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
+{
+    if (f->id <= 0x700U || f->id > 0x77FU || f->len != 1U) {
+        return false;
+    }
+    const uint8_t id = (uint8_t)(f->id - 0x700U);
+    bool used = false;
+    for (uint8_t i = 0U; i < node->hbc.count; i++) {
+        co_hb_consumer_slot_t *s = &node->hbc.slot[i];
+        if (s->node_id != id || s->state == 0U) {
+            continue;
+        }
+        used = true;
+        s->remote_state = f->data[0];
+        if (f->data[0] == 0U) {
+            continue; /* boot-up: the node restarted; monitoring resumes with its first heartbeat */
+        }
+        if (s->state == 3U) {
+            uint8_t msef[5];
+            slot_msef(id, msef);
+            (void)co_emcy_clear(node, 0x8130U, msef);
+        }
+        s->state = 2U;
+        s->deadline = node->now + (co_time_us_t)(co_od_u32_or(node, 0x1016U, (uint8_t)(i + 1U), 0U) & 0xFFFFU) * 1000U;
+    }
+    return used;
+}
+
+co_time_us_t co_hbc_process(co_node_t *node)
+{
+    co_time_us_t next = CO_NEVER;
+    for (uint8_t i = 0U; i < node->hbc.count; i++) {
+        co_hb_consumer_slot_t *s = &node->hbc.slot[i];
+        if (s->state != 2U) {
+            continue;
+        }
+        if (node->now >= s->deadline) {
+            uint8_t msef[5];
+            s->state = 3U;
+            slot_msef(s->node_id, msef);
+            co_node_event(node, CO_EV_HB_TIMEOUT, 0x1016U, (uint8_t)(i + 1U), s->node_id, 0U);
+            (void)co_emcy_raise(node, 0x8130U, 0x10U, msef);
+        } else {
+            next = co_min_time(next, s->deadline);
+        }
+    }
+    return next;
+}
+
+uint32_t co_hbc_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    (void)len;
+    if (e->sub == 0U) {
+        return CO_ABORT_NONE;
+    }
+    const uint32_t v = co_get_u32(data);
+    const uint32_t id = (v >> 16) & 0xFFU;
+    if (id == 0U || id > 127U || (v & 0xFFFFU) == 0U) {
+        return CO_ABORT_NONE; /* an unused entry */
+    }
+    const uint8_t n = co_od_sub_count(node->od, 0x1016U);
+    for (uint8_t k = 1U; k <= n; k++) {
+        const uint32_t other = co_od_u32_or(node, 0x1016U, k, 0U);
+        if (k != e->sub && ((other >> 16) & 0xFFU) == id && (other & 0xFFFFU) != 0U) {
+            return CO_ABORT_PARAM_INCOMPATIBLE; /* one node-ID monitored twice */
+        }
+    }
+    return CO_ABORT_NONE;
+}
+
+void co_hbc_written(co_node_t *node, const co_od_entry_t *e)
+{
+    if (e->sub >= 1U && e->sub <= node->hbc.count) {
+        slot_configure(node, (uint8_t)(e->sub - 1U));
+    }
+}

@@ -1,0 +1,263 @@
+/*
+ * LSS slave (CiA 305): switch state global/selective, configure node-ID and bit timing, activate bit
+ * timing, store configuration, inquire identity and node-ID, identify remote / non-configured slave,
+ * fastscan. Master -> slave on 0x7E5, slave -> master on 0x7E4, always 8 bytes. Works in every NMT state.
+ * The LSS address is 0x1018 sub 1..4 (vendor, product, revision, serial).
+ */
+#include "priv/co_priv.h"
+
+enum { LSS_WAITING = 0, LSS_CONFIGURATION = 1 };
+
+static uint32_t identity(const co_node_t *node, uint8_t i)
+{
+    return co_od_u32_or(node, 0x1018U, (uint8_t)(i + 1U), 0U);
+}
+
+static void reply(co_node_t *node, uint8_t cs, uint8_t b1, uint8_t b2)
+{
+    const co_frame_t f = {0x7E4U, 8U, 0U, {cs, b1, b2, 0U, 0U, 0U, 0U, 0U}};
+    co_node_send(node, &f);
+}
+
+static void reply_u32(co_node_t *node, uint8_t cs, uint32_t v)
+{
+    co_frame_t f = {0x7E4U, 8U, 0U, {cs, 0U, 0U, 0U, 0U, 0U, 0U, 0U}};
+    co_put_u32(&f.data[1], v);
+    co_node_send(node, &f);
+}
+
+void co_lss_init(co_node_t *node)
+{
+    co_lss_slave_t *l = &node->lss;
+    l->state = LSS_WAITING;
+    l->pending_node_id = node->node_id;
+    l->pending_bit_timing = l->active_bit_timing;
+    l->select_step = 0U;
+    l->ident_step = 0U;
+    l->fastscan_pos = 0U;
+    l->switch_pending = false;
+    l->silent_until = 0U;
+}
+
+bool co_lss_set_pending_node_id(co_node_t *node, uint8_t node_id)
+{
+    if ((node_id < 1U || node_id > 127U) && node_id != CO_NODE_ID_UNCONFIGURED) {
+        return false;
+    }
+    node->lss.pending_node_id = node_id;
+    return true;
+}
+
+static void switch_global(co_node_t *node, uint8_t mode)
+{
+    co_lss_slave_t *l = &node->lss;
+    if (mode == LSS_CONFIGURATION) {
+        l->state = LSS_CONFIGURATION;
+    } else if (mode == LSS_WAITING) {
+        l->state = LSS_WAITING;
+        /* An unconfigured node that got a node-ID starts at once (reset communication, boot-up) rather
+         * than waiting for NMT 0x82, as CANopenNode does; see docs/decisions.md. */
+        if (node->node_id == CO_NODE_ID_UNCONFIGURED && l->pending_node_id != CO_NODE_ID_UNCONFIGURED) {
+            co_node_reset(node, CO_RESET_COMMUNICATION, node->now);
+        }
+    }
+    l->select_step = 0U;
+}
+
+static void switch_selective(co_node_t *node, uint8_t cs, uint32_t v)
+{
+    co_lss_slave_t *l = &node->lss;
+    const uint8_t step = (uint8_t)(cs - 0x40U);
+    if (l->state != LSS_WAITING) {
+        return;
+    }
+    if (step != 0U && step != l->select_step) {
+        l->select_step = 0U; /* out of order: start again */
+        return;
+    }
+    l->select[step] = v;
+    l->select_step = (uint8_t)(step + 1U);
+    if (step == 3U) {
+        l->select_step = 0U;
+        for (uint8_t i = 0U; i < 4U; i++) {
+            if (l->select[i] != identity(node, i)) {
+                return;
+            }
+        }
+        l->state = LSS_CONFIGURATION;
+        reply(node, 0x44U, 0U, 0U);
+    }
+}
+
+static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
+{
+    co_lss_slave_t *l = &node->lss;
+    const uint8_t step = (uint8_t)(cs - 0x46U);
+    if (step != 0U && step != l->ident_step) {
+        l->ident_step = 0U;
+        return;
+    }
+    l->ident_step = (uint8_t)(step + 1U);
+    switch (step) {
+    case 0:
+        l->ident_match = v == identity(node, 0U);
+        break;
+    case 1:
+        l->ident_match = l->ident_match && v == identity(node, 1U);
+        break;
+    case 2:
+    case 4:
+        l->ident_low = v;
+        break;
+    case 3:
+        l->ident_match = l->ident_match && l->ident_low <= identity(node, 2U) && identity(node, 2U) <= v;
+        break;
+    default:
+        l->ident_step = 0U;
+        if (l->ident_match && l->ident_low <= identity(node, 3U) && identity(node, 3U) <= v) {
+            reply(node, 0x4FU, 0U, 0U);
+        }
+        break;
+    }
+}
+
+#if CO_CONFIG_LSS_FASTSCAN
+static void fastscan(co_node_t *node, const uint8_t *d)
+{
+    co_lss_slave_t *l = &node->lss;
+    const uint32_t id_number = co_get_u32(&d[1]);
+    const uint8_t bit_checked = d[5];
+    const uint8_t lss_sub = d[6];
+    const uint8_t lss_next = d[7];
+    /* Only unconfigured slaves in waiting state take part (CANopenNode's rule; decisions.md). */
+    if (l->state != LSS_WAITING || node->node_id != CO_NODE_ID_UNCONFIGURED) {
+        return;
+    }
+    if (bit_checked == 0x80U) {
+        l->fastscan_pos = 0U;
+        reply(node, 0x4FU, 0U, 0U);
+        return;
+    }
+    if (bit_checked > 31U || lss_sub > 3U || lss_next > 3U || lss_sub != l->fastscan_pos) {
+        return;
+    }
+    const uint32_t mask = 0xFFFFFFFFUL << bit_checked;
+    if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
+        return;
+    }
+    reply(node, 0x4FU, 0U, 0U);
+    if (bit_checked == 0U) {
+        l->fastscan_pos = lss_next;
+        if (lss_next < lss_sub) {
+            l->state = LSS_CONFIGURATION; /* all four numbers matched */
+            l->fastscan_pos = 0U;
+        }
+    }
+}
+#endif
+
+static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
+{
+    co_lss_slave_t *l = &node->lss;
+    switch (cs) {
+    case 0x11: {
+        const uint8_t id = d[1];
+        const bool ok = (id >= 1U && id <= 127U) ||
+                        (id == CO_NODE_ID_UNCONFIGURED && (node->options & CO_OPT_LSS_NO_UNCONFIGURE) == 0U);
+        if (ok) {
+            l->pending_node_id = id;
+            co_node_event(node, CO_EV_LSS_NODE_ID, 0U, 0U, id, 0U);
+        }
+        reply(node, 0x11U, (uint8_t)(ok ? 0U : 1U), 0U);
+        break;
+    }
+    case 0x13: {
+        const bool ok = d[1] == 0U && d[2] < CO_LSS_BIT_TIMING_COUNT && node->bit_rates_kbit[d[2]] != 0U;
+        if (ok) {
+            l->pending_bit_timing = d[2];
+            co_node_event(node, CO_EV_LSS_BIT_TIMING, 0U, 0U, d[2], 0U);
+        }
+        reply(node, 0x13U, (uint8_t)(ok ? 0U : 1U), 0U);
+        break;
+    }
+    case 0x15: {
+        const co_time_us_t delay = (co_time_us_t)co_get_u16(&d[1]) * 1000U;
+        l->switch_pending = true;
+        l->switch_at = node->now + delay;
+        l->silent_until = node->now + 2U * delay;
+        break;
+    }
+    case 0x17: {
+        uint8_t err = 0U;
+        if (node->port->nvm_write == NULL || node->port->nvm_commit == NULL) {
+            err = 1U; /* storing not supported */
+        } else if (co_store_lss_save(node, l->pending_node_id, l->pending_bit_timing) != CO_OK) {
+            err = 2U; /* storage media access error */
+        }
+        co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, err);
+        reply(node, 0x17U, err, 0U);
+        break;
+    }
+    case 0x5A:
+    case 0x5B:
+    case 0x5C:
+    case 0x5D:
+        reply_u32(node, cs, identity(node, (uint8_t)(cs - 0x5AU)));
+        break;
+    case 0x5E:
+        reply(node, 0x5EU, node->node_id, 0U);
+        break;
+    default:
+        break;
+    }
+}
+
+void co_lss_rx(co_node_t *node, const co_frame_t *f)
+{
+    if (f->len != 8U || (f->flags & CO_FRAME_RTR) != 0U) {
+        return;
+    }
+    const uint8_t cs = f->data[0];
+    const uint32_t v = co_get_u32(&f->data[1]);
+    if (cs == 0x04U) {
+        switch_global(node, f->data[1]);
+    } else if (cs >= 0x40U && cs <= 0x43U) {
+        switch_selective(node, cs, v);
+    } else if (cs >= 0x46U && cs <= 0x4BU) {
+        identify_remote(node, cs, v);
+    } else if (cs == 0x4CU) {
+        if (node->node_id == CO_NODE_ID_UNCONFIGURED) {
+            reply(node, 0x50U, 0U, 0U);
+        }
+#if CO_CONFIG_LSS_FASTSCAN
+    } else if (cs == 0x51U) {
+        fastscan(node, f->data);
+#endif
+    } else if (node->lss.state == LSS_CONFIGURATION) {
+        configure(node, cs, f->data);
+    }
+}
+
+co_time_us_t co_lss_process(co_node_t *node)
+{
+    co_lss_slave_t *l = &node->lss;
+    if (l->switch_pending) {
+        if (node->now < l->switch_at) {
+            return l->switch_at;
+        }
+        l->switch_pending = false;
+        l->active_bit_timing = l->pending_bit_timing;
+        const uint16_t kbit = node->bit_rates_kbit[l->active_bit_timing];
+        if (node->port->set_bit_rate != NULL) {
+            (void)node->port->set_bit_rate(node->port_ctx, kbit);
+        }
+        co_node_event(node, CO_EV_LSS_ACTIVATE, 0U, 0U, kbit, 0U);
+    }
+    if (l->silent_until != 0U) {
+        if (node->now < l->silent_until) {
+            return l->silent_until;
+        }
+        l->silent_until = 0U;
+    }
+    return CO_NEVER;
+}

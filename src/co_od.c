@@ -1,0 +1,479 @@
+/*
+ * Object dictionary access: lookup in the generated const table, the read and write paths with their
+ * checks, and conversion between the values block (native representation, laid out by the generated
+ * struct) and the wire (little-endian).
+ */
+#include "priv/co_priv.h"
+
+/* An internal check that fully handled a write (an action such as "save"): nothing is stored. */
+#define CO_HANDLED 1U
+
+static uint32_t entry_key(uint16_t index, uint8_t sub) { return ((uint32_t)index << 8) | sub; }
+
+/* Index of the first row with key >= (index, sub). */
+static uint16_t lower_bound(const co_od_t *od, uint16_t index, uint8_t sub)
+{
+    uint16_t lo = 0U;
+    uint16_t hi = od->count;
+    const uint32_t key = entry_key(index, sub);
+    while (lo < hi) {
+        const uint16_t mid = (uint16_t)(lo + (uint16_t)((hi - lo) / 2U));
+        if (entry_key(od->entries[mid].index, od->entries[mid].sub) < key) {
+            lo = (uint16_t)(mid + 1U);
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub)
+{
+    const uint16_t i = lower_bound(od, index, sub);
+    if (i < od->count && od->entries[i].index == index && od->entries[i].sub == sub) {
+        return &od->entries[i];
+    }
+    return NULL;
+}
+
+uint16_t co_od_first_row(const co_od_t *od, uint16_t index)
+{
+    const uint16_t i = lower_bound(od, index, 0U);
+    return (i < od->count && od->entries[i].index == index) ? i : od->count;
+}
+
+bool co_od_has_index(const co_od_t *od, uint16_t index) { return co_od_first_row(od, index) < od->count; }
+
+uint8_t co_od_sub_count(const co_od_t *od, uint16_t index)
+{
+    uint16_t i = co_od_first_row(od, index);
+    uint8_t n = 0U;
+    for (; i < od->count && od->entries[i].index == index; i++) {
+        if (od->entries[i].sub != 0U) {
+            n++;
+        }
+    }
+    return n;
+}
+
+uint16_t co_od_type_size(uint8_t type)
+{
+    switch (type) {
+    case CO_T_BOOLEAN:
+    case CO_T_INTEGER8:
+    case CO_T_UNSIGNED8:
+        return 1U;
+    case CO_T_INTEGER16:
+    case CO_T_UNSIGNED16:
+        return 2U;
+    case CO_T_INTEGER32:
+    case CO_T_UNSIGNED32:
+    case CO_T_REAL32:
+        return 4U;
+    case CO_T_INTEGER64:
+    case CO_T_UNSIGNED64:
+    case CO_T_REAL64:
+        return 8U;
+    default:
+        return 0U;
+    }
+}
+
+static bool is_bytes(const co_od_entry_t *e)
+{
+    return e->type == CO_T_VISIBLE_STRING || e->type == CO_T_OCTET_STRING || e->type == CO_T_DOMAIN;
+}
+
+static bool is_signed(uint8_t type)
+{
+    return type == CO_T_INTEGER8 || type == CO_T_INTEGER16 || type == CO_T_INTEGER32 || type == CO_T_INTEGER64;
+}
+
+uint8_t *co_od_ptr(co_node_t *node, const co_od_entry_t *e) { return node->values + e->offset; }
+
+/* Native value (1, 2, 4 or 8 bytes) -> little-endian wire bytes. */
+static void native_to_wire(const co_od_entry_t *e, const uint8_t *src, uint8_t *dst)
+{
+    switch (e->size) {
+    case 1U:
+        dst[0] = src[0];
+        break;
+    case 2U: {
+        uint16_t v;
+        memcpy(&v, src, 2U);
+        co_put_u16(dst, v);
+        break;
+    }
+    case 4U: {
+        uint32_t v;
+        memcpy(&v, src, 4U);
+        co_put_u32(dst, v);
+        break;
+    }
+    default: {
+        uint64_t v;
+        memcpy(&v, src, 8U);
+        co_put_u32(dst, (uint32_t)v);
+        co_put_u32(dst + 4, (uint32_t)(v >> 32));
+        break;
+    }
+    }
+}
+
+static void wire_to_native(const co_od_entry_t *e, const uint8_t *src, uint8_t *dst)
+{
+    switch (e->size) {
+    case 1U:
+        dst[0] = src[0];
+        break;
+    case 2U: {
+        const uint16_t v = co_get_u16(src);
+        memcpy(dst, &v, 2U);
+        break;
+    }
+    case 4U: {
+        const uint32_t v = co_get_u32(src);
+        memcpy(dst, &v, 4U);
+        break;
+    }
+    default: {
+        const uint64_t v = (uint64_t)co_get_u32(src) | ((uint64_t)co_get_u32(src + 4) << 32);
+        memcpy(dst, &v, 8U);
+        break;
+    }
+    }
+}
+
+uint32_t co_od_entry_u32(const co_node_t *node, const co_od_entry_t *e)
+{
+    const uint8_t *p = node->values + e->offset;
+    switch (e->size) {
+    case 1U:
+        return p[0];
+    case 2U: {
+        uint16_t v;
+        memcpy(&v, p, 2U);
+        return v;
+    }
+    case 4U: {
+        uint32_t v;
+        memcpy(&v, p, 4U);
+        return v;
+    }
+    default:
+        return 0U;
+    }
+}
+
+void co_od_entry_set_u32(co_node_t *node, const co_od_entry_t *e, uint32_t v)
+{
+    uint8_t *p = node->values + e->offset;
+    switch (e->size) {
+    case 1U:
+        p[0] = (uint8_t)v;
+        break;
+    case 2U: {
+        const uint16_t v16 = (uint16_t)v;
+        memcpy(p, &v16, 2U);
+        break;
+    }
+    case 4U:
+        memcpy(p, &v, 4U);
+        break;
+    default:
+        break;
+    }
+}
+
+uint32_t co_od_u32_or(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t fallback)
+{
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    return e != NULL ? co_od_entry_u32(node, e) : fallback;
+}
+
+void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    uint8_t *p = co_od_ptr(node, e);
+    if (is_bytes(e)) {
+        const size_t n = len < e->size ? len : e->size;
+        memcpy(p, data, n);
+        memset(p + n, 0, (size_t)e->size - n);
+    } else {
+        wire_to_native(e, data, p);
+    }
+}
+
+/* Wire length of a row's current value: strings end at the first NUL. */
+static size_t value_len(co_node_t *node, const co_od_entry_t *e)
+{
+    if (e->type == CO_T_VISIBLE_STRING) {
+        const uint8_t *p = co_od_ptr(node, e);
+        size_t n = 0U;
+        while (n < e->size && p[n] != 0U) {
+            n++;
+        }
+        return n;
+    }
+    return e->size;
+}
+
+size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap)
+{
+    if (node->hooks != NULL && node->hooks->on_read != NULL) {
+        node->hooks->on_read(node->hooks_ctx, node, e);
+    }
+    const size_t n = value_len(node, e);
+    if (n > cap) {
+        return 0U;
+    }
+    if (is_bytes(e)) {
+        memcpy(buf, co_od_ptr(node, e), n);
+    } else {
+        native_to_wire(e, co_od_ptr(node, e), buf);
+    }
+    return n;
+}
+
+/* Sign-extended or zero-extended value of wire bytes of a fixed-size integer row. */
+static int64_t wire_integer(const co_od_entry_t *e, const uint8_t *data)
+{
+    uint64_t u = 0U;
+    for (uint16_t i = e->size; i > 0U; i--) {
+        u = (u << 8) | data[i - 1U];
+    }
+    if (is_signed(e->type) && e->size < 8U && (u & ((uint64_t)1U << (e->size * 8U - 1U))) != 0U) {
+        u |= ~(((uint64_t)1U << (e->size * 8U)) - 1U);
+    }
+    return (int64_t)u;
+}
+
+uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    if (e->limits == NULL || is_bytes(e) || e->type == CO_T_REAL32 || e->type == CO_T_REAL64 ||
+        e->type == CO_T_UNSIGNED64 || len < e->size) {
+        return CO_ABORT_NONE;
+    }
+    const int64_t v = wire_integer(e, data);
+    if (v > e->limits->high) {
+        return CO_ABORT_VALUE_HIGH;
+    }
+    if (v < e->limits->low) {
+        return CO_ABORT_VALUE_LOW;
+    }
+    return CO_ABORT_NONE;
+}
+
+/* Protocol rules of the communication objects, by owner module. CO_HANDLED: an action, nothing to store. */
+static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    switch (e->index) {
+    case 0x1001:
+    case 0x1003:
+    case 0x1014:
+    case 0x1015:
+        if (e->index == 0x1003 && e->sub == 0U) {
+            return co_emcy_write_action(node, e, data, len) ? CO_HANDLED : CO_ABORT_INVALID_VALUE;
+        }
+        return co_emcy_check_write(node, e, data, len);
+#if CO_CONFIG_SYNC
+    case 0x1005:
+    case 0x1006:
+    case 0x1007:
+    case 0x1019:
+        return co_sync_check_write(node, e, data, len);
+#endif
+    case 0x1010:
+    case 0x1011: {
+        const uint32_t r = co_store_check_write(node, e, data, len);
+        return r == CO_ABORT_NONE ? CO_HANDLED : r;
+    }
+    case 0x1016:
+        return co_hbc_check_write(node, e, data, len);
+    case 0x1017:
+        return co_hb_check_write(node, e, data, len);
+    default:
+        if (e->index >= 0x1400U && e->index <= 0x1BFFU) {
+            return co_pdo_check_write(node, e, data, len);
+        }
+        return CO_ABORT_NONE;
+    }
+}
+
+static void comm_written(co_node_t *node, const co_od_entry_t *e)
+{
+    switch (e->index) {
+#if CO_CONFIG_SYNC
+    case 0x1005:
+    case 0x1006:
+    case 0x1007:
+    case 0x1019:
+        co_sync_written(node, e);
+        break;
+#endif
+    case 0x1016:
+        co_hbc_written(node, e);
+        break;
+    case 0x1017:
+        co_hb_written(node, e);
+        break;
+    default:
+        if (e->index >= 0x1400U && e->index <= 0x1BFFU) {
+            co_pdo_written(node, e);
+        }
+        break;
+    }
+}
+
+static uint32_t find_checked(const co_od_t *od, uint16_t index, uint8_t sub, const co_od_entry_t **out)
+{
+    *out = co_od_find(od, index, sub);
+    if (*out != NULL) {
+        return CO_ABORT_NONE;
+    }
+    return co_od_has_index(od, index) ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NO_OBJECT;
+}
+
+uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, size_t cap, size_t *len,
+                    co_od_origin_t origin)
+{
+    const co_od_entry_t *e;
+    uint32_t r = find_checked(node->od, index, sub, &e);
+    *len = 0U;
+    if (r != CO_ABORT_NONE) {
+        return r;
+    }
+    if (origin != CO_ORIGIN_LOCAL && (e->flags & CO_OD_READ) == 0U) {
+        return (e->flags & CO_OD_WRITE) != 0U ? CO_ABORT_WRITE_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
+    }
+    if (e->index == 0x1003U) {
+        r = co_emcy_check_read(node, e);
+        if (r != CO_ABORT_NONE) {
+            return r;
+        }
+    }
+    uint8_t tmp[8];
+    if (!is_bytes(e)) {
+        if (cap < e->size) {
+            return CO_ABORT_LENGTH_HIGH;
+        }
+        *len = co_od_sample(node, e, tmp, sizeof tmp);
+        memcpy(buf, tmp, *len);
+        return CO_ABORT_NONE;
+    }
+    if (node->hooks != NULL && node->hooks->on_read != NULL) {
+        node->hooks->on_read(node->hooks_ctx, node, e);
+    }
+    const size_t n = value_len(node, e);
+    if (n > cap) {
+        return CO_ABORT_LENGTH_HIGH;
+    }
+    memcpy(buf, co_od_ptr(node, e), n);
+    *len = n;
+    return CO_ABORT_NONE;
+}
+
+uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *data, size_t len,
+                     co_od_origin_t origin)
+{
+    const co_od_entry_t *e;
+    const uint8_t *bytes = (const uint8_t *)data;
+    uint32_t r = find_checked(node->od, index, sub, &e);
+    if (r != CO_ABORT_NONE) {
+        return r;
+    }
+    if ((e->flags & CO_OD_CONST) != 0U) {
+        return CO_ABORT_READ_ONLY;
+    }
+    if (origin == CO_ORIGIN_SDO && (e->flags & CO_OD_WRITE) == 0U) {
+        return (e->flags & CO_OD_READ) != 0U ? CO_ABORT_READ_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
+    }
+    if (origin == CO_ORIGIN_RPDO && (e->flags & CO_OD_RPDO) == 0U) {
+        return CO_ABORT_NOT_MAPPABLE;
+    }
+    if (is_bytes(e)) {
+        if (len > e->size) {
+            return CO_ABORT_LENGTH_HIGH;
+        }
+    } else if (len != e->size) {
+        return len > e->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW;
+    }
+    if (origin != CO_ORIGIN_LOCAL) {
+        r = co_od_check_limits(e, bytes, len);
+        if (r != CO_ABORT_NONE) {
+            return r;
+        }
+    }
+    if (index < 0x2000U) {
+        r = comm_check_write(node, e, bytes, len);
+        if (r == CO_HANDLED) {
+            return CO_ABORT_NONE;
+        }
+        if (r != CO_ABORT_NONE) {
+            return r;
+        }
+    }
+    if (node->hooks != NULL && node->hooks->on_write != NULL) {
+        r = node->hooks->on_write(node->hooks_ctx, node, e, bytes, len, origin);
+        if (r != CO_ABORT_NONE) {
+            return r;
+        }
+    }
+    co_od_store_value(node, e, bytes, len);
+    if (index < 0x2000U) {
+        comm_written(node, e);
+    }
+    return CO_ABORT_NONE;
+}
+
+void *co_od_value(co_node_t *node, uint16_t index, uint8_t sub)
+{
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    return e != NULL ? co_od_ptr(node, e) : NULL;
+}
+
+static uint32_t get_sized(co_node_t *node, uint16_t index, uint8_t sub, uint16_t size)
+{
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    return (e != NULL && e->size == size && !is_bytes(e)) ? co_od_entry_u32(node, e) : 0U;
+}
+
+uint8_t co_od_get_u8(co_node_t *node, uint16_t index, uint8_t sub) { return (uint8_t)get_sized(node, index, sub, 1U); }
+uint16_t co_od_get_u16(co_node_t *node, uint16_t index, uint8_t sub)
+{
+    return (uint16_t)get_sized(node, index, sub, 2U);
+}
+uint32_t co_od_get_u32(co_node_t *node, uint16_t index, uint8_t sub) { return get_sized(node, index, sub, 4U); }
+
+static uint32_t set_local(co_node_t *node, uint16_t index, uint8_t sub, uint32_t value, size_t size)
+{
+    uint8_t wire[4];
+    co_put_u32(wire, value);
+    return co_od_write(node, index, sub, wire, size, CO_ORIGIN_LOCAL);
+}
+
+uint32_t co_od_set_u8(co_node_t *node, uint16_t index, uint8_t sub, uint8_t value)
+{
+    return set_local(node, index, sub, value, 1U);
+}
+uint32_t co_od_set_u16(co_node_t *node, uint16_t index, uint8_t sub, uint16_t value)
+{
+    return set_local(node, index, sub, value, 2U);
+}
+uint32_t co_od_set_u32(co_node_t *node, uint16_t index, uint8_t sub, uint32_t value)
+{
+    return set_local(node, index, sub, value, 4U);
+}
+
+void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last)
+{
+    const co_od_t *od = node->od;
+    const uint8_t *defaults = (const uint8_t *)od->defaults;
+    for (uint16_t i = lower_bound(od, first, 0U); i < od->count && od->entries[i].index <= last; i++) {
+        const co_od_entry_t *e = &od->entries[i];
+        memcpy(node->values + e->offset, defaults + e->offset, e->size);
+        if ((e->flags & CO_OD_NODEID) != 0U && node->node_id != CO_NODE_ID_UNCONFIGURED) {
+            co_od_entry_set_u32(node, e, co_od_entry_u32(node, e) + node->node_id);
+        }
+    }
+    co_store_load_area(node, first, last);
+}

@@ -1,0 +1,450 @@
+/*
+ * PDOs (CiA 301 §7.2.2): RPDOs 0x1400+n/0x1600+n, TPDOs 0x1800+n/0x1A00+n, as many as the OD declares.
+ * Mapping is resolved once (at reset and when a parameter changes) into (row, bytes) pairs. Event-driven
+ * TPDOs (254/255) go out when a mapped value changes (compared with what was sent last, so the
+ * application needs no call), when co_tpdo_trigger() asks, and when the event timer expires; always
+ * subject to the inhibit time. Synchronous TPDOs (0..240) and RPDOs go with SYNC. Only in Operational.
+ * Mapping granularity is one byte; entries whose length is not a multiple of 8 bits are refused.
+ */
+#include "priv/co_priv.h"
+
+#define RPDO_COMM 0x1400U
+#define RPDO_MAP 0x1600U
+#define TPDO_COMM 0x1800U
+#define TPDO_MAP 0x1A00U
+
+static const uint8_t rpdo_msef[5] = {0x04U, 0U, 0U, 0U, 0U};
+
+static uint8_t highest_pdo(const co_od_t *od, uint16_t base)
+{
+    uint8_t n = 0U;
+    for (uint16_t i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U;) {
+        const uint16_t num = (uint16_t)(od->entries[i].index - base);
+        n = num >= 0xFFU ? 0xFFU : (uint8_t)(num + 1U);
+        i = (uint16_t)(i + 1U);
+    }
+    return n;
+}
+
+co_status_t co_pdo_count(co_node_t *node)
+{
+    const uint8_t nr = highest_pdo(node->od, RPDO_COMM);
+    const uint8_t nt = highest_pdo(node->od, TPDO_COMM);
+    if (nr > CO_RPDO_MAX || nt > CO_TPDO_MAX) {
+        return CO_ERR_RANGE;
+    }
+    node->n_rpdo = nr;
+    node->n_tpdo = nt;
+    return CO_OK;
+}
+
+/* Resolves one mapping value (index << 16 | sub << 8 | bits). Returns 0 or the abort code. */
+static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_pdo_map_t *out)
+{
+    const uint16_t index = (uint16_t)(value >> 16);
+    const uint8_t sub = (uint8_t)(value >> 8);
+    const uint8_t bits = (uint8_t)value;
+    if (bits == 0U || (bits % 8U) != 0U) {
+        return CO_ABORT_NOT_MAPPABLE;
+    }
+    out->len = (uint8_t)(bits / 8U);
+    out->entry = NULL;
+    if (receive && index >= 0x0001U && index <= 0x0007U && sub == 0U) {
+        return out->len <= 8U ? CO_ABORT_NONE : CO_ABORT_PDO_LENGTH; /* dummy entry: skips bytes */
+    }
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    if (e == NULL) {
+        return co_od_has_index(node->od, index) ? CO_ABORT_NOT_MAPPABLE : CO_ABORT_NO_OBJECT;
+    }
+    if ((e->flags & (receive ? CO_OD_RPDO : CO_OD_TPDO)) == 0U || e->size != out->len) {
+        return CO_ABORT_NOT_MAPPABLE;
+    }
+    out->entry = e;
+    return CO_ABORT_NONE;
+}
+
+/* Resolves a whole mapping; returns the mapped byte count, or -1 when invalid. */
+static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, co_pdo_map_t map[8], uint8_t *n_out)
+{
+    const uint32_t n = co_od_u32_or(node, map_index, 0U, 0U);
+    int total = 0;
+    *n_out = 0U;
+    if (n > 8U) {
+        return -1;
+    }
+    for (uint8_t i = 1U; i <= n; i++) {
+        if (resolve(node, co_od_u32_or(node, map_index, i, 0U), receive, &map[i - 1U]) != CO_ABORT_NONE) {
+            return -1;
+        }
+        total += map[i - 1U].len;
+    }
+    if (total > 8) {
+        return -1;
+    }
+    *n_out = (uint8_t)n;
+    return total;
+}
+
+static void configure_rpdo(co_node_t *node, uint8_t n)
+{
+    co_rpdo_t *p = &node->rpdo[n];
+    const uint16_t comm = (uint16_t)(RPDO_COMM + n);
+    p->cob_id = co_od_u32_or(node, comm, 1U, CO_COBID_INVALID);
+    p->type = (uint8_t)co_od_u32_or(node, comm, 2U, 255U);
+    const int len = resolve_all(node, (uint16_t)(RPDO_MAP + n), true, p->map, &p->n_map);
+    p->map_len = len > 0 ? (uint8_t)len : 0U;
+    p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
+    p->sync_pending = false;
+    p->deadline = CO_NEVER;
+}
+
+static void configure_tpdo(co_node_t *node, uint8_t n)
+{
+    co_tpdo_t *p = &node->tpdo[n];
+    const uint16_t comm = (uint16_t)(TPDO_COMM + n);
+    p->cob_id = co_od_u32_or(node, comm, 1U, CO_COBID_INVALID);
+    p->type = (uint8_t)co_od_u32_or(node, comm, 2U, 255U);
+    p->inhibit_us = co_od_u32_or(node, comm, 3U, 0U) * 100U;
+    p->event_us = co_od_u32_or(node, comm, 5U, 0U) * 1000U;
+    p->sync_start = (uint8_t)co_od_u32_or(node, comm, 6U, 0U);
+    const int len = resolve_all(node, (uint16_t)(TPDO_MAP + n), false, p->map, &p->n_map);
+    p->map_len = len > 0 ? (uint8_t)len : 0U;
+    p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
+    p->sent_once = false;
+    p->event = false;
+    p->next_allowed = 0U;
+    p->event_due = CO_NEVER;
+    p->sync_count = 0U;
+    p->sync_started = p->sync_start == 0U;
+}
+
+void co_pdo_reset(co_node_t *node)
+{
+    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+        node->rpdo[n].length_error = false;
+        node->rpdo[n].timeout_error = false;
+        configure_rpdo(node, n);
+    }
+    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+        configure_tpdo(node, n);
+    }
+}
+
+static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
+{
+    uint8_t pos = 0U;
+    for (uint8_t i = 0U; i < p->n_map; i++) {
+        const co_od_entry_t *e = p->map[i].entry;
+        if (e != NULL) {
+            /* The device hook may refuse a value; an RPDO has no way to answer, so it is dropped. */
+            (void)co_od_write(node, e->index, e->sub, &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
+        }
+        pos = (uint8_t)(pos + p->map[i].len);
+    }
+}
+
+static void rpdo_length_error(co_node_t *node, co_rpdo_t *p, uint16_t code)
+{
+    if (!p->length_error) {
+        p->length_error = true;
+        (void)co_emcy_raise(node, code, 0x10U, rpdo_msef);
+    }
+}
+
+bool co_pdo_rx(co_node_t *node, const co_frame_t *f)
+{
+    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+        co_rpdo_t *p = &node->rpdo[n];
+        if (!p->valid || f->id != (p->cob_id & CO_COBID_CAN_ID)) {
+            continue;
+        }
+        if (node->nmt_state != CO_NMT_OPERATIONAL) {
+            return true; /* dropped, not applied later */
+        }
+        if (f->len < p->map_len) {
+            rpdo_length_error(node, p, 0x8210U); /* data discarded */
+            return true;
+        }
+        if (f->len > p->map_len) {
+            rpdo_length_error(node, p, 0x8220U); /* first mapped bytes applied */
+        } else if (p->length_error) {
+            p->length_error = false;
+            if (!co_emcy_clear(node, 0x8210U, rpdo_msef)) {
+                (void)co_emcy_clear(node, 0x8220U, rpdo_msef);
+            }
+        }
+        if (p->type <= 240U) {
+            memcpy(p->sync_data, f->data, p->map_len);
+            p->sync_len = p->map_len;
+            p->sync_pending = true;
+        } else {
+            rpdo_apply(node, p, f->data);
+        }
+        const uint32_t event_ms = co_od_u32_or(node, (uint16_t)(RPDO_COMM + n), 5U, 0U);
+        p->deadline = event_ms != 0U ? node->now + (co_time_us_t)event_ms * 1000U : CO_NEVER;
+        if (p->timeout_error) {
+            p->timeout_error = false;
+            (void)co_emcy_clear(node, 0x8250U, rpdo_msef);
+        }
+        return true;
+    }
+    return false;
+}
+
+static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
+{
+    uint8_t pos = 0U;
+    memset(buf, 0, 8U);
+    for (uint8_t i = 0U; i < p->n_map; i++) {
+        (void)co_od_sample(node, p->map[i].entry, &buf[pos], p->map[i].len);
+        pos = (uint8_t)(pos + p->map[i].len);
+    }
+    return pos;
+}
+
+static void tpdo_send(co_node_t *node, co_tpdo_t *p, const uint8_t buf[8])
+{
+    co_frame_t f = {p->cob_id & CO_COBID_CAN_ID, p->map_len, 0U, {0U}};
+    memcpy(f.data, buf, p->map_len);
+    co_node_send(node, &f);
+    memcpy(p->last, buf, 8U);
+    p->sent_once = true;
+    p->event = false;
+    p->next_allowed = node->now + p->inhibit_us;
+}
+
+static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
+{
+    uint8_t buf[8];
+    (void)tpdo_sample(node, p, buf);
+    const bool changed = !p->sent_once || p->event || memcmp(buf, p->last, 8U) != 0;
+    const bool timer = p->event_due != CO_NEVER && node->now >= p->event_due;
+    if (changed || timer) {
+        if (node->now < p->next_allowed) {
+            p->event = true; /* waits for the inhibit time */
+            return co_min_time(p->next_allowed, p->event_due);
+        }
+        tpdo_send(node, p, buf);
+        if (p->event_us == 0U) {
+            p->event_due = CO_NEVER;
+        } else if (timer && !changed) {
+            /* Timer-driven: stay on the original grid so late calls do not accumulate drift. */
+            p->event_due += p->event_us * (1U + (node->now - p->event_due) / p->event_us);
+        } else {
+            p->event_due = node->now + p->event_us; /* the event timer restarts at every transmission */
+        }
+    }
+    return p->event_due;
+}
+
+co_time_us_t co_pdo_process(co_node_t *node)
+{
+    co_time_us_t next = CO_NEVER;
+    if (node->nmt_state != CO_NMT_OPERATIONAL) {
+        return next;
+    }
+    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+        co_rpdo_t *p = &node->rpdo[n];
+        if (!p->valid || p->deadline == CO_NEVER) {
+            continue;
+        }
+        if (node->now >= p->deadline) {
+            p->deadline = CO_NEVER;
+            p->timeout_error = true;
+            (void)co_emcy_raise(node, 0x8250U, 0x10U, rpdo_msef);
+        } else {
+            next = co_min_time(next, p->deadline);
+        }
+    }
+    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+        co_tpdo_t *p = &node->tpdo[n];
+        if (p->valid && p->type >= 254U) {
+            next = co_min_time(next, tpdo_event_driven(node, p));
+        }
+    }
+    return next;
+}
+
+void co_pdo_on_sync(co_node_t *node, uint8_t counter)
+{
+    if (node->nmt_state != CO_NMT_OPERATIONAL) {
+        return;
+    }
+    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+        co_rpdo_t *p = &node->rpdo[n];
+        if (p->valid && p->sync_pending) {
+            p->sync_pending = false;
+            rpdo_apply(node, p, p->sync_data);
+        }
+    }
+    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+        co_tpdo_t *p = &node->tpdo[n];
+        if (!p->valid || p->type > 240U) {
+            continue;
+        }
+        if (!p->sync_started) {
+            if (counter != 0U && counter != p->sync_start) {
+                continue;
+            }
+            p->sync_started = true;
+            p->sync_count = p->type; /* the first transmission is at the SYNC carrying the start value */
+        }
+        uint8_t buf[8];
+        (void)tpdo_sample(node, p, buf);
+        if (p->type == 0U) {
+            if (p->event || !p->sent_once || memcmp(buf, p->last, 8U) != 0) {
+                tpdo_send(node, p, buf); /* acyclic: only when something changed */
+            }
+            continue;
+        }
+        p->sync_count++;
+        if (p->sync_count >= p->type) {
+            p->sync_count = 0U;
+            tpdo_send(node, p, buf);
+        }
+    }
+}
+
+void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
+{
+    if (from != CO_NMT_OPERATIONAL && to != CO_NMT_OPERATIONAL) {
+        return;
+    }
+    /* Entering or leaving Operational: timers and SYNC counts restart; on entering, every event-driven
+     * TPDO is sent once at once (its first "change"), as CANopenNode does. */
+    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+        co_tpdo_t *p = &node->tpdo[n];
+        p->sent_once = false;
+        p->event = false;
+        p->next_allowed = 0U;
+        p->event_due = CO_NEVER;
+        p->sync_count = 0U;
+        p->sync_started = p->sync_start == 0U;
+    }
+    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+        node->rpdo[n].sync_pending = false;
+        node->rpdo[n].deadline = CO_NEVER;
+    }
+}
+
+void co_tpdo_trigger(co_node_t *node, uint8_t n)
+{
+    if (n < node->n_tpdo) {
+        node->tpdo[n].event = true;
+    }
+}
+
+static bool pdo_is_valid(const co_node_t *node, uint16_t comm_index)
+{
+    return (co_od_u32_or(node, comm_index, 1U, CO_COBID_INVALID) & CO_COBID_INVALID) == 0U;
+}
+
+static uint32_t check_comm(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool receive)
+{
+    const bool valid = pdo_is_valid(node, e->index);
+    switch (e->sub) {
+    case 1: {
+        const uint32_t v = co_get_u32(data);
+        const uint32_t cur = co_od_entry_u32(node, e);
+        if ((v & 0x3FFFF800UL) != 0U) {
+            return CO_ABORT_INVALID_VALUE; /* 29-bit identifiers and reserved bits */
+        }
+        if ((v & CO_COBID_INVALID) != 0U) {
+            return CO_ABORT_NONE;
+        }
+        if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
+            return CO_ABORT_INVALID_VALUE;
+        }
+        if (valid && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
+            return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while the PDO is invalid */
+        }
+        const uint16_t map = (uint16_t)(e->index + 0x200U);
+        co_pdo_map_t tmp[8];
+        uint8_t n;
+        if (resolve_all(node, map, receive, tmp, &n) <= 0) {
+            return CO_ABORT_INVALID_VALUE; /* a PDO without a valid, non-empty mapping cannot be valid */
+        }
+        return CO_ABORT_NONE;
+    }
+    case 2:
+        return (data[0] >= 241U && data[0] <= 253U) ? CO_ABORT_INVALID_VALUE : CO_ABORT_NONE;
+    case 3:
+    case 6:
+        return (!receive && valid) ? CO_ABORT_INVALID_VALUE : CO_ABORT_NONE;
+    default:
+        return CO_ABORT_NONE;
+    }
+}
+
+static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool receive)
+{
+#if CO_CONFIG_PDO_DYNAMIC_MAPPING
+    if (pdo_is_valid(node, (uint16_t)(e->index - 0x200U))) {
+        return CO_ABORT_UNSUPPORTED_ACCESS; /* step 1 of the mapping procedure: make the PDO invalid */
+    }
+    if (e->sub == 0U) {
+        const uint8_t n = data[0];
+        if (n > 8U || n > co_od_sub_count(node->od, e->index)) {
+            return CO_ABORT_PDO_LENGTH;
+        }
+        uint32_t bytes = 0U;
+        for (uint8_t i = 1U; i <= n; i++) {
+            co_pdo_map_t m;
+            const uint32_t r = resolve(node, co_od_u32_or(node, e->index, i, 0U), receive, &m);
+            if (r != CO_ABORT_NONE) {
+                return r;
+            }
+            bytes += m.len;
+        }
+        return bytes > 8U ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
+    }
+    if (co_od_u32_or(node, e->index, 0U, 0U) != 0U) {
+        return CO_ABORT_UNSUPPORTED_ACCESS; /* step 2: sub 0 must be 0 while entries change */
+    }
+    const uint32_t v = co_get_u32(data);
+    if (v == 0U) {
+        return CO_ABORT_NONE;
+    }
+    if ((v & 0xFFU) > 64U) {
+        return CO_ABORT_PDO_LENGTH;
+    }
+    co_pdo_map_t m;
+    return resolve(node, v, receive, &m);
+#else
+    (void)node;
+    (void)e;
+    (void)data;
+    (void)receive;
+    return CO_ABORT_READ_ONLY;
+#endif
+}
+
+uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    (void)len;
+    const uint16_t base = (uint16_t)(e->index & 0xFE00U);
+    const uint16_t n = (uint16_t)(e->index & 0x01FFU);
+    switch (base) {
+    case RPDO_COMM:
+        return n < node->n_rpdo ? check_comm(node, e, data, true) : CO_ABORT_NONE;
+    case TPDO_COMM:
+        return n < node->n_tpdo ? check_comm(node, e, data, false) : CO_ABORT_NONE;
+    case RPDO_MAP:
+        return n < node->n_rpdo ? check_map(node, e, data, true) : CO_ABORT_NONE;
+    case TPDO_MAP:
+        return n < node->n_tpdo ? check_map(node, e, data, false) : CO_ABORT_NONE;
+    default:
+        return CO_ABORT_NONE;
+    }
+}
+
+void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
+{
+    const uint16_t base = (uint16_t)(e->index & 0xFE00U);
+    const uint16_t n = (uint16_t)(e->index & 0x01FFU);
+    if ((base == RPDO_COMM || base == RPDO_MAP) && n < node->n_rpdo) {
+        configure_rpdo(node, (uint8_t)n);
+    } else if ((base == TPDO_COMM || base == TPDO_MAP) && n < node->n_tpdo) {
+        configure_tpdo(node, (uint8_t)n);
+    }
+}

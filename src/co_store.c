@@ -1,0 +1,272 @@
+/*
+ * Store and restore parameters (CiA 301 §7.5.2.13/14, objects 0x1010/0x1011) and the LSS configuration.
+ *
+ * Parameter blob (area CO_NVM_PARAMS), all numbers little-endian:
+ *   header  "COS1" | OD signature (u32) | payload length (u32) | CRC-32 of the payload (u32)
+ *   payload records, sorted by (index, sub): index (u16) | sub (u8) | length (u8) | value (wire format)
+ * Records name their object, so a blob survives a changed table layout as long as the signature matches.
+ * Saving a group (0x1010 sub 2 = 0x1000-0x1FFF, 3 = 0x6000-0x9FFF, 4 = 0x2000-0x5FFF, 1 and others = all)
+ * merges the current values of the group with the stored records of the other groups in one pass.
+ * Restoring writes a blob without the group's records (except rows marked CO_OD_KEEP), so the defaults
+ * return at the next reset, as CiA 301 prescribes; the running values do not change.
+ *
+ * LSS blob (area CO_NVM_LSS): "COL1" | node-ID (u8) | bit-timing index (u8) | 0 | 0 | CRC-32 of bytes 0..7.
+ */
+#include "priv/co_priv.h"
+
+#define SIG_SAVE 0x65766173UL /* "save" */
+#define SIG_LOAD 0x64616F6CUL /* "load" */
+#define HEADER_LEN 16U
+#define PAYLOAD_MAX 0x10000UL
+#define RECORD_HEAD 4U
+
+uint32_t co_crc32(uint32_t crc, const uint8_t *data, size_t len)
+{
+    crc = ~crc;
+    for (size_t i = 0U; i < len; i++) {
+        crc ^= data[i];
+        for (uint8_t b = 0U; b < 8U; b++) {
+            crc = (crc >> 1) ^ (0xEDB88320UL & (0U - (crc & 1U)));
+        }
+    }
+    return ~crc;
+}
+
+static bool have_read(const co_node_t *node) { return node->port->nvm_read != NULL; }
+static bool have_write(const co_node_t *node)
+{
+    return node->port->nvm_write != NULL && node->port->nvm_commit != NULL;
+}
+
+/* Validates the stored parameter blob; returns its payload length through *len. */
+static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
+{
+    uint8_t h[HEADER_LEN];
+    *len = 0U;
+    if (!have_read(node) || node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) != CO_OK) {
+        return CO_NVM_NONE;
+    }
+    const uint32_t payload = co_get_u32(&h[8]);
+    if (memcmp(h, "COS1", 4U) != 0 || payload > PAYLOAD_MAX) {
+        return CO_NVM_CORRUPT;
+    }
+    uint32_t crc = 0U;
+    uint8_t chunk[32];
+    for (uint32_t pos = 0U; pos < payload;) {
+        const uint32_t n = (payload - pos) < sizeof chunk ? (payload - pos) : (uint32_t)sizeof chunk;
+        if (node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + pos, chunk, n) != CO_OK) {
+            return CO_NVM_CORRUPT; /* truncated */
+        }
+        crc = co_crc32(crc, chunk, n);
+        pos += n;
+    }
+    if (crc != co_get_u32(&h[12])) {
+        return CO_NVM_CORRUPT;
+    }
+    if (co_get_u32(&h[4]) != node->od->signature) {
+        return CO_NVM_FOREIGN;
+    }
+    *len = payload;
+    return CO_NVM_LOADED;
+}
+
+/* Sequential reader of the stored records. */
+typedef struct record_reader {
+    co_node_t *node;
+    uint32_t pos;
+    uint32_t end;
+    uint16_t index;
+    uint8_t sub;
+    uint8_t len;
+    uint8_t value[255];
+    bool valid;
+} record_reader_t;
+
+static void reader_next(record_reader_t *r)
+{
+    uint8_t head[RECORD_HEAD];
+    r->valid = false;
+    if (r->pos + RECORD_HEAD > r->end ||
+        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos, head, RECORD_HEAD) != CO_OK) {
+        return;
+    }
+    r->index = co_get_u16(head);
+    r->sub = head[2];
+    r->len = head[3];
+    if (r->pos + RECORD_HEAD + r->len > r->end ||
+        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos + RECORD_HEAD, r->value,
+                                r->len) != CO_OK) {
+        return;
+    }
+    r->pos += RECORD_HEAD + r->len;
+    r->valid = true;
+}
+
+static co_nvm_status_t reader_open(record_reader_t *r, co_node_t *node)
+{
+    r->node = node;
+    r->pos = 0U;
+    r->valid = false;
+    const co_nvm_status_t st = params_check(node, &r->end);
+    if (st == CO_NVM_LOADED) {
+        reader_next(r);
+    }
+    return st;
+}
+
+/* Advances to the first record whose key is >= (index, sub); true when it is exactly that key. */
+static bool reader_seek(record_reader_t *r, uint16_t index, uint8_t sub)
+{
+    const uint32_t key = ((uint32_t)index << 8) | sub;
+    while (r->valid && (((uint32_t)r->index << 8) | r->sub) < key) {
+        reader_next(r);
+    }
+    return r->valid && r->index == index && r->sub == sub;
+}
+
+void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
+{
+    record_reader_t local;
+    node->nvm_status = reader_open(&local, node);
+    for (; local.valid; reader_next(&local)) {
+        if (local.index < first || local.index > last) {
+            continue;
+        }
+        const co_od_entry_t *e = co_od_find(node->od, local.index, local.sub);
+        if (e == NULL || (e->flags & CO_OD_STORE) == 0U) {
+            continue;
+        }
+        const uint16_t fixed = co_od_type_size(e->type);
+        if ((fixed != 0U && local.len != fixed) || local.len > e->size) {
+            continue;
+        }
+        co_od_store_value(node, e, local.value, local.len);
+    }
+}
+
+static bool in_group(uint8_t sub, uint16_t index)
+{
+    switch (sub) {
+    case 2:
+        return index >= 0x1000U && index <= 0x1FFFU;
+    case 3:
+        return index >= 0x6000U && index <= 0x9FFFU;
+    case 4:
+        return index >= 0x2000U && index <= 0x5FFFU;
+    default:
+        return true;
+    }
+}
+
+/* Streams records to the staging area and keeps the running CRC. */
+typedef struct blob_writer {
+    co_node_t *node;
+    uint32_t pos;
+    uint32_t crc;
+    bool ok;
+} blob_writer_t;
+
+static void writer_put(blob_writer_t *w, uint16_t index, uint8_t sub, const uint8_t *value, uint8_t len)
+{
+    uint8_t head[RECORD_HEAD];
+    co_put_u16(head, index);
+    head[2] = sub;
+    head[3] = len;
+    if (!w->ok) {
+        return;
+    }
+    w->ok = w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, head, RECORD_HEAD) == CO_OK &&
+            w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos + RECORD_HEAD, value, len) ==
+                CO_OK;
+    w->crc = co_crc32(w->crc, head, RECORD_HEAD);
+    w->crc = co_crc32(w->crc, value, len);
+    w->pos += RECORD_HEAD + (uint32_t)len;
+}
+
+/* True when a row holds its node-ID-relative default: not stored, so a new node-ID moves it along. */
+static bool at_relative_default(co_node_t *node, const co_od_entry_t *e)
+{
+    if ((e->flags & CO_OD_NODEID) == 0U) {
+        return false;
+    }
+    uint32_t def = 0U;
+    memcpy(&def, (const uint8_t *)node->od->defaults + e->offset, e->size < 4U ? e->size : 4U);
+    return co_od_entry_u32(node, e) == def + node->node_id;
+}
+
+/* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay). */
+static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
+{
+    record_reader_t old;
+    blob_writer_t w = {node, 0U, 0U, true};
+    (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
+    for (uint16_t i = 0U; i < node->od->count; i++) {
+        const co_od_entry_t *e = &node->od->entries[i];
+        if ((e->flags & CO_OD_STORE) == 0U) {
+            continue;
+        }
+        const bool stored = reader_seek(&old, e->index, e->sub);
+        if (save && in_group(group, e->index)) {
+            if (!at_relative_default(node, e)) {
+                uint8_t value[255];
+                const size_t n = co_od_sample(node, e, value, sizeof value);
+                writer_put(&w, e->index, e->sub, value, (uint8_t)n);
+            }
+        } else if (stored && (save || !in_group(group, e->index) || (e->flags & CO_OD_KEEP) != 0U)) {
+            writer_put(&w, e->index, e->sub, old.value, old.len);
+        }
+    }
+    uint8_t h[HEADER_LEN];
+    memcpy(h, "COS1", 4U);
+    co_put_u32(&h[4], node->od->signature);
+    co_put_u32(&h[8], w.pos);
+    co_put_u32(&h[12], w.crc);
+    if (!w.ok || node->port->nvm_write(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) != CO_OK ||
+        node->port->nvm_commit(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w.pos) != CO_OK) {
+        return CO_ERR_IO;
+    }
+    return CO_OK;
+}
+
+uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    const bool save = e->index == 0x1010U;
+    if (e->sub == 0U || len != 4U) {
+        return CO_ABORT_READ_ONLY;
+    }
+    if (co_get_u32(data) != (save ? SIG_SAVE : SIG_LOAD)) {
+        return CO_ABORT_STORE; /* wrong signature */
+    }
+    uint32_t r = CO_ABORT_NONE;
+    if (!have_write(node) || rewrite(node, e->sub, save) != CO_OK) {
+        r = CO_ABORT_HARDWARE;
+    }
+    co_node_event(node, save ? CO_EV_STORE : CO_EV_RESTORE, e->index, e->sub, 0U, r);
+    return r;
+}
+
+co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
+{
+    uint8_t b[12] = {'C', 'O', 'L', '1', node_id, bit_timing, 0U, 0U, 0U, 0U, 0U, 0U};
+    co_put_u32(&b[8], co_crc32(0U, b, 8U));
+    if (!have_write(node) || node->port->nvm_write(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) != CO_OK ||
+        node->port->nvm_commit(node->port_ctx, CO_NVM_LSS, sizeof b) != CO_OK) {
+        return CO_ERR_IO;
+    }
+    return CO_OK;
+}
+
+bool co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing)
+{
+    uint8_t b[12];
+    if (!have_read(node) || node->port->nvm_read(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) != CO_OK ||
+        memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
+        return false;
+    }
+    if ((b[4] < 1U || b[4] > 127U) && b[4] != CO_NODE_ID_UNCONFIGURED) {
+        return false;
+    }
+    *node_id = b[4];
+    *bit_timing = b[5];
+    return true;
+}

@@ -1,0 +1,133 @@
+/*
+ * Internal interfaces between the core's service modules. Not installed; applications use include/co/.
+ * Each service module (co_nmt.c, co_hb.c, ...) exposes here its rx/process/reset functions and the
+ * checks it applies to writes of the communication objects it owns.
+ */
+#ifndef CO_PRIV_H
+#define CO_PRIV_H
+
+#include <string.h>
+
+#include "co/co.h"
+
+/* ---- Little-endian codec: CANopen puts every multi-byte number on the wire LSB first. ---- */
+static inline uint16_t co_get_u16(const uint8_t *p) { return (uint16_t)(p[0] | (uint16_t)(p[1] << 8)); }
+static inline uint32_t co_get_u32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+static inline void co_put_u16(uint8_t *p, uint16_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
+static inline void co_put_u32(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+    p[2] = (uint8_t)(v >> 16);
+    p[3] = (uint8_t)(v >> 24);
+}
+static inline co_time_us_t co_min_time(co_time_us_t a, co_time_us_t b) { return a < b ? a : b; }
+
+/* COB-ID bits (0x1005, 0x1014, 0x14xx/0x18xx sub 1). */
+#define CO_COBID_INVALID 0x80000000UL
+#define CO_COBID_NO_RTR 0x40000000UL   /* TPDO: no RTR; SYNC: bit 30 = "produce SYNC" */
+#define CO_COBID_FRAME 0x20000000UL    /* 29-bit frame */
+#define CO_COBID_CAN_ID 0x000007FFUL
+
+/* ---- OD internals (co_od.c) ---- */
+uint8_t *co_od_ptr(co_node_t *node, const co_od_entry_t *e);
+/* Raw value get/set of a row (native LE bytes in the values block); u32 helpers widen/narrow 1..4 bytes. */
+uint32_t co_od_entry_u32(const co_node_t *node, const co_od_entry_t *e);
+void co_od_entry_set_u32(co_node_t *node, const co_od_entry_t *e, uint32_t v);
+/* Same by index/sub; 'fallback' when the row does not exist. */
+uint32_t co_od_u32_or(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t fallback);
+/* Re-initialises the rows with first <= index <= last from defaults (node-ID added) then stored values. */
+void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last);
+/* Number of sub-indices > 0 an object has in the table (e.g. size of 0x1003 or 0x1016). */
+uint8_t co_od_sub_count(const co_od_t *od, uint16_t index);
+/* Index of the first row of an object, or od->count. */
+uint16_t co_od_first_row(const co_od_t *od, uint16_t index);
+/* Writes an entry's value from a buffer; len may be shorter for strings (rest zeroed). No checks. */
+void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+/* Reads a row for a PDO or SDO after the device's read hook (no access check). Returns bytes copied. */
+size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap);
+/* Checks a value against the row's limits; 0 or VALUE_HIGH/VALUE_LOW. */
+uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t len);
+
+/* ---- node (co_node.c) ---- */
+/* Queues/sends a frame through the port; frames are retried when the port is busy. */
+void co_node_send(co_node_t *node, const co_frame_t *frame);
+void co_node_event(co_node_t *node, co_event_kind_t kind, uint16_t index, uint8_t sub, uint32_t value,
+                   uint32_t code);
+void co_node_set_state(co_node_t *node, co_nmt_state_t state);
+
+/* ---- NMT (co_nmt.c) ---- */
+void co_nmt_rx(co_node_t *node, const co_frame_t *f);
+
+/* ---- Heartbeat producer (co_hb.c) ---- */
+void co_hb_reset(co_node_t *node);
+co_time_us_t co_hb_process(co_node_t *node);
+uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+void co_hb_written(co_node_t *node, const co_od_entry_t *e);
+
+/* ---- Heartbeat consumer (co_hb_consumer.c) ---- */
+void co_hbc_reset(co_node_t *node);
+bool co_hbc_rx(co_node_t *node, const co_frame_t *f);
+co_time_us_t co_hbc_process(co_node_t *node);
+uint32_t co_hbc_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+void co_hbc_written(co_node_t *node, const co_od_entry_t *e);
+
+/* ---- Node guarding (co_guard.c) ---- */
+void co_guard_reset(co_node_t *node);
+void co_guard_rx(co_node_t *node, const co_frame_t *f);
+co_time_us_t co_guard_process(co_node_t *node);
+
+/* ---- EMCY (co_emcy.c) ---- */
+void co_emcy_reset(co_node_t *node);
+co_time_us_t co_emcy_process(co_node_t *node);
+uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e);
+bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+
+/* ---- SDO server (co_sdo_server.c) ---- */
+void co_sdo_reset(co_node_t *node);
+void co_sdo_rx(co_node_t *node, const co_frame_t *f);
+co_time_us_t co_sdo_process(co_node_t *node);
+
+/* ---- SYNC (co_sync.c) ---- */
+void co_sync_reset(co_node_t *node);
+bool co_sync_rx(co_node_t *node, const co_frame_t *f);
+co_time_us_t co_sync_process(co_node_t *node);
+uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+void co_sync_written(co_node_t *node, const co_od_entry_t *e);
+
+/* ---- PDO (co_pdo.c) ---- */
+void co_pdo_reset(co_node_t *node);
+bool co_pdo_rx(co_node_t *node, const co_frame_t *f);
+co_time_us_t co_pdo_process(co_node_t *node);
+void co_pdo_on_sync(co_node_t *node, uint8_t counter);
+void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to);
+uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+void co_pdo_written(co_node_t *node, const co_od_entry_t *e);
+co_status_t co_pdo_count(co_node_t *node);
+
+/* ---- Store / restore (co_store.c) ---- */
+uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+/* Loads stored values of the rows first..last into the values block. Sets node->nvm_status. */
+void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last);
+co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timing);
+bool co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing);
+uint32_t co_crc32(uint32_t crc, const uint8_t *data, size_t len);
+
+/* ---- LSS slave (co_lss_slave.c) ---- */
+void co_lss_init(co_node_t *node);
+void co_lss_rx(co_node_t *node, const co_frame_t *f);
+co_time_us_t co_lss_process(co_node_t *node);
+
+/* ---- COB-ID rules shared by SYNC, EMCY and PDO ---- */
+/* True when a CAN-ID may not be used for SYNC/TIME/EMCY/PDO/SDO (CiA 301 restricted identifiers). */
+bool co_cob_id_restricted(uint32_t can_id);
+
+#endif /* CO_PRIV_H */

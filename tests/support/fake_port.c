@@ -1,0 +1,74 @@
+#include "fake_port.h"
+
+#include <string.h>
+
+static co_status_t fake_send(void *ctx, const co_frame_t *frame)
+{
+    fake_port_t *fp = (fake_port_t *)ctx;
+    if (fp->busy_count > 0U) {
+        fp->busy_count--;
+        return CO_ERR_BUSY;
+    }
+    if (fp->send_io_error) {
+        return CO_ERR_IO;
+    }
+    if (fp->n_sent < FAKE_PORT_MAX_FRAMES) {
+        fp->sent[fp->n_sent] = *frame;
+        fp->sent_at[fp->n_sent] = fp->clock != NULL ? *fp->clock : 0U;
+        fp->n_sent++;
+    }
+    return CO_OK;
+}
+
+static co_status_t fake_nvm_write(void *ctx, co_nvm_area_t area, uint32_t offset, const void *data, size_t len)
+{
+    fake_port_t *fp = (fake_port_t *)ctx;
+    if (fp->nvm_fail_write || offset + len > FAKE_NVM_SIZE) {
+        return CO_ERR_IO;
+    }
+    memcpy(&fp->nvm[area].staging[offset], data, len);
+    return CO_OK;
+}
+
+static co_status_t fake_nvm_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
+{
+    fake_port_t *fp = (fake_port_t *)ctx;
+    if (fp->nvm_fail_commit || total_len > FAKE_NVM_SIZE) {
+        return CO_ERR_IO;
+    }
+    memcpy(fp->nvm[area].stored, fp->nvm[area].staging, total_len);
+    fp->nvm[area].stored_len = total_len;
+    fp->nvm[area].commits++;
+    return CO_OK;
+}
+
+static co_status_t fake_nvm_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *data, size_t len)
+{
+    fake_port_t *fp = (fake_port_t *)ctx;
+    if (offset + len > fp->nvm[area].stored_len) {
+        return CO_ERR_NO_DATA;
+    }
+    memcpy(data, &fp->nvm[area].stored[offset], len);
+    return CO_OK;
+}
+
+static co_status_t fake_set_bit_rate(void *ctx, uint32_t kbit)
+{
+    fake_port_t *fp = (fake_port_t *)ctx;
+    fp->bit_rate_kbit = kbit;
+    fp->bit_rate_calls++;
+    return CO_OK;
+}
+
+void fake_port_init(fake_port_t *fp, const co_time_us_t *clock)
+{
+    memset(fp, 0, sizeof *fp);
+    fp->port.send = fake_send;
+    fp->port.nvm_write = fake_nvm_write;
+    fp->port.nvm_commit = fake_nvm_commit;
+    fp->port.nvm_read = fake_nvm_read;
+    fp->port.set_bit_rate = fake_set_bit_rate;
+    fp->clock = clock;
+}
+
+void fake_port_clear(fake_port_t *fp) { fp->n_sent = 0U; }

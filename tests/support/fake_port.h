@@ -1,0 +1,40 @@
+/*
+ * A fake port for unit tests: records every frame sent (with the simulated time), can refuse sends
+ * (busy or I/O error) and simulates the two NVM areas with staging and atomic commit, with failure injection.
+ */
+#ifndef FAKE_PORT_H
+#define FAKE_PORT_H
+
+#include "co/co.h"
+
+#define FAKE_PORT_MAX_FRAMES 4096U
+#define FAKE_NVM_SIZE 4096U
+
+typedef struct fake_nvm_area {
+    uint8_t stored[FAKE_NVM_SIZE];
+    uint32_t stored_len;    /* 0 = nothing stored */
+    uint8_t staging[FAKE_NVM_SIZE];
+    uint32_t commits;
+} fake_nvm_area_t;
+
+typedef struct fake_port {
+    co_port_t port;          /* the vtable handed to the node; ctx = this struct */
+    co_frame_t sent[FAKE_PORT_MAX_FRAMES];
+    co_time_us_t sent_at[FAKE_PORT_MAX_FRAMES];
+    uint32_t n_sent;
+    const co_time_us_t *clock; /* where the test keeps "now", to timestamp frames */
+    uint32_t busy_count;     /* the next n sends answer CO_ERR_BUSY */
+    bool send_io_error;      /* sends answer CO_ERR_IO */
+    bool nvm_fail_write;     /* nvm_write answers CO_ERR_IO */
+    bool nvm_fail_commit;    /* nvm_commit answers CO_ERR_IO */
+    fake_nvm_area_t nvm[2];
+    uint32_t bit_rate_kbit;  /* last set_bit_rate */
+    uint32_t bit_rate_calls;
+} fake_port_t;
+
+/* Initialises with every port function present. */
+void fake_port_init(fake_port_t *fp, const co_time_us_t *clock);
+/* Forgets the recorded frames (keeps NVM). */
+void fake_port_clear(fake_port_t *fp);
+
+#endif
