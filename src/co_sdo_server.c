@@ -237,7 +237,13 @@ void co_sdo_rx(co_node_t *node, const co_frame_t *f)
         upload_initiate(node, index, sub);
         return;
     }
-    sdo_abort(node, index, sub, CO_ABORT_COMMAND); /* block transfer, stray segments, unknown commands */
+    const uint8_t ccs = (uint8_t)(cmd >> 5);
+    if (ccs == 0U || ccs == 3U) {
+        /* A segment with no transfer open: its bytes 1..3 are data, there is no multiplexer to echo. */
+        sdo_abort(node, 0U, 0U, CO_ABORT_COMMAND);
+        return;
+    }
+    sdo_abort(node, index, sub, CO_ABORT_COMMAND); /* block transfer, unknown commands */
 }
 
 co_time_us_t co_sdo_process(co_node_t *node)

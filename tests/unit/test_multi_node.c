@@ -1,5 +1,164 @@
+/* Several nodes in one process: same device type sharing one const OD, and a different device type.
+ * Nothing is shared between nodes but the const tables. */
+#include <stddef.h>
+#include <string.h>
+
+#include "fake_port.h"
+#include "test_od.h"
 #include "unity.h"
-void setUp(void){}
-void tearDown(void){}
-static void todo(void){TEST_FAIL_MESSAGE("not written");}
-int main(void){UNITY_BEGIN();RUN_TEST(todo);return UNITY_END();}
+
+/* A second, minimal device type: identity, heartbeat, one TPDO. */
+typedef struct mini_values {
+    uint32_t device_type;
+    uint8_t error_register;
+    uint16_t heartbeat;
+    uint8_t id_n;
+    uint32_t vendor;
+    uint8_t tpdo_n;
+    uint32_t tpdo_cob;
+    uint8_t tpdo_type;
+    uint8_t map_n;
+    uint32_t map1;
+    uint8_t input;
+} mini_values_t;
+
+#define M(i, s, t, f, m) {i, s, t, f, (uint16_t)sizeof(((mini_values_t *)0)->m), (uint32_t)offsetof(mini_values_t, m), NULL}
+static const co_od_entry_t mini_entries[] = {
+    M(0x1000, 0, CO_T_UNSIGNED32, CO_OD_READ, device_type),
+    M(0x1001, 0, CO_T_UNSIGNED8, CO_OD_READ, error_register),
+    M(0x1017, 0, CO_T_UNSIGNED16, CO_OD_READ | CO_OD_WRITE, heartbeat),
+    M(0x1018, 0, CO_T_UNSIGNED8, CO_OD_READ, id_n),
+    M(0x1018, 1, CO_T_UNSIGNED32, CO_OD_READ, vendor),
+    M(0x1800, 0, CO_T_UNSIGNED8, CO_OD_READ, tpdo_n),
+    M(0x1800, 1, CO_T_UNSIGNED32, CO_OD_READ | CO_OD_NODEID, tpdo_cob),
+    M(0x1800, 2, CO_T_UNSIGNED8, CO_OD_READ, tpdo_type),
+    M(0x1A00, 0, CO_T_UNSIGNED8, CO_OD_READ, map_n),
+    M(0x1A00, 1, CO_T_UNSIGNED32, CO_OD_READ, map1),
+    M(0x6000, 0, CO_T_UNSIGNED8, CO_OD_READ | CO_OD_TPDO, input),
+};
+static const mini_values_t mini_defaults = {0x00000191UL, 0U, 50U, 1U, 0x39UL, 2U, 0x180UL, 255U, 1U, 0x60000008UL, 0U};
+static const co_od_t mini_od = {"mini", mini_entries, (uint16_t)(sizeof mini_entries / sizeof mini_entries[0]),
+                                &mini_defaults, (uint32_t)sizeof(mini_values_t), 0x12345678UL};
+
+/* One bus: every node's port records into the same fake port; frames are delivered to all nodes. */
+static fake_port_t bus;
+static co_time_us_t now;
+static co_node_t node[3];
+static test_od_values_t values_a, values_b;
+static mini_values_t values_c;
+
+static void deliver(uint32_t id, uint8_t len, const uint8_t *data)
+{
+    co_frame_t f = {id, len, 0U, {0U}};
+    memcpy(f.data, data, len);
+    for (size_t i = 0U; i < 3U; i++) {
+        co_node_rx(&node[i], &f, now);
+        (void)co_node_process(&node[i], now);
+    }
+}
+
+static void start_node(size_t i, const co_od_t *od, void *values, uint8_t id)
+{
+    const co_node_cfg_t cfg = {od, values, &bus.port, &bus, NULL, NULL, id, 4U, NULL, 0U};
+    TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&node[i], &cfg, now));
+}
+
+void setUp(void)
+{
+    now = 0U;
+    fake_port_init(&bus, &now);
+    start_node(0U, &test_od, &values_a, 5U);
+    start_node(1U, &test_od, &values_b, 6U);
+    start_node(2U, &mini_od, &values_c, 7U);
+}
+void tearDown(void) {}
+
+static void each_node_boots_with_its_own_id(void)
+{
+    TEST_ASSERT_EQUAL_UINT32(3U, bus.n_sent);
+    TEST_ASSERT_EQUAL_HEX32(0x705U, bus.sent[0].id);
+    TEST_ASSERT_EQUAL_HEX32(0x706U, bus.sent[1].id);
+    TEST_ASSERT_EQUAL_HEX32(0x707U, bus.sent[2].id);
+    TEST_ASSERT_EQUAL_HEX32(0x185U, values_a.tpdo_comm[0].cob_id);
+    TEST_ASSERT_EQUAL_HEX32(0x186U, values_b.tpdo_comm[0].cob_id);
+    TEST_ASSERT_EQUAL_HEX32(0x187U, values_c.tpdo_cob);
+}
+
+static void values_are_per_node(void)
+{
+    const uint8_t w[8] = {0x2B, 0x00, 0x20, 0x00, 0xE8, 0x03, 0, 0};
+    deliver(0x605U, 8U, w);
+    TEST_ASSERT_EQUAL_UINT16(1000U, values_a.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_UINT16(500U, values_b.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0x585U, bus.sent[bus.n_sent - 1U].id);
+    TEST_ASSERT_EQUAL_UINT32(4U, bus.n_sent); /* only node 5 answered */
+}
+
+static void nmt_addressed_and_broadcast(void)
+{
+    const uint8_t start6[2] = {0x01, 0x06};
+    deliver(0x000U, 2U, start6);
+    TEST_ASSERT_EQUAL_HEX8(CO_NMT_PRE_OPERATIONAL, co_node_state(&node[0]));
+    TEST_ASSERT_EQUAL_HEX8(CO_NMT_OPERATIONAL, co_node_state(&node[1]));
+    TEST_ASSERT_EQUAL_HEX8(CO_NMT_PRE_OPERATIONAL, co_node_state(&node[2]));
+    const uint8_t stop_all[2] = {0x02, 0x00};
+    deliver(0x000U, 2U, stop_all);
+    for (size_t i = 0U; i < 3U; i++) {
+        TEST_ASSERT_EQUAL_HEX8(CO_NMT_STOPPED, co_node_state(&node[i]));
+    }
+}
+
+static void timers_are_per_node(void)
+{
+    /* node 7 (mini) has a 50 ms heartbeat by default; the others none */
+    bus.n_sent = 0U;
+    for (now = 0U; now <= 200000U; now += 1000U) {
+        for (size_t i = 0U; i < 3U; i++) {
+            (void)co_node_process(&node[i], now);
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT32(4U, bus.n_sent);
+    for (uint32_t i = 0U; i < bus.n_sent; i++) {
+        TEST_ASSERT_EQUAL_HEX32(0x707U, bus.sent[i].id);
+        TEST_ASSERT_EQUAL_UINT64(50000U * (i + 1U), bus.sent_at[i]);
+    }
+}
+
+static void emcy_of_one_node_stays_there(void)
+{
+    (void)co_emcy_raise(&node[1], 0x5000U, 0x01U, NULL);
+    TEST_ASSERT_EQUAL_HEX8(0x01, values_b.x1001_error_register);
+    TEST_ASSERT_EQUAL_HEX8(0x00, values_a.x1001_error_register);
+    TEST_ASSERT_FALSE(co_emcy_is_active(&node[0], 0x5000U));
+    TEST_ASSERT_TRUE(co_emcy_is_active(&node[1], 0x5000U));
+}
+
+static void many_nodes_of_one_type(void)
+{
+    static co_node_t nodes[127];
+    static test_od_values_t vals[127];
+    bus.n_sent = 0U;
+    for (uint8_t i = 0U; i < 127U; i++) {
+        const co_node_cfg_t cfg = {&test_od, &vals[i], &bus.port, &bus, NULL, NULL, (uint8_t)(i + 1U), 4U, NULL, 0U};
+        TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&nodes[i], &cfg, now));
+    }
+    TEST_ASSERT_EQUAL_UINT32(127U, bus.n_sent);
+    const co_frame_t read = {0x600U + 99U, 8U, 0U, {0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0}};
+    for (uint8_t i = 0U; i < 127U; i++) {
+        co_node_rx(&nodes[i], &read, now);
+    }
+    TEST_ASSERT_EQUAL_UINT32(128U, bus.n_sent);
+    TEST_ASSERT_EQUAL_HEX32(0x580U + 99U, bus.sent[127].id);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(each_node_boots_with_its_own_id);
+    RUN_TEST(values_are_per_node);
+    RUN_TEST(nmt_addressed_and_broadcast);
+    RUN_TEST(timers_are_per_node);
+    RUN_TEST(emcy_of_one_node_stays_there);
+    RUN_TEST(many_nodes_of_one_type);
+    return UNITY_END();
+}

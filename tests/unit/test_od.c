@@ -1,5 +1,146 @@
-#include "unity.h"
-void setUp(void){}
-void tearDown(void){}
-static void todo(void){TEST_FAIL_MESSAGE("not written");}
-int main(void){UNITY_BEGIN();RUN_TEST(todo);return UNITY_END();}
+/* Object dictionary: lookup, the read and write paths, local access, node-ID-relative defaults. */
+#include <string.h>
+
+#include "fixture.h"
+
+void setUp(void) { fx_start(5U, 0U); }
+void tearDown(void) {}
+
+static void lookup(void)
+{
+    const co_od_entry_t *e = co_od_find(&test_od, 0x1018, 0x03);
+    TEST_ASSERT_NOT_NULL(e);
+    TEST_ASSERT_EQUAL_HEX16(0x1018, e->index);
+    TEST_ASSERT_EQUAL_HEX8(0x03, e->sub);
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0x1018, 0x05));
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0x0FFF, 0x00));
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0xFFFF, 0xFF));
+    TEST_ASSERT_TRUE(co_od_has_index(&test_od, 0x1018));
+    TEST_ASSERT_FALSE(co_od_has_index(&test_od, 0x2100));
+    /* every row is found at its own position: the table is sorted and unique */
+    for (uint16_t i = 0U; i < test_od.count; i++) {
+        TEST_ASSERT_EQUAL_PTR(&test_od.entries[i], co_od_find(&test_od, test_od.entries[i].index, test_od.entries[i].sub));
+    }
+}
+
+static void type_sizes(void)
+{
+    TEST_ASSERT_EQUAL_UINT16(1U, co_od_type_size(CO_T_BOOLEAN));
+    TEST_ASSERT_EQUAL_UINT16(1U, co_od_type_size(CO_T_INTEGER8));
+    TEST_ASSERT_EQUAL_UINT16(2U, co_od_type_size(CO_T_UNSIGNED16));
+    TEST_ASSERT_EQUAL_UINT16(4U, co_od_type_size(CO_T_REAL32));
+    TEST_ASSERT_EQUAL_UINT16(8U, co_od_type_size(CO_T_UNSIGNED64));
+    TEST_ASSERT_EQUAL_UINT16(0U, co_od_type_size(CO_T_VISIBLE_STRING));
+}
+
+static void local_access_bypasses_access_rights_not_sizes(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_set_u16(&fx.node, 0x6401, 1, 1234U)); /* RO for SDO */
+    TEST_ASSERT_EQUAL_UINT16(1234U, fx.values.x6401_analog[0]);
+    TEST_ASSERT_EQUAL_UINT16(1234U, co_od_get_u16(&fx.node, 0x6401, 1));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_LENGTH_HIGH, co_od_set_u32(&fx.node, 0x6401, 1, 1U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_LENGTH_LOW, co_od_set_u8(&fx.node, 0x6401, 1, 1U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_OBJECT, co_od_set_u8(&fx.node, 0x2100, 0, 1U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_SUBINDEX, co_od_set_u8(&fx.node, 0x6401, 9, 1U));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_set_u16(&fx.node, 0x2000, 0, 5U)); /* limits are for SDO/RPDO */
+    TEST_ASSERT_EQUAL_UINT16(0U, co_od_get_u16(&fx.node, 0x2000, 1)); /* missing: 0 */
+    TEST_ASSERT_EQUAL_UINT32(0U, co_od_get_u32(&fx.node, 0x2000, 0)); /* other size: 0 */
+    TEST_ASSERT_EQUAL_HEX32(0x000F0191UL, co_od_get_u32(&fx.node, 0x1000, 0));
+    TEST_ASSERT_EQUAL_PTR(&fx.values.x2003_volatile, co_od_value(&fx.node, 0x2003, 0));
+    TEST_ASSERT_NULL(co_od_value(&fx.node, 0x2003, 1));
+}
+
+static void read_path(void)
+{
+    uint8_t buf[32];
+    size_t len = 99U;
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_read(&fx.node, 0x1000, 0, buf, sizeof buf, &len, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT32(4U, len);
+    const uint8_t le[4] = {0x91, 0x01, 0x0F, 0x00};
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(le, buf, 4);
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_WRITE_ONLY, co_od_read(&fx.node, 0x6200, 1, buf, sizeof buf, &len, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_read(&fx.node, 0x6200, 1, buf, sizeof buf, &len, CO_ORIGIN_LOCAL));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_read(&fx.node, 0x1009, 0, buf, sizeof buf, &len, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT32(24U, len);
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_LENGTH_HIGH, co_od_read(&fx.node, 0x1009, 0, buf, 10U, &len, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_LENGTH_HIGH, co_od_read(&fx.node, 0x1000, 0, buf, 3U, &len, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_read(&fx.node, 0x2006, 0, buf, sizeof buf, &len, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT32(8U, len);
+    const uint8_t u64[8] = {8, 7, 6, 5, 4, 3, 2, 1};
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(u64, buf, 8);
+}
+
+static void write_path_order(void)
+{
+    uint32_t hooks = fx.write_hooks;
+    /* the device hook only sees writes the core accepted */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_READ_ONLY, co_od_write(&fx.node, 0x1000, 0, "\0\0\0\0", 4U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, co_od_write(&fx.node, 0x2000, 0, "\1\0", 2U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_LENGTH_LOW, co_od_write(&fx.node, 0x2000, 0, "\1", 1U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_INVALID_VALUE, co_od_write(&fx.node, 0x1019, 0, "\xF1", 1U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT32(hooks, fx.write_hooks);
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x2000, 0, "\x10\x27", 2U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT32(hooks + 1U, fx.write_hooks);
+    TEST_ASSERT_EQUAL_UINT16(10000U, fx.values.x2000_cycle_ms);
+    /* a refused write changes nothing */
+    fx.refuse_code = CO_ABORT_DEVICE_STATE;
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_DEVICE_STATE, co_od_write(&fx.node, 0x2000, 0, "\x20\x4E", 2U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT16(10000U, fx.values.x2000_cycle_ms);
+}
+
+static void strings_shorter_than_capacity_are_zero_padded(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x2005, 0, "abcdefghijkl", 12U, CO_ORIGIN_LOCAL));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x2005, 0, "xy", 2U, CO_ORIGIN_LOCAL));
+    TEST_ASSERT_EQUAL_STRING("xy", fx.values.x2005_description);
+    for (size_t i = 2U; i < sizeof fx.values.x2005_description; i++) {
+        TEST_ASSERT_EQUAL_HEX8(0, fx.values.x2005_description[i]);
+    }
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_LENGTH_HIGH,
+                            co_od_write(&fx.node, 0x2005, 0, "123456789012345678901", 21U, CO_ORIGIN_LOCAL));
+}
+
+static void node_id_relative_defaults(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0x185U, fx.values.tpdo_comm[0].cob_id);
+    TEST_ASSERT_EQUAL_HEX32(0x205U, fx.values.rpdo_comm[0].cob_id);
+    TEST_ASSERT_EQUAL_HEX32(0x85U, fx.values.x1014_cob_id_emcy);
+    TEST_ASSERT_EQUAL_HEX32(0x605U, fx.values.x1200_cob[0]);
+    TEST_ASSERT_EQUAL_HEX32(0x80000285UL, fx.values.tpdo_comm[1].cob_id);
+    fx_start(0x42U, 0U);
+    TEST_ASSERT_EQUAL_HEX32(0x1C2U, fx.values.tpdo_comm[0].cob_id);
+    TEST_ASSERT_EQUAL_HEX32(0xC2U, fx.values.x1014_cob_id_emcy);
+}
+
+static void init_rejects_bad_configuration(void)
+{
+    co_node_t n;
+    co_node_cfg_t cfg = fx.cfg;
+    cfg.node_id = 0U;
+    TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, &cfg, 0U));
+    cfg.node_id = 128U;
+    TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, &cfg, 0U));
+    cfg.node_id = 5U;
+    cfg.values = NULL;
+    TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, &cfg, 0U));
+    TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, NULL, 0U));
+    cfg = fx.cfg;
+    co_port_t no_send = fx.port.port;
+    no_send.send = NULL;
+    cfg.port = &no_send;
+    TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, &cfg, 0U));
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(lookup);
+    RUN_TEST(type_sizes);
+    RUN_TEST(local_access_bypasses_access_rights_not_sizes);
+    RUN_TEST(read_path);
+    RUN_TEST(write_path_order);
+    RUN_TEST(strings_shorter_than_capacity_are_zero_padded);
+    RUN_TEST(node_id_relative_defaults);
+    RUN_TEST(init_rejects_bad_configuration);
+    return UNITY_END();
+}
