@@ -141,7 +141,7 @@ static void fastscan(co_node_t *node, const uint8_t *d)
     if (bit_checked > 31U || lss_sub > 3U || lss_next > 3U || lss_sub != l->fastscan_pos) {
         return;
     }
-    const uint32_t mask = 0xFFFFFFFFUL << bit_checked;
+    const uint32_t mask = (uint32_t)(UINT32_MAX << bit_checked);
     if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
         return;
     }

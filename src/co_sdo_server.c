@@ -155,7 +155,7 @@ static void download_segment(co_node_t *node, uint8_t cmd, const uint8_t *seg)
     s->toggle ^= 1U;
     s->deadline = node->now + CO_SDO_TIMEOUT_US;
     if ((cmd & 0x01U) == 0U) {
-        respond(node, (uint8_t)(0x20U | (toggle << 4)), 0U, 0U, NULL, 0U);
+        respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
         return;
     }
     if (s->size != 0U && s->pos != s->size) {
@@ -168,7 +168,7 @@ static void download_segment(co_node_t *node, uint8_t cmd, const uint8_t *seg)
         return;
     }
     s->state = SDO_IDLE;
-    respond(node, (uint8_t)(0x20U | (toggle << 4)), 0U, 0U, NULL, 0U);
+    respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
 }
 
 static void upload_segment(co_node_t *node, uint8_t cmd)
@@ -183,7 +183,7 @@ static void upload_segment(co_node_t *node, uint8_t cmd)
     const uint32_t n = left < 7U ? left : 7U;
     const bool last = s->pos + n >= s->size;
     co_frame_t f = {0x580U + node->node_id, 8U, 0U, {0U}};
-    f.data[0] = (uint8_t)((toggle << 4) | ((7U - n) << 1) | (last ? 1U : 0U));
+    f.data[0] = (uint8_t)(((uint32_t)toggle << 4) | ((7U - n) << 1) | (last ? 1U : 0U));
     memcpy(&f.data[1], &s->buf[s->pos], n);
     co_node_send(node, &f);
     s->pos += n;
