@@ -217,11 +217,9 @@ static size_t value_len(co_node_t *node, const co_od_entry_t *e)
     return e->size;
 }
 
-size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap)
+/* Copies a row's current value in wire format (no hook). Returns its length, 0 if it does not fit. */
+static size_t copy_wire(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap)
 {
-    if (node->hooks != NULL && node->hooks->on_read != NULL) {
-        node->hooks->on_read(node->hooks_ctx, node, e);
-    }
     const size_t n = value_len(node, e);
     if (n > cap) {
         return 0U;
@@ -232,6 +230,20 @@ size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_
         native_to_wire(e, co_od_ptr(node, e), buf);
     }
     return n;
+}
+
+static uint32_t read_hook(co_node_t *node, const co_od_entry_t *e)
+{
+    if (node->hooks != NULL && node->hooks->on_read != NULL) {
+        return node->hooks->on_read(node->hooks_ctx, node, e);
+    }
+    return CO_ABORT_NONE;
+}
+
+size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap)
+{
+    (void)read_hook(node, e); /* a PDO cannot be refused: the value is sent as it is */
+    return copy_wire(node, e, buf, cap);
 }
 
 /* Sign-extended or zero-extended value of wire bytes of a fixed-size integer row. */
@@ -351,24 +363,15 @@ uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, siz
             return r;
         }
     }
-    uint8_t tmp[8];
-    if (!is_bytes(e)) {
-        if (cap < e->size) {
-            return CO_ABORT_LENGTH_HIGH;
-        }
-        *len = co_od_sample(node, e, tmp, sizeof tmp);
-        memcpy(buf, tmp, *len);
-        return CO_ABORT_NONE;
-    }
-    if (node->hooks != NULL && node->hooks->on_read != NULL) {
-        node->hooks->on_read(node->hooks_ctx, node, e);
+    r = read_hook(node, e);
+    if (r != CO_ABORT_NONE) {
+        return r;
     }
     const size_t n = value_len(node, e);
     if (n > cap) {
         return CO_ABORT_LENGTH_HIGH;
     }
-    memcpy(buf, co_od_ptr(node, e), n);
-    *len = n;
+    *len = copy_wire(node, e, (uint8_t *)buf, cap);
     return CO_ABORT_NONE;
 }
 

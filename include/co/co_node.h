@@ -73,8 +73,12 @@ typedef struct co_hooks {
      */
     uint32_t (*on_write)(void *ctx, co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                          size_t len, co_od_origin_t origin);
-    /** An object is about to be read by SDO or sampled for a TPDO: refresh a live value here. */
-    void (*on_read)(void *ctx, co_node_t *node, const co_od_entry_t *entry);
+    /**
+     * An object is about to be read by SDO or sampled for a TPDO: refresh a live value here. Return 0, or
+     * an SDO abort code to refuse an SDO read (e.g. CO_ABORT_NO_SUBINDEX for an entry this device variant
+     * lacks); the code is ignored for TPDO sampling, so never hide PDO-mapped entries.
+     */
+    uint32_t (*on_read)(void *ctx, co_node_t *node, const co_od_entry_t *entry);
     /** The NMT state changed (after the change; boot-up reports INITIALISING -> PRE_OPERATIONAL). */
     void (*on_nmt_change)(void *ctx, co_node_t *node, co_nmt_state_t from, co_nmt_state_t to);
     /** An OD area was re-initialised from stored values/defaults (before the boot-up frame). */

@@ -19,11 +19,12 @@ static uint32_t hook_write(void *ctx, co_node_t *node, const co_od_entry_t *e, c
     return 0U;
 }
 
-static void hook_read(void *ctx, co_node_t *node, const co_od_entry_t *e)
+static uint32_t hook_read(void *ctx, co_node_t *node, const co_od_entry_t *e)
 {
+    fixture_t *f = (fixture_t *)ctx;
     (void)node;
-    (void)e;
-    ((fixture_t *)ctx)->read_hooks++;
+    f->read_hooks++;
+    return (f->hide_index != 0U && f->hide_index == e->index) ? CO_ABORT_NO_SUBINDEX : 0U;
 }
 
 static void hook_nmt(void *ctx, co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)

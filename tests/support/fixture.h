@@ -19,6 +19,7 @@ typedef struct fixture {
     uint32_t write_hooks;    /* on_write calls */
     uint32_t refuse_code;    /* on_write answers this (0 = accept) */
     uint16_t refuse_index;   /* ... for this index only (0 = all) */
+    uint16_t hide_index;     /* on_read answers 0x06090011 for this index (0 = none) */
     co_nmt_state_t last_from, last_to;
     uint32_t nmt_changes;
     uint32_t resets_app, resets_comm;

@@ -264,6 +264,15 @@ static void read_hook_runs_before_every_upload(void)
     TEST_ASSERT_EQUAL_UINT32(before + 1U, fx.read_hooks);
 }
 
+static void read_hook_can_hide_an_entry(void)
+{
+    fx.hide_index = 0x2003U; /* e.g. an entry this device variant lacks */
+    SDO(0x40, 0x03, 0x20, 0x00, 0, 0, 0, 0);
+    EXPECT(0x80, 0x03, 0x20, 0x00, 0x11, 0x00, 0x09, 0x06);
+    SDO(0x40, 0x00, 0x20, 0x00, 0, 0, 0, 0);
+    EXPECT(0x4B, 0x00, 0x20, 0x00, 0xF4, 0x01, 0x00, 0x00);
+}
+
 static void sdo_abort_is_reported_as_event(void)
 {
     fx.n_events = 0U;
@@ -327,6 +336,7 @@ int main(void)
     RUN_TEST(limits_give_value_too_high_and_too_low);
     RUN_TEST(device_hook_can_refuse_with_its_code);
     RUN_TEST(read_hook_runs_before_every_upload);
+    RUN_TEST(read_hook_can_hide_an_entry);
     RUN_TEST(sdo_abort_is_reported_as_event);
     RUN_TEST(sdo_on_new_node_id);
     RUN_TEST(pdo_parameters_follow_node_id);
