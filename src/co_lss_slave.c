@@ -41,7 +41,8 @@ void co_lss_init(co_node_t *node)
 
 bool co_lss_set_pending_node_id(co_node_t *node, uint8_t node_id)
 {
-    if ((node_id < 1U || node_id > 127U) && node_id != CO_NODE_ID_UNCONFIGURED) {
+    const bool unconfigure_ok = (node->options & CO_OPT_LSS_NO_UNCONFIGURE) == 0U;
+    if ((node_id < 1U || node_id > 127U) && !(node_id == CO_NODE_ID_UNCONFIGURED && unconfigure_ok)) {
         return false;
     }
     node->lss.pending_node_id = node_id;

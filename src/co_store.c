@@ -43,8 +43,13 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
 {
     uint8_t h[HEADER_LEN];
     *len = 0U;
-    if (!have_read(node) || node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) != CO_OK) {
+    if (!have_read(node)) {
         return CO_NVM_NONE;
+    }
+    if (node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) != CO_OK) {
+        /* Shorter than a header: damaged if anything is there at all, otherwise nothing is stored. */
+        return node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, 1U) == CO_OK ? CO_NVM_CORRUPT
+                                                                                      : CO_NVM_NONE;
     }
     const uint32_t payload = co_get_u32(&h[8]);
     if (memcmp(h, "COS1", 4U) != 0 || payload > PAYLOAD_MAX) {

@@ -1,5 +1,775 @@
-#include "unity.h"
-void setUp(void){}
-void tearDown(void){}
-static void todo(void){TEST_FAIL_MESSAGE("not written");}
-int main(void){UNITY_BEGIN();RUN_TEST(todo);return UNITY_END();}
+/*
+ * Store / restore parameters 0x1010 / 0x1011 (facts §8, vectors #39-#41), groups, node-ID-relative rows,
+ * storage failures, damaged blobs and the stored blob's format (documented at the top of src/co_store.c).
+ */
+#include "fixture.h"
+
+#include <string.h>
+
+#define SAVE 0x65766173UL /* "save" */
+#define LOAD 0x64616F6CUL /* "load" */
+#define HDR 16U           /* "COS1" | signature | payload length | CRC-32 */
+
+void setUp(void)
+{
+    fx_start(5U, 0U);
+    fake_port_clear(&fx.port);
+}
+void tearDown(void) {}
+
+/* ---- helpers ---------------------------------------------------------------------------------------- */
+
+static void sdo_expect(const uint8_t req[8], const uint8_t resp[8])
+{
+    const co_frame_t *f = fx_sdo(req);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(resp, f->data, 8);
+}
+
+static void save(uint8_t sub) { TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1010, sub, SAVE, 4U)); }
+static void restore(uint8_t sub) { TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1011, sub, LOAD, 4U)); }
+static void wr(uint16_t index, uint8_t sub, uint32_t v, uint8_t size)
+{
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(index, sub, v, size));
+}
+
+static void power_cycle(void)
+{
+    fake_port_clear(&fx.port);
+    fx.n_events = 0U;
+    fx_power_cycle();
+}
+
+static int find_event(co_event_kind_t kind)
+{
+    for (uint32_t i = fx.n_events; i > 0U; i--) {
+        if (fx.events[i - 1U].kind == kind) {
+            return (int)(i - 1U);
+        }
+    }
+    return -1;
+}
+
+/* The NVM status reported by the CO_EV_NVM_LOADED event of the last power cycle / reset. */
+static uint32_t nvm_loaded_event(void)
+{
+    const int e = find_event(CO_EV_NVM_LOADED);
+    TEST_ASSERT_TRUE_MESSAGE(e >= 0, "no CO_EV_NVM_LOADED event");
+    return fx.events[e].value;
+}
+
+static fake_nvm_area_t *params(void) { return &fx.port.nvm[CO_NVM_PARAMS]; }
+
+static uint32_t le32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+
+/* Plain CRC-32 (IEEE 802.3, reflected, init and final xor 0xFFFFFFFF), written independently of the core. */
+static uint32_t crc32_ieee(const uint8_t *p, uint32_t n)
+{
+    uint32_t crc = 0xFFFFFFFFUL;
+    for (uint32_t i = 0U; i < n; i++) {
+        crc ^= p[i];
+        for (int b = 0; b < 8; b++) {
+            crc = (crc & 1U) != 0U ? (crc >> 1) ^ 0xEDB88320UL : crc >> 1;
+        }
+    }
+    return crc ^ 0xFFFFFFFFUL;
+}
+
+/* Walks the stored records; returns the number of records, checks they are well formed and sorted. */
+static uint32_t record_count(void)
+{
+    const uint8_t *b = params()->stored;
+    const uint32_t end = le32(&b[8]);
+    uint32_t n = 0U;
+    uint32_t last_key = 0U;
+    for (uint32_t pos = 0U; pos < end;) {
+        TEST_ASSERT_TRUE_MESSAGE(pos + 4U <= end, "record header runs past the payload");
+        const uint32_t key = ((uint32_t)b[HDR + pos] | ((uint32_t)b[HDR + pos + 1U] << 8)) << 8 | b[HDR + pos + 2U];
+        TEST_ASSERT_TRUE_MESSAGE(n == 0U || key > last_key, "records not sorted by (index, sub)");
+        last_key = key;
+        pos += 4U + b[HDR + pos + 3U];
+        TEST_ASSERT_TRUE_MESSAGE(pos <= end, "record value runs past the payload");
+        n++;
+    }
+    return n;
+}
+
+/* Finds the stored record of (index, sub); returns a pointer to its 4-byte head, or NULL. */
+static const uint8_t *find_record(uint16_t index, uint8_t sub)
+{
+    const uint8_t *b = params()->stored;
+    if (params()->stored_len < HDR) {
+        return NULL;
+    }
+    const uint32_t end = le32(&b[8]);
+    (void)record_count();
+    for (uint32_t pos = 0U; pos < end; pos += 4U + b[HDR + pos + 3U]) {
+        const uint8_t *r = &b[HDR + pos];
+        if (r[0] == (uint8_t)index && r[1] == (uint8_t)(index >> 8) && r[2] == sub) {
+            return r;
+        }
+    }
+    return NULL;
+}
+
+static void set_all_groups(void)
+{
+    wr(0x1017, 0, 300U, 2U);        /* 0x1000-0x1FFF */
+    wr(0x2000, 0, 1000U, 2U);       /* 0x2000-0x5FFF */
+    wr(0x6300, 1, 0xAABBCCDDUL, 4U); /* 0x6000-0x9FFF */
+}
+
+/* ---- facts §11 #39-#41 and the object itself ---------------------------------------------------------- */
+
+static void v39_save_signature(void)
+{
+    sdo_expect((const uint8_t[8]){0x23, 0x10, 0x10, 0x01, 0x73, 0x61, 0x76, 0x65},
+               (const uint8_t[8]){0x60, 0x10, 0x10, 0x01, 0x00, 0x00, 0x00, 0x00});
+    TEST_ASSERT_EQUAL_UINT32(1U, params()->commits);
+    const int e = find_event(CO_EV_STORE);
+    TEST_ASSERT_TRUE(e >= 0);
+    TEST_ASSERT_EQUAL_HEX16(0x1010, fx.events[e].index);
+    TEST_ASSERT_EQUAL_UINT8(1U, fx.events[e].sub);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.events[e].code);
+}
+
+static void v40_wrong_signature(void)
+{
+    sdo_expect((const uint8_t[8]){0x23, 0x10, 0x10, 0x01, 0x00, 0x00, 0x00, 0x00},
+               (const uint8_t[8]){0x80, 0x10, 0x10, 0x01, 0x20, 0x00, 0x00, 0x08});
+    /* "load" to 0x1010 and "save" to 0x1011 are wrong signatures too */
+    TEST_ASSERT_EQUAL_HEX32(0x08000020UL, fx_sdo_write_u32(0x1010, 1, LOAD, 4U));
+    TEST_ASSERT_EQUAL_HEX32(0x08000020UL, fx_sdo_write_u32(0x1011, 1, SAVE, 4U));
+    TEST_ASSERT_EQUAL_HEX32(0x08000020UL, fx_sdo_write_u32(0x1010, 2, 0x65766174UL, 4U));
+    TEST_ASSERT_EQUAL_UINT32(0U, params()->commits);
+    TEST_ASSERT_EQUAL_UINT32(0U, params()->stored_len);
+}
+
+static void v41_load_signature(void)
+{
+    sdo_expect((const uint8_t[8]){0x23, 0x11, 0x10, 0x01, 0x6C, 0x6F, 0x61, 0x64},
+               (const uint8_t[8]){0x60, 0x11, 0x10, 0x01, 0x00, 0x00, 0x00, 0x00});
+    TEST_ASSERT_EQUAL_UINT32(1U, params()->commits);
+    const int e = find_event(CO_EV_RESTORE);
+    TEST_ASSERT_TRUE(e >= 0);
+    TEST_ASSERT_EQUAL_HEX16(0x1011, fx.events[e].index);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.events[e].code);
+}
+
+static void sub0_is_read_only(void)
+{
+    sdo_expect((const uint8_t[8]){0x2F, 0x10, 0x10, 0x00, 0x01, 0x00, 0x00, 0x00},
+               (const uint8_t[8]){0x80, 0x10, 0x10, 0x00, 0x02, 0x00, 0x01, 0x06});
+    sdo_expect((const uint8_t[8]){0x2F, 0x11, 0x10, 0x00, 0x01, 0x00, 0x00, 0x00},
+               (const uint8_t[8]){0x80, 0x11, 0x10, 0x00, 0x02, 0x00, 0x01, 0x06});
+    sdo_expect((const uint8_t[8]){0x40, 0x10, 0x10, 0x00, 0, 0, 0, 0},
+               (const uint8_t[8]){0x4F, 0x10, 0x10, 0x00, 0x04, 0x00, 0x00, 0x00});
+}
+
+static void sub_not_existing(void)
+{
+    sdo_expect((const uint8_t[8]){0x23, 0x10, 0x10, 0x05, 0x73, 0x61, 0x76, 0x65},
+               (const uint8_t[8]){0x80, 0x10, 0x10, 0x05, 0x11, 0x00, 0x09, 0x06});
+    sdo_expect((const uint8_t[8]){0x23, 0x11, 0x10, 0x05, 0x6C, 0x6F, 0x61, 0x64},
+               (const uint8_t[8]){0x80, 0x11, 0x10, 0x05, 0x11, 0x00, 0x09, 0x06});
+    TEST_ASSERT_EQUAL_UINT32(0U, params()->commits);
+}
+
+static void read_sub1_gives_1(void)
+{
+    sdo_expect((const uint8_t[8]){0x40, 0x10, 0x10, 0x01, 0, 0, 0, 0},
+               (const uint8_t[8]){0x43, 0x10, 0x10, 0x01, 0x01, 0x00, 0x00, 0x00});
+    sdo_expect((const uint8_t[8]){0x40, 0x11, 0x10, 0x01, 0, 0, 0, 0},
+               (const uint8_t[8]){0x43, 0x11, 0x10, 0x01, 0x01, 0x00, 0x00, 0x00});
+    /* writing the signature is an action: the value read stays 1 */
+    save(1U);
+    restore(1U);
+    uint32_t v = 0U;
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_read_u32(0x1010, 1, &v));
+    TEST_ASSERT_EQUAL_UINT32(1U, v);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_read_u32(0x1011, 1, &v));
+    TEST_ASSERT_EQUAL_UINT32(1U, v);
+}
+
+static void wrong_length_refused(void)
+{
+    /* "sa" with 2 bytes: the object is U32 */
+    sdo_expect((const uint8_t[8]){0x2B, 0x10, 0x10, 0x01, 0x73, 0x61, 0x00, 0x00},
+               (const uint8_t[8]){0x80, 0x10, 0x10, 0x01, 0x13, 0x00, 0x07, 0x06});
+    TEST_ASSERT_EQUAL_UINT32(0U, params()->commits);
+}
+
+/* ---- saving and loading ---------------------------------------------------------------------------- */
+
+static void saved_values_survive_power_cycle(void)
+{
+    set_all_groups();
+    wr(0x2001, 0, (uint16_t)(int16_t)-50, 2U);
+    wr(0x2002, 0, 42U, 1U);
+    wr(0x2005, 0, 0x00636261UL, 3U); /* "abc" */
+    save(1U);
+    /* change everything after the save */
+    wr(0x1017, 0, 400U, 2U);
+    wr(0x2000, 0, 2000U, 2U);
+    wr(0x6300, 1, 1U, 4U);
+    wr(0x2001, 0, 7U, 2U);
+    wr(0x2002, 0, 1U, 1U);
+    wr(0x2005, 0, 0x007A7978UL, 3U);
+
+    power_cycle();
+    ASSERT_FRAME(0, 0x705U, 1, 0x00);
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0xAABBCCDDUL, fx.values.x6300_value);
+    TEST_ASSERT_EQUAL_INT16(-50, fx.values.x2001_offset);
+    TEST_ASSERT_EQUAL_UINT8(42U, fx.values.x2002_address);
+    TEST_ASSERT_EQUAL_MEMORY("abc\0\0\0\0\0\0\0", fx.values.x2005_description, 10);
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_LOADED, nvm_loaded_event());
+    /* the loaded heartbeat period is in effect */
+    fake_port_clear(&fx.port);
+    fx_advance(300000U);
+    TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x705U));
+    ASSERT_FRAME(0, 0x705U, 1, 0x7F);
+}
+
+static void saved_values_return_at_nmt_reset(void)
+{
+    set_all_groups();
+    save(1U);
+    wr(0x1017, 0, 400U, 2U);
+    wr(0x2000, 0, 2000U, 2U);
+    wr(0x6300, 1, 1U, 4U);
+    RX(0x000, 0x82, 0x05); /* communication area only */
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(2000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(1U, fx.values.x6300_value);
+    wr(0x1017, 0, 400U, 2U);
+    RX(0x000, 0x81, 0x05); /* everything */
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0xAABBCCDDUL, fx.values.x6300_value);
+}
+
+static void rows_without_store_flag_never_stored(void)
+{
+    wr(0x2003, 0, 0x12345678UL, 4U);
+    wr(0x2000, 0, 1000U, 2U);
+    save(1U);
+    TEST_ASSERT_NULL(find_record(0x2003, 0));
+    TEST_ASSERT_NULL(find_record(0x2004, 0)); /* RW, not stored */
+    TEST_ASSERT_NULL(find_record(0x1018, 1)); /* RO */
+    TEST_ASSERT_NULL(find_record(0x1010, 1)); /* the store command itself */
+    TEST_ASSERT_NOT_NULL(find_record(0x2000, 0));
+    power_cycle();
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.values.x2003_volatile);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    wr(0x2003, 0, 0x12345678UL, 4U);
+    RX(0x000, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.values.x2003_volatile);
+}
+
+/* ---- groups ---------------------------------------------------------------------------------------- */
+
+static void save_group_2_communication_only(void)
+{
+    set_all_groups();
+    save(2U);
+    TEST_ASSERT_NOT_NULL(find_record(0x1017, 0));
+    TEST_ASSERT_NULL(find_record(0x2000, 0));
+    TEST_ASSERT_NULL(find_record(0x6300, 1));
+    TEST_ASSERT_NULL(find_record(0x2002, 0));
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.values.x6300_value);
+}
+
+static void save_group_3_application_only(void)
+{
+    set_all_groups();
+    save(3U);
+    TEST_ASSERT_NULL(find_record(0x1017, 0));
+    TEST_ASSERT_NULL(find_record(0x2000, 0));
+    TEST_ASSERT_NOT_NULL(find_record(0x6300, 1));
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0xAABBCCDDUL, fx.values.x6300_value);
+}
+
+static void save_group_4_manufacturer_only(void)
+{
+    set_all_groups();
+    save(4U);
+    TEST_ASSERT_NULL(find_record(0x1017, 0));
+    TEST_ASSERT_NOT_NULL(find_record(0x2000, 0));
+    TEST_ASSERT_NOT_NULL(find_record(0x2005, 0));
+    TEST_ASSERT_NULL(find_record(0x6300, 1));
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.values.x6300_value);
+}
+
+static void saving_a_group_keeps_other_groups(void)
+{
+    wr(0x2000, 0, 1000U, 2U);
+    save(4U);
+    wr(0x2000, 0, 2000U, 2U); /* not saved again: the stored 1000 must stay */
+    wr(0x1017, 0, 300U, 2U);
+    save(2U);
+    wr(0x6300, 1, 7U, 4U);
+    wr(0x1017, 0, 400U, 2U); /* not saved again */
+    save(3U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_HEX32(7U, fx.values.x6300_value);
+    /* saving a group again replaces only that group's values */
+    wr(0x2000, 0, 3000U, 2U);
+    save(4U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(3000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_HEX32(7U, fx.values.x6300_value);
+}
+
+/* ---- restore --------------------------------------------------------------------------------------- */
+
+static void restore_takes_effect_at_next_reset(void)
+{
+    set_all_groups();
+    save(1U);
+    restore(1U);
+    /* running values unchanged */
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0xAABBCCDDUL, fx.values.x6300_value);
+    uint32_t v = 0U;
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_read_u32(0x2000, 0, &v));
+    TEST_ASSERT_EQUAL_UINT32(1000U, v);
+    /* reset node: the defaults return */
+    RX(0x000, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.values.x6300_value);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+}
+
+static void restore_then_power_cycle(void)
+{
+    set_all_groups();
+    save(1U);
+    restore(1U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.values.x6300_value);
+    /* only the CO_OD_KEEP row 0x2002 (saved at its default 99) is left */
+    TEST_ASSERT_EQUAL_UINT32(1U, record_count());
+    TEST_ASSERT_NOT_NULL(find_record(0x2002, 0));
+}
+
+static void restore_keeps_keep_rows(void)
+{
+    wr(0x2002, 0, 42U, 1U);
+    wr(0x2000, 0, 1000U, 2U);
+    save(1U);
+    restore(1U);
+    TEST_ASSERT_EQUAL_UINT32(1U, record_count());
+    TEST_ASSERT_NOT_NULL(find_record(0x2002, 0));
+    wr(0x2002, 0, 7U, 1U);
+    RX(0x000, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT8(42U, fx.values.x2002_address);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT8(42U, fx.values.x2002_address);
+    /* restore of its own group keeps it too */
+    restore(4U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT8(42U, fx.values.x2002_address);
+}
+
+static void restore_keep_row_never_stored_gives_default(void)
+{
+    wr(0x2002, 0, 42U, 1U); /* not saved */
+    restore(1U);
+    RX(0x000, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT8(99U, fx.values.x2002_address);
+}
+
+static void restore_group_2_only_communication(void)
+{
+    set_all_groups();
+    save(1U);
+    restore(2U);
+    TEST_ASSERT_NULL(find_record(0x1017, 0));
+    TEST_ASSERT_NOT_NULL(find_record(0x2000, 0));
+    TEST_ASSERT_NOT_NULL(find_record(0x6300, 1));
+    RX(0x000, 0x82, 0x05); /* reset communication is enough for group 2 */
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    RX(0x000, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0xAABBCCDDUL, fx.values.x6300_value);
+}
+
+static void restore_groups_3_and_4(void)
+{
+    set_all_groups();
+    save(1U);
+    restore(3U);
+    RX(0x000, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx.values.x6300_value);
+    restore(4U);
+    RX(0x000, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+}
+
+static void restore_does_not_touch_lss_configuration(void)
+{
+    /* Eltex: restore factory settings except node-ID and bit timing (those live in the LSS area) */
+    RX(0x7E5, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x11, 0x0A, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x17, 0x00, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x04, 0x00, 0, 0, 0, 0, 0, 0);
+    const uint32_t lss_commits = fx.port.nvm[CO_NVM_LSS].commits;
+    restore(1U);
+    TEST_ASSERT_EQUAL_UINT32(lss_commits, fx.port.nvm[CO_NVM_LSS].commits);
+    power_cycle();
+    ASSERT_FRAME(0, 0x70AU, 1, 0x00);
+    TEST_ASSERT_EQUAL_HEX8(0x0A, co_node_id(&fx.node));
+}
+
+/* ---- node-ID-relative rows --------------------------------------------------------------------------- */
+
+static void node_id_relative_defaults_follow_new_node_id(void)
+{
+    wr(0x1017, 0, 300U, 2U);
+    save(1U);
+    TEST_ASSERT_NULL(find_record(0x1014, 0));
+    TEST_ASSERT_NULL(find_record(0x1400, 1));
+    TEST_ASSERT_NULL(find_record(0x1401, 1));
+    TEST_ASSERT_NULL(find_record(0x1800, 1));
+    TEST_ASSERT_NULL(find_record(0x1801, 1));
+    TEST_ASSERT_NOT_NULL(find_record(0x1800, 2)); /* plain row of the same object */
+
+    /* LSS: node-ID 0x0A, store, power cycle */
+    RX(0x7E5, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x11, 0x0A, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x17, 0x00, 0, 0, 0, 0, 0, 0);
+    ASSERT_FRAME(fx.port.n_sent - 1U, 0x7E4U, 8, 0x17, 0x00, 0, 0, 0, 0, 0, 0);
+    power_cycle();
+    ASSERT_FRAME(0, 0x70AU, 1, 0x00);
+    TEST_ASSERT_EQUAL_HEX8(0x0A, co_node_id(&fx.node));
+    sdo_expect((const uint8_t[8]){0x40, 0x14, 0x10, 0x00, 0, 0, 0, 0},
+               (const uint8_t[8]){0x43, 0x14, 0x10, 0x00, 0x8A, 0x00, 0x00, 0x00});
+    uint32_t v = 0U;
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_read_u32(0x1800, 1, &v));
+    TEST_ASSERT_EQUAL_HEX32(0x18AU, v);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_read_u32(0x1400, 1, &v));
+    TEST_ASSERT_EQUAL_HEX32(0x20AU, v);
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_read_u32(0x1801, 1, &v));
+    TEST_ASSERT_EQUAL_HEX32(0x8000028AUL, v);
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb); /* the saved parameters are loaded too */
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    /* EMCY goes out on the new COB-ID */
+    fake_port_clear(&fx.port);
+    (void)co_emcy_raise(&fx.node, 0x5000U, 0x01U, NULL);
+    (void)fx_process();
+    TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x08AU));
+}
+
+static void node_id_relative_row_changed_is_stored_as_value(void)
+{
+    wr(0x1014, 0, 0x80000085UL, 4U); /* EMCY disabled: no longer the relative default */
+    save(1U);
+    const uint8_t *r = find_record(0x1014, 0);
+    TEST_ASSERT_NOT_NULL(r);
+    const uint8_t expect[8] = {0x14, 0x10, 0x00, 0x04, 0x85, 0x00, 0x00, 0x80};
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(expect, r, 8);
+    power_cycle();
+    TEST_ASSERT_EQUAL_HEX32(0x80000085UL, fx.values.x1014_cob_id_emcy);
+    /* back at the default and saved again: the record is gone */
+    wr(0x1014, 0, 0x85U, 4U);
+    save(1U);
+    TEST_ASSERT_NULL(find_record(0x1014, 0));
+}
+
+/* ---- storage failures ----------------------------------------------------------------------------- */
+
+static void store_failure(bool fail_write)
+{
+    wr(0x2000, 0, 1000U, 2U);
+    save(1U);
+    const uint32_t commits = params()->commits;
+    wr(0x2000, 0, 2000U, 2U);
+    fx.port.nvm_fail_write = fail_write;
+    fx.port.nvm_fail_commit = !fail_write;
+    fx.n_events = 0U;
+    sdo_expect((const uint8_t[8]){0x23, 0x10, 0x10, 0x01, 0x73, 0x61, 0x76, 0x65},
+               (const uint8_t[8]){0x80, 0x10, 0x10, 0x01, 0x00, 0x00, 0x06, 0x06});
+    const int e = find_event(CO_EV_STORE);
+    TEST_ASSERT_TRUE(e >= 0);
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, fx.events[e].code);
+    sdo_expect((const uint8_t[8]){0x23, 0x11, 0x10, 0x01, 0x6C, 0x6F, 0x61, 0x64},
+               (const uint8_t[8]){0x80, 0x11, 0x10, 0x01, 0x00, 0x00, 0x06, 0x06});
+    TEST_ASSERT_EQUAL_UINT32(commits, params()->commits);
+    fx.port.nvm_fail_write = false;
+    fx.port.nvm_fail_commit = false;
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+}
+
+static void store_write_failure(void) { store_failure(true); }
+static void store_commit_failure(void) { store_failure(false); }
+
+static void port_without_storage(void)
+{
+    fx.port.port.nvm_write = NULL;
+    fx.port.port.nvm_commit = NULL;
+    fx.port.port.nvm_read = NULL;
+    sdo_expect((const uint8_t[8]){0x23, 0x10, 0x10, 0x01, 0x73, 0x61, 0x76, 0x65},
+               (const uint8_t[8]){0x80, 0x10, 0x10, 0x01, 0x00, 0x00, 0x06, 0x06});
+    sdo_expect((const uint8_t[8]){0x23, 0x11, 0x10, 0x01, 0x6C, 0x6F, 0x61, 0x64},
+               (const uint8_t[8]){0x80, 0x11, 0x10, 0x01, 0x00, 0x00, 0x06, 0x06});
+    /* the signature is still checked first */
+    TEST_ASSERT_EQUAL_HEX32(0x08000020UL, fx_sdo_write_u32(0x1010, 1, 0U, 4U));
+    wr(0x2000, 0, 1000U, 2U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_INT(CO_NVM_NONE, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_NONE, nvm_loaded_event());
+}
+
+static void port_with_read_only_storage(void)
+{
+    wr(0x2000, 0, 1000U, 2U);
+    save(1U);
+    fx.port.port.nvm_write = NULL;
+    fx.port.port.nvm_commit = NULL;
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, fx_sdo_write_u32(0x1010, 1, SAVE, 4U));
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms); /* still loaded */
+}
+
+/* ---- damaged blobs ---------------------------------------------------------------------------------- */
+
+static void save_2000(void)
+{
+    wr(0x2000, 0, 1000U, 2U);
+    save(1U);
+    TEST_ASSERT_TRUE(params()->stored_len > HDR);
+}
+
+static void expect_defaults_with_status(co_nvm_status_t st)
+{
+    power_cycle();
+    ASSERT_FRAME(0, 0x705U, 1, 0x00);
+    TEST_ASSERT_EQUAL_UINT16(500U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_INT(st, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)st, nvm_loaded_event());
+}
+
+static void nothing_stored_is_none(void)
+{
+    power_cycle();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_NONE, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_NONE, nvm_loaded_event());
+    /* also right after fx_start */
+    fx_start(5U, 0U);
+    TEST_ASSERT_EQUAL_INT(CO_NVM_NONE, fx.node.nvm_status);
+}
+
+static void good_blob_is_loaded(void)
+{
+    save_2000();
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_LOADED, nvm_loaded_event());
+}
+
+static void flipped_payload_byte_is_corrupt(void)
+{
+    save_2000();
+    const uint8_t *r = find_record(0x2000, 0);
+    TEST_ASSERT_NOT_NULL(r);
+    params()->stored[(size_t)(r - params()->stored) + 4U] ^= 0x01U; /* value low byte: 1000 -> 1001 */
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+    /* every byte of the payload is protected */
+    fx_start(5U, 0U);
+    save_2000();
+    params()->stored[params()->stored_len - 1U] ^= 0x80U;
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+}
+
+static void damaged_header_is_corrupt(void)
+{
+    save_2000();
+    params()->stored[0] = 'X'; /* magic */
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+    fx_start(5U, 0U);
+    save_2000();
+    params()->stored[12] ^= 0x01U; /* CRC */
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+    fx_start(5U, 0U);
+    save_2000();
+    params()->stored[8] ^= 0x04U; /* payload length */
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+}
+
+static void truncated_blob_is_corrupt(void)
+{
+    save_2000();
+    params()->stored_len -= 1U;
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+    params()->stored_len = HDR; /* header only, payload missing */
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+}
+
+static void truncated_header_is_corrupt(void)
+{
+    /* co_node.h: CORRUPT = "a blob was there but its header, length or CRC is wrong"; NONE = nothing stored */
+    save_2000();
+    params()->stored_len = 10U;
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+}
+
+static void foreign_signature(void)
+{
+    save_2000();
+    params()->stored[4] ^= 0xFFU; /* the signature is outside the CRC */
+    expect_defaults_with_status(CO_NVM_FOREIGN);
+    /* a foreign blob with a bad CRC counts as corrupt */
+    params()->stored[HDR + 5U] ^= 0x01U;
+    expect_defaults_with_status(CO_NVM_CORRUPT);
+}
+
+static void save_over_damaged_blob_recovers(void)
+{
+    wr(0x1017, 0, 300U, 2U);
+    save_2000();
+    params()->stored[HDR] ^= 0x01U;
+    power_cycle();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_CORRUPT, fx.node.nvm_status);
+    wr(0x2000, 0, 1500U, 2U);
+    save(4U); /* the damaged blob counts as empty: only group 4 ends up stored */
+    power_cycle();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT16(1500U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_UINT16(0U, fx.values.x1017_producer_hb);
+}
+
+/* ---- blob format (top of src/co_store.c) ------------------------------------------------------------ */
+
+static void blob_format(void)
+{
+    /* the reference CRC itself */
+    TEST_ASSERT_EQUAL_HEX32(0xCBF43926UL, crc32_ieee((const uint8_t *)"123456789", 9U));
+
+    wr(0x2000, 0, 1000U, 2U);
+    wr(0x1017, 0, 300U, 2U);
+    wr(0x6300, 1, 0x11223344UL, 4U);
+    save(1U);
+    const uint8_t *b = params()->stored;
+    const uint32_t payload = le32(&b[8]);
+    TEST_ASSERT_EQUAL_MEMORY("COS1", b, 4);
+    TEST_ASSERT_EQUAL_HEX32(test_od.signature, le32(&b[4]));
+    TEST_ASSERT_EQUAL_UINT32(params()->stored_len - HDR, payload);
+    TEST_ASSERT_EQUAL_HEX32(crc32_ieee(&b[HDR], payload), le32(&b[12]));
+
+    const uint8_t r2000[6] = {0x00, 0x20, 0x00, 0x02, 0xE8, 0x03};
+    TEST_ASSERT_NOT_NULL(find_record(0x2000, 0));
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(r2000, find_record(0x2000, 0), 6);
+    const uint8_t r1017[6] = {0x17, 0x10, 0x00, 0x02, 0x2C, 0x01};
+    TEST_ASSERT_NOT_NULL(find_record(0x1017, 0));
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(r1017, find_record(0x1017, 0), 6);
+    const uint8_t r6300[8] = {0x00, 0x63, 0x01, 0x04, 0x44, 0x33, 0x22, 0x11};
+    TEST_ASSERT_NOT_NULL(find_record(0x6300, 1));
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(r6300, find_record(0x6300, 1), 8);
+    const uint8_t r2002[5] = {0x02, 0x20, 0x00, 0x01, 99};
+    TEST_ASSERT_NOT_NULL(find_record(0x2002, 0));
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(r2002, find_record(0x2002, 0), 5);
+    /* strings: their length up to the first NUL */
+    const uint8_t r2005[13] = {0x05, 0x20, 0x00, 0x09, 't', 'e', 's', 't', ' ', 'n', 'o', 'd', 'e'};
+    TEST_ASSERT_NOT_NULL(find_record(0x2005, 0));
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(r2005, find_record(0x2005, 0), 13);
+    /* one record per stored row of the test OD that is not at a node-ID-relative default */
+    uint32_t expected = 0U;
+    for (uint16_t i = 0U; i < test_od.count; i++) {
+        const co_od_entry_t *e = &test_od.entries[i];
+        if ((e->flags & CO_OD_STORE) != 0U && (e->flags & CO_OD_NODEID) == 0U) {
+            expected++;
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT32(expected, record_count());
+}
+
+static void lss_blob_format(void)
+{
+    RX(0x7E5, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x11, 0x0A, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x13, 0x00, 0x03, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x17, 0x00, 0, 0, 0, 0, 0, 0);
+    const fake_nvm_area_t *a = &fx.port.nvm[CO_NVM_LSS];
+    TEST_ASSERT_EQUAL_UINT32(12U, a->stored_len);
+    const uint8_t head[8] = {'C', 'O', 'L', '1', 0x0A, 0x03, 0x00, 0x00};
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(head, a->stored, 8);
+    TEST_ASSERT_EQUAL_HEX32(crc32_ieee(a->stored, 8U), le32(&a->stored[8]));
+    /* the LSS area does not disturb the parameter area */
+    TEST_ASSERT_EQUAL_UINT32(0U, params()->stored_len);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(v39_save_signature);
+    RUN_TEST(v40_wrong_signature);
+    RUN_TEST(v41_load_signature);
+    RUN_TEST(sub0_is_read_only);
+    RUN_TEST(sub_not_existing);
+    RUN_TEST(read_sub1_gives_1);
+    RUN_TEST(wrong_length_refused);
+    RUN_TEST(saved_values_survive_power_cycle);
+    RUN_TEST(saved_values_return_at_nmt_reset);
+    RUN_TEST(rows_without_store_flag_never_stored);
+    RUN_TEST(save_group_2_communication_only);
+    RUN_TEST(save_group_3_application_only);
+    RUN_TEST(save_group_4_manufacturer_only);
+    RUN_TEST(saving_a_group_keeps_other_groups);
+    RUN_TEST(restore_takes_effect_at_next_reset);
+    RUN_TEST(restore_then_power_cycle);
+    RUN_TEST(restore_keeps_keep_rows);
+    RUN_TEST(restore_keep_row_never_stored_gives_default);
+    RUN_TEST(restore_group_2_only_communication);
+    RUN_TEST(restore_groups_3_and_4);
+    RUN_TEST(restore_does_not_touch_lss_configuration);
+    RUN_TEST(node_id_relative_defaults_follow_new_node_id);
+    RUN_TEST(node_id_relative_row_changed_is_stored_as_value);
+    RUN_TEST(store_write_failure);
+    RUN_TEST(store_commit_failure);
+    RUN_TEST(port_without_storage);
+    RUN_TEST(port_with_read_only_storage);
+    RUN_TEST(nothing_stored_is_none);
+    RUN_TEST(good_blob_is_loaded);
+    RUN_TEST(flipped_payload_byte_is_corrupt);
+    RUN_TEST(damaged_header_is_corrupt);
+    RUN_TEST(truncated_blob_is_corrupt);
+    RUN_TEST(truncated_header_is_corrupt);
+    RUN_TEST(foreign_signature);
+    RUN_TEST(save_over_damaged_blob_recovers);
+    RUN_TEST(blob_format);
+    RUN_TEST(lss_blob_format);
+    return UNITY_END();
+}
