@@ -78,6 +78,9 @@ bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8
 {
     co_emcy_t *em = &node->emcy;
     const uint8_t *m = msef != NULL ? msef : zero_msef;
+    if (code == 0x0000U) {
+        return false; /* 0x0000 is the error reset, never an error (and never logged in 0x1003) */
+    }
     for (uint8_t i = 0U; i < em->n_active; i++) {
         if (same_error(&em->active[i], code, m)) {
             return true;

@@ -53,7 +53,11 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
         used = true;
         s->remote_state = f->data[0];
         if (f->data[0] == 0U) {
-            continue; /* boot-up: the node restarted; monitoring resumes with its first heartbeat */
+            if (s->state == 2U) { /* boot-up: the node restarted; monitoring resumes with its first heartbeat */
+                s->state = 1U;
+                s->deadline = CO_NEVER;
+            }
+            continue;
         }
         if (s->state == 3U) {
             uint8_t msef[5];

@@ -58,10 +58,11 @@ bool co_sync_rx(co_node_t *node, const co_frame_t *f)
 
 co_time_us_t co_sync_process(co_node_t *node)
 {
-    if (node->sync.timeout_error || node->sync.timeout_due == CO_NEVER) {
+    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
+        node->sync.timeout_due = CO_NEVER; /* consumer off: monitoring restarts with the next SYNC */
         return CO_NEVER;
     }
-    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
+    if (node->sync.timeout_error || node->sync.timeout_due == CO_NEVER) {
         return CO_NEVER;
     }
     if (node->now >= node->sync.timeout_due) {

@@ -312,7 +312,8 @@ uint8_t co_node_id(const co_node_t *node);
  * Raises an error: sets its bits in 0x1001 (bit 0 always), records it in 0x1003 (newest first) and sends
  * an EMCY frame `code | 0x1001 | msef[0..4]` (subject to the inhibit time 0x1015; queued while Stopped).
  * Raising an error that is already active (same code and msef[0..1]) does nothing.
- * @param msef 5 manufacturer-specific bytes, or NULL for zeros. @return false if the active list is full.
+ * @param msef 5 manufacturer-specific bytes, or NULL for zeros.
+ * @return false if the active list is full or code is 0x0000 (the error-reset code is never an error).
  */
 bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8_t *msef);
 
