@@ -19,7 +19,8 @@ extern "C" {
 /** Non-volatile storage areas. Each area holds one blob that the core replaces as a whole. */
 typedef enum co_nvm_area {
     CO_NVM_PARAMS = 0, /**< Object values saved with 0x1010 (a few hundred bytes for the shipped devices). */
-    CO_NVM_LSS = 1     /**< LSS configuration: node-ID and bit-timing index (12 bytes). */
+    CO_NVM_LSS = 1,    /**< LSS configuration: node-ID and bit-timing index (12 bytes). */
+    CO_NVM_DEVICE = 2  /**< The device model's own data (e.g. operating-hour counters); never used by the core. */
 } co_nvm_area_t;
 
 typedef struct co_port {

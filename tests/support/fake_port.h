@@ -27,7 +27,7 @@ typedef struct fake_port {
     bool send_io_error;      /* sends answer CO_ERR_IO */
     bool nvm_fail_write;     /* nvm_write answers CO_ERR_IO */
     bool nvm_fail_commit;    /* nvm_commit answers CO_ERR_IO */
-    fake_nvm_area_t nvm[2];
+    fake_nvm_area_t nvm[3];
     uint32_t bit_rate_kbit;  /* last set_bit_rate */
     uint32_t bit_rate_calls;
 } fake_port_t;

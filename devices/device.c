@@ -1,0 +1,368 @@
+/*
+ * The device framework: instance set-up, hook trampolines into the device class, and the control
+ * commands every device understands (show, get, set, power-cycle). Device-specific commands come first.
+ */
+#include "device.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static device_t *dev_of(void *ctx) { return (device_t *)ctx; }
+
+static uint32_t tramp_write(void *ctx, co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len,
+                            co_od_origin_t origin)
+{
+    device_t *dev = dev_of(ctx);
+    (void)node;
+    return dev->cls->on_write != NULL ? dev->cls->on_write(dev, e, data, len, origin) : 0U;
+}
+
+static uint32_t tramp_read(void *ctx, co_node_t *node, const co_od_entry_t *e)
+{
+    device_t *dev = dev_of(ctx);
+    (void)node;
+    return dev->cls->on_read != NULL ? dev->cls->on_read(dev, e) : 0U;
+}
+
+static void tramp_nmt(void *ctx, co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
+{
+    device_t *dev = dev_of(ctx);
+    (void)node;
+    if (dev->cls->on_nmt_change != NULL) {
+        dev->cls->on_nmt_change(dev, from, to);
+    }
+}
+
+static void tramp_reset(void *ctx, co_node_t *node, co_reset_t what)
+{
+    device_t *dev = dev_of(ctx);
+    (void)node;
+    if (dev->cls->on_reset != NULL) {
+        dev->cls->on_reset(dev, what);
+    }
+}
+
+static void tramp_event(void *ctx, co_node_t *node, const co_event_t *ev)
+{
+    device_t *dev = dev_of(ctx);
+    (void)node;
+    if (dev->cfg.on_event != NULL) {
+        dev->cfg.on_event(dev->cfg.event_ctx, dev, ev);
+    }
+}
+
+static co_status_t boot(device_t *dev, co_time_us_t now)
+{
+    dev->now = now;
+    memcpy(dev->values, dev->cls->od->defaults, dev->cls->od->values_size);
+    if (dev->cls->model_size > 0U) {
+        memset(dev->model, 0, dev->cls->model_size);
+    }
+    if (dev->cls->power_on != NULL) {
+        dev->cls->power_on(dev, now);
+    }
+    co_node_cfg_t nc;
+    memset(&nc, 0, sizeof nc);
+    nc.od = dev->cls->od;
+    nc.values = dev->values;
+    nc.port = dev->cfg.port;
+    nc.port_ctx = dev->cfg.port_ctx;
+    nc.hooks = &dev->hooks;
+    nc.hooks_ctx = dev;
+    nc.node_id = dev->cfg.node_id;
+    nc.bit_timing = dev->cls->default_bit_timing;
+    nc.bit_rates_kbit = dev->cls->bit_rates_kbit;
+    nc.options = dev->cls->core_options;
+    return co_node_init(&dev->node, &nc, now);
+}
+
+co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, void *model, const device_cfg_t *cfg,
+                        co_time_us_t now)
+{
+    if (dev == NULL || cls == NULL || values == NULL || cfg == NULL || (cls->model_size > 0U && model == NULL)) {
+        return CO_ERR_ARG;
+    }
+    memset(dev, 0, sizeof *dev);
+    dev->cls = cls;
+    dev->values = values;
+    dev->model = model;
+    dev->cfg = *cfg;
+    if (dev->cfg.node_id == 0U) {
+        dev->cfg.node_id = cls->default_node_id;
+    }
+    if (cfg->variant != NULL) {
+        bool found = false;
+        for (uint8_t i = 0U; cls->variants != NULL && cls->variants[i] != NULL; i++) {
+            if (strcmp(cls->variants[i], cfg->variant) == 0) {
+                dev->variant = i;
+                found = true;
+            }
+        }
+        if (!found) {
+            return CO_ERR_ARG;
+        }
+    }
+    dev->hooks.on_write = tramp_write;
+    dev->hooks.on_read = tramp_read;
+    dev->hooks.on_nmt_change = tramp_nmt;
+    dev->hooks.on_reset = tramp_reset;
+    dev->hooks.on_event = tramp_event;
+    return boot(dev, now);
+}
+
+co_status_t device_power_cycle(device_t *dev, co_time_us_t now) { return boot(dev, now); }
+
+void device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now)
+{
+    dev->now = now;
+    co_node_rx(&dev->node, frame, now);
+}
+
+co_time_us_t device_process(device_t *dev, co_time_us_t now)
+{
+    dev->now = now;
+    co_time_us_t next = CO_NEVER;
+    if (dev->cls->step != NULL) {
+        next = dev->cls->step(dev, now);
+    }
+    const co_time_us_t core = co_node_process(&dev->node, now);
+    return core < next ? core : next;
+}
+
+void device_printf(const device_t *dev, const char *fmt, ...)
+{
+    char line[512];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    if (dev->cfg.print != NULL) {
+        dev->cfg.print(dev->cfg.print_ctx, dev, line);
+    }
+}
+
+bool device_parse_int(const char *text, long long lo, long long hi, long long *out)
+{
+    if (text == NULL || *text == '\0') {
+        return false;
+    }
+    char *end = NULL;
+    const long long v = strtoll(text, &end, 0);
+    if (end == NULL || *end != '\0' || v < lo || v > hi) {
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+static const char *state_name(co_nmt_state_t s)
+{
+    switch (s) {
+    case CO_NMT_INITIALISING:
+        return "INITIALISING";
+    case CO_NMT_STOPPED:
+        return "STOPPED";
+    case CO_NMT_OPERATIONAL:
+        return "OPERATIONAL";
+    default:
+        return "PRE-OPERATIONAL";
+    }
+}
+
+/* One hex field of an address: optional 0x, hex digits only. */
+static bool parse_hex(const char *text, size_t n, unsigned long max, unsigned long *out)
+{
+    if (n > 2U && text[0] == '0' && (text[1] == 'x' || text[1] == 'X')) {
+        text += 2;
+        n -= 2U;
+    }
+    if (n == 0U || n > 4U) {
+        return false;
+    }
+    unsigned long v = 0U;
+    for (size_t i = 0U; i < n; i++) {
+        const char c = text[i];
+        const int d = (c >= '0' && c <= '9') ? c - '0' : (c >= 'a' && c <= 'f') ? c - 'a' + 10 : (c >= 'A' && c <= 'F') ? c - 'A' + 10 : -1;
+        if (d < 0) {
+            return false;
+        }
+        v = v * 16U + (unsigned long)d;
+    }
+    if (v > max) {
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+/* INDEX[:SUB], both hex with or without 0x: "0x2002:06", "1017", "2002:0x3B". */
+static bool parse_address(const char *text, uint16_t *index, uint8_t *sub)
+{
+    const char *colon = strchr(text, ':');
+    const size_t ilen = colon != NULL ? (size_t)(colon - text) : strlen(text);
+    unsigned long i, s = 0U;
+    if (!parse_hex(text, ilen, 0xFFFFU, &i) || (colon != NULL && !parse_hex(colon + 1, strlen(colon + 1), 0xFFU, &s))) {
+        return false;
+    }
+    *index = (uint16_t)i;
+    *sub = (uint8_t)s;
+    return true;
+}
+
+static void print_value(device_t *dev, uint16_t index, uint8_t sub)
+{
+    const co_od_entry_t *e = co_od_find(dev->cls->od, index, sub);
+    uint8_t buf[256];
+    size_t len = 0U;
+    const uint32_t r = co_od_read(&dev->node, index, sub, buf, sizeof buf - 1U, &len, CO_ORIGIN_LOCAL);
+    if (r != 0U) {
+        device_printf(dev, "0x%04X:%02X: %s (0x%08lX)", index, sub, co_abort_text(r), (unsigned long)r);
+        return;
+    }
+    uint64_t u = 0U;
+    for (size_t i = len; i > 0U; i--) {
+        u = (u << 8) | buf[i - 1U];
+    }
+    switch (e->type) {
+    case CO_T_VISIBLE_STRING:
+        buf[len] = 0U;
+        device_printf(dev, "0x%04X:%02X = \"%s\"", index, sub, (const char *)buf);
+        break;
+    case CO_T_REAL32: {
+        float f;
+        const uint32_t u32 = (uint32_t)u;
+        memcpy(&f, &u32, sizeof f);
+        device_printf(dev, "0x%04X:%02X = %g", index, sub, (double)f);
+        break;
+    }
+    case CO_T_INTEGER8:
+    case CO_T_INTEGER16:
+    case CO_T_INTEGER32:
+    case CO_T_INTEGER64: {
+        const unsigned bits = (unsigned)len * 8U;
+        int64_t v = (int64_t)u;
+        if (bits < 64U && (u >> (bits - 1U)) != 0U) {
+            v = (int64_t)(u | ~((UINT64_C(1) << bits) - 1U));
+        }
+        device_printf(dev, "0x%04X:%02X = %lld", index, sub, (long long)v);
+        break;
+    }
+    default:
+        device_printf(dev, "0x%04X:%02X = %llu (0x%llX)", index, sub, (unsigned long long)u, (unsigned long long)u);
+        break;
+    }
+}
+
+static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *text)
+{
+    uint16_t index;
+    uint8_t sub;
+    const co_od_entry_t *e;
+    if (!parse_address(addr, &index, &sub) || (e = co_od_find(dev->cls->od, index, sub)) == NULL) {
+        device_printf(dev, "error: no object %s", addr);
+        return DEVICE_CMD_ERROR;
+    }
+    uint8_t wire[256];
+    size_t len = e->size;
+    if (e->type == CO_T_VISIBLE_STRING) {
+        len = strlen(text);
+        if (len > e->size) {
+            device_printf(dev, "error: %s holds at most %u characters", addr, e->size);
+            return DEVICE_CMD_ERROR;
+        }
+        memcpy(wire, text, len);
+    } else if (e->type == CO_T_REAL32) {
+        char *end = NULL;
+        const float f = strtof(text, &end);
+        uint32_t u;
+        if (end == NULL || *end != '\0') {
+            device_printf(dev, "error: '%s' is not a number", text);
+            return DEVICE_CMD_ERROR;
+        }
+        memcpy(&u, &f, sizeof u);
+        for (size_t i = 0U; i < 4U; i++) {
+            wire[i] = (uint8_t)(u >> (8U * i));
+        }
+    } else if (e->size <= 8U) {
+        long long v;
+        if (!device_parse_int(text, -0x7FFFFFFFFFFFFFFFLL - 1, 0x7FFFFFFFFFFFFFFFLL, &v)) {
+            device_printf(dev, "error: '%s' is not a number", text);
+            return DEVICE_CMD_ERROR;
+        }
+        for (size_t i = 0U; i < e->size; i++) {
+            wire[i] = (uint8_t)((unsigned long long)v >> (8U * i));
+        }
+    } else {
+        device_printf(dev, "error: %s cannot be set from the command line", addr);
+        return DEVICE_CMD_ERROR;
+    }
+    const uint32_t r = co_od_write(&dev->node, index, sub, wire, len, CO_ORIGIN_LOCAL);
+    if (r != 0U) {
+        device_printf(dev, "error: 0x%04X:%02X: %s (0x%08lX)", index, sub, co_abort_text(r), (unsigned long)r);
+        return DEVICE_CMD_ERROR;
+    }
+    print_value(dev, index, sub);
+    return DEVICE_CMD_OK;
+}
+
+device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now)
+{
+    dev->now = now;
+    if (argc < 1) {
+        return DEVICE_CMD_UNKNOWN;
+    }
+    if (dev->cls->command != NULL) {
+        const device_cmd_result_t r = dev->cls->command(dev, argc, argv, now);
+        if (r != DEVICE_CMD_UNKNOWN) {
+            return r;
+        }
+    }
+    const char *cmd = argv[0];
+    if (strcmp(cmd, "show") == 0 && argc == 1) {
+        const co_node_t *n = &dev->node;
+        device_printf(dev, "%s node-ID %u%s: %s, error register 0x%02X, %u active error(s), tx %lu, rx %lu, dropped %lu",
+                      dev->cls->name, n->node_id, n->node_id == CO_NODE_ID_UNCONFIGURED ? " (unconfigured)" : "",
+                      state_name(n->nmt_state), co_od_get_u8(&dev->node, 0x1001, 0), n->emcy.n_active,
+                      (unsigned long)n->stats.tx_frames, (unsigned long)n->stats.rx_frames,
+                      (unsigned long)n->stats.tx_dropped);
+        for (uint8_t i = 0U; i < n->emcy.n_active; i++) {
+            const co_emcy_error_t *er = &n->emcy.active[i];
+            device_printf(dev, "  error 0x%04X register 0x%02X info %02X %02X %02X %02X %02X", er->code, er->reg,
+                          er->msef[0], er->msef[1], er->msef[2], er->msef[3], er->msef[4]);
+        }
+        return DEVICE_CMD_OK;
+    }
+    if (strcmp(cmd, "get") == 0 && argc == 2) {
+        uint16_t index;
+        uint8_t sub;
+        if (!parse_address(argv[1], &index, &sub)) {
+            device_printf(dev, "error: '%s' is not INDEX[:SUB]", argv[1]);
+            return DEVICE_CMD_ERROR;
+        }
+        print_value(dev, index, sub);
+        return DEVICE_CMD_OK;
+    }
+    if (strcmp(cmd, "set") == 0 && argc == 3) {
+        return cmd_set(dev, argv[1], argv[2]);
+    }
+    if (strcmp(cmd, "power-cycle") == 0 && argc == 1) {
+        if (device_power_cycle(dev, now) != CO_OK) {
+            device_printf(dev, "error: power-on failed");
+            return DEVICE_CMD_ERROR;
+        }
+        device_printf(dev, "power cycled");
+        return DEVICE_CMD_OK;
+    }
+    return DEVICE_CMD_UNKNOWN;
+}
+
+const device_class_t *device_find_class(const char *name)
+{
+    for (size_t i = 0U; device_classes[i] != NULL; i++) {
+        if (strcmp(device_classes[i]->name, name) == 0) {
+            return device_classes[i];
+        }
+    }
+    return NULL;
+}

@@ -1,0 +1,128 @@
+/**
+ * @file device.h
+ * @brief Emulated devices: the contract between a device model (devices/<name>/) and whoever runs it
+ *        (the canopen-emu program, a unit test with simulated time, a microcontroller port).
+ *
+ * A device is a class (const, one per device type: its object dictionary, defaults, behaviour) and
+ * instances (one per emulated node: a co_node_t, its OD values, the model's state). Device code uses the
+ * core's API only: it allocates nothing, reads no clock (time is an argument), touches no OS. It keeps
+ * persistent data of its own (operating-hour counters) in the port's CO_NVM_DEVICE area.
+ *
+ * Life of an instance:
+ *   device_init(dev, cls, cfg, now)      set up model + node (power-on: loads NVM, boot-up)
+ *   loop: device_rx(dev, frame, t)       for every received frame
+ *         next = device_process(dev, now)  model step + core processing; call again at `next` at the latest
+ *         device_command(dev, argv, now)   control commands (inputs, faults, power cycle)
+ */
+#ifndef DEVICE_H
+#define DEVICE_H
+
+#include <stdarg.h>
+
+#include "co/co.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct device device_t;
+
+/** Where a device writes command replies and log lines (one line per call, no newline). */
+typedef void (*device_print_fn)(void *ctx, const device_t *dev, const char *line);
+
+/** Result of device_command(). */
+typedef enum device_cmd_result {
+    DEVICE_CMD_OK = 0,       /**< Done (a reply may have been printed). */
+    DEVICE_CMD_UNKNOWN = 1,  /**< Not a command of this device. */
+    DEVICE_CMD_ERROR = 2     /**< A known command with bad arguments or refused; the reason was printed. */
+} device_cmd_result_t;
+
+/** A device type. All fields const; shared by every instance. */
+typedef struct device_class {
+    const char *name;              /**< Command-line name, e.g. "pro-ionizer". */
+    const char *summary;           /**< One line for --list-devices. */
+    const co_od_t *od;             /**< Generated object dictionary. */
+    uint8_t default_node_id;       /**< Node-ID when the user gives none (the manual's factory setting). */
+    uint8_t default_bit_timing;    /**< LSS bit-timing index at the factory setting. */
+    uint32_t core_options;         /**< CO_OPT_* for co_node_init. */
+    const uint16_t *bit_rates_kbit;/**< LSS bit-timing table of the device (NULL: CiA 305). */
+    size_t model_size;             /**< Bytes of the model state the caller provides (device_t.model). */
+    const char *const *variants;   /**< NULL-terminated variant names (first = default), or NULL. */
+    const char *commands_help;     /**< Help text of the device's own commands (lines, '\n'-separated). */
+
+    /** Initialises the model state for a power-on (called before co_node_init and at every power cycle).
+     *  The values block already holds the defaults; NVM is not loaded yet. */
+    void (*power_on)(device_t *dev, co_time_us_t now);
+    /** The core's hooks, with dev as context (any may be NULL). */
+    uint32_t (*on_write)(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len, co_od_origin_t origin);
+    uint32_t (*on_read)(device_t *dev, const co_od_entry_t *e);
+    void (*on_nmt_change)(device_t *dev, co_nmt_state_t from, co_nmt_state_t to);
+    void (*on_reset)(device_t *dev, co_reset_t what);
+    /** Advances the model to now (values move, timers run). Returns its next deadline or CO_NEVER. */
+    co_time_us_t (*step)(device_t *dev, co_time_us_t now);
+    /** A control command (argv[0] is the command word). */
+    device_cmd_result_t (*command)(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
+} device_class_t;
+
+/** What the runner gives an instance. */
+typedef struct device_cfg {
+    uint8_t node_id;               /**< 0 = the class default. */
+    const char *variant;           /**< NULL = the class default. */
+    const co_port_t *port;         /**< CAN + NVM of this node. */
+    void *port_ctx;
+    device_print_fn print;         /**< Replies and logs (may be NULL). */
+    void *print_ctx;
+    void (*on_event)(void *ctx, const device_t *dev, const co_event_t *ev); /**< Core events, for logs (may be NULL). */
+    void *event_ctx;
+} device_cfg_t;
+
+/** One emulated node. Memory is the caller's: values (cls->od->values_size) and model (cls->model_size). */
+struct device {
+    const device_class_t *cls;
+    co_node_t node;
+    void *values;
+    void *model;
+    device_cfg_t cfg;
+    co_hooks_t hooks;              /**< Trampolines to cls (set by device_init). */
+    uint8_t variant;               /**< Index into cls->variants. */
+    co_time_us_t now;              /**< Time of the call in progress. */
+};
+
+/**
+ * Powers an instance on. values and model must point to blocks of the class's sizes.
+ * @return CO_OK, CO_ERR_ARG (bad node-ID or unknown variant), or co_node_init's error.
+ */
+co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, void *model, const device_cfg_t *cfg,
+                        co_time_us_t now);
+
+/** A power cycle: the model restarts, the node re-initialises from NVM and boots. */
+co_status_t device_power_cycle(device_t *dev, co_time_us_t now);
+
+void device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now);
+
+/** Runs the model and the core; returns the earliest deadline of both. */
+co_time_us_t device_process(device_t *dev, co_time_us_t now);
+
+/** Runs a control command: the device's own first, then the common ones (see device.c). */
+device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
+
+/** printf-style reply/log line through cfg.print. */
+void device_printf(const device_t *dev, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/** Parses an unsigned/signed number (decimal or 0x-hex). Returns false if it is not one or out of [lo, hi]. */
+bool device_parse_int(const char *text, long long lo, long long hi, long long *out);
+
+/** The registered device classes, NULL-terminated. */
+extern const device_class_t *const device_classes[];
+
+/** Finds a class by name, or NULL. */
+const device_class_t *device_find_class(const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* DEVICE_H */

@@ -1,0 +1,713 @@
+/*
+ * canopen-emu: emulated CANopen devices on a SocketCAN interface.
+ *
+ *   canopen-emu [-i IFACE] [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID] ...
+ *
+ * Each DEVICE becomes one node with its own CAN socket (so nodes see each other's frames, as separate
+ * devices on a bus would) and its own NVM files. One poll loop sleeps until the earliest deadline any node
+ * returns or until a frame, a control command or a signal arrives. See docs/emulator.md.
+ */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <fcntl.h>
+#include <getopt.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "../linux/nvm_file.h"
+#include "../linux/socketcan.h"
+#include "device.h"
+
+#define EMU_VERSION "0.1.0"
+#define MAX_NODES 127
+#define MAX_ARGS 16
+#define LINE_MAX_LEN 512
+
+enum { LOG_QUIET = 0, LOG_NORMAL = 1, LOG_VERBOSE = 2 };
+
+typedef struct emu_node {
+    device_t dev;
+    void *values;
+    void *model;
+    co_port_t port;
+    socketcan_t can;
+    nvm_file_t nvm;
+    uint8_t cmdline_id;
+    char key[64];
+} emu_node_t;
+
+typedef struct script_line {
+    co_time_us_t at;
+    char text[LINE_MAX_LEN];
+} script_line_t;
+
+typedef struct emu {
+    emu_node_t *nodes[MAX_NODES];
+    size_t n_nodes;
+    co_time_us_t start;
+    int log_level;
+    script_line_t *script;
+    size_t script_len;
+    size_t script_pos;
+    bool control_stdin;
+    bool stdin_open;
+    char stdin_buf[LINE_MAX_LEN * 4];
+    size_t stdin_fill;
+    bool quit;
+} emu_t;
+
+static volatile sig_atomic_t stop_signal;
+
+static void on_signal(int sig) { stop_signal = sig; }
+
+static emu_t emu;
+
+static void logline(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void logline(int level, const char *fmt, ...)
+{
+    if (level > emu.log_level) {
+        return;
+    }
+    char text[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    const co_time_us_t t = socketcan_now_us() - emu.start;
+    fprintf(stderr, "[%8.3f] %s\n", (double)t / 1e6, text);
+}
+
+static void can_log(void *ctx, const char *line)
+{
+    const emu_node_t *n = (const emu_node_t *)ctx;
+    logline(LOG_NORMAL, "node %u (%s): %s", co_node_id(&n->dev.node), n->dev.cls->name, line);
+}
+
+static void device_print(void *ctx, const device_t *dev, const char *line)
+{
+    (void)ctx;
+    printf("node %u: %s\n", co_node_id(&dev->node), line);
+    fflush(stdout);
+}
+
+static const char *nmt_name(uint32_t s)
+{
+    switch (s) {
+    case CO_NMT_INITIALISING:
+        return "INITIALISING";
+    case CO_NMT_STOPPED:
+        return "STOPPED";
+    case CO_NMT_OPERATIONAL:
+        return "OPERATIONAL";
+    default:
+        return "PRE-OPERATIONAL";
+    }
+}
+
+static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
+{
+    (void)ctx;
+    const unsigned id = co_node_id(&dev->node);
+    const char *name = dev->cls->name;
+    switch (ev->kind) {
+    case CO_EV_NMT_STATE:
+        logline(LOG_NORMAL, "node %u (%s): NMT %s -> %s", id, name, nmt_name(ev->code), nmt_name(ev->value));
+        break;
+    case CO_EV_SDO_ABORT:
+        logline(LOG_NORMAL, "node %u (%s): SDO abort 0x%08lX on 0x%04X:%02X (%s)", id, name, (unsigned long)ev->code,
+                ev->index, ev->sub, co_abort_text(ev->code));
+        break;
+    case CO_EV_EMCY:
+        logline(LOG_NORMAL, "node %u (%s): EMCY 0x%04lX, error register 0x%02lX", id, name, (unsigned long)ev->value,
+                (unsigned long)ev->code);
+        break;
+    case CO_EV_STORE:
+    case CO_EV_RESTORE:
+        if (ev->index == 0x7E5U) {
+            logline(LOG_NORMAL, "node %u (%s): LSS store configuration (node-ID %lu): %s", id, name,
+                    (unsigned long)ev->value, ev->code == 0U ? "stored" : "failed");
+        } else {
+            logline(LOG_NORMAL, "node %u (%s): %s 0x%04X:%02X: %s", id, name, ev->kind == CO_EV_STORE ? "store" : "restore",
+                    ev->index, ev->sub, ev->code == 0U ? "done" : co_abort_text(ev->code));
+        }
+        break;
+    case CO_EV_NVM_LOADED:
+        if (ev->value == CO_NVM_CORRUPT || ev->value == CO_NVM_FOREIGN) {
+            logline(LOG_QUIET, "node %u (%s): stored parameters %s; starting from defaults", id, name,
+                    ev->value == CO_NVM_CORRUPT ? "are damaged (bad header, length or CRC)" : "belong to another device");
+        } else {
+            logline(LOG_VERBOSE, "node %u (%s): stored parameters %s", id, name,
+                    ev->value == CO_NVM_LOADED ? "loaded" : "none, defaults used");
+        }
+        break;
+    case CO_EV_LSS_NODE_ID:
+        logline(LOG_NORMAL, "node %u (%s): LSS pending node-ID %lu", id, name, (unsigned long)ev->value);
+        break;
+    case CO_EV_LSS_BIT_TIMING:
+        logline(LOG_NORMAL, "node %u (%s): LSS pending bit timing %lu", id, name, (unsigned long)ev->value);
+        break;
+    case CO_EV_LSS_ACTIVATE:
+        logline(LOG_NORMAL, "node %u (%s): LSS activated %lu kbit/s", id, name, (unsigned long)ev->value);
+        break;
+    case CO_EV_HB_TIMEOUT:
+        logline(LOG_NORMAL, "node %u (%s): heartbeat of node %lu missing", id, name, (unsigned long)ev->value);
+        break;
+    case CO_EV_GUARD_TIMEOUT:
+        logline(LOG_NORMAL, "node %u (%s): life guarding: no guard request in time", id, name);
+        break;
+    case CO_EV_TX_DROPPED:
+        logline(LOG_VERBOSE, "node %u (%s): frame 0x%03lX not sent", id, name, (unsigned long)ev->value);
+        break;
+    default:
+        break;
+    }
+}
+
+/* ---- the port of one node: its CAN socket and its NVM files ---- */
+
+static co_status_t port_send(void *ctx, const co_frame_t *f)
+{
+    emu_node_t *n = (emu_node_t *)ctx;
+    const co_status_t st = socketcan_send(&n->can, f);
+    if (st == CO_OK && emu.log_level >= LOG_VERBOSE) {
+        char hex[24] = "";
+        for (uint8_t i = 0U; i < f->len; i++) {
+            (void)snprintf(hex + 2U * i, sizeof hex - 2U * i, "%02X", f->data[i]);
+        }
+        logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&n->dev.node), (unsigned)f->id, hex);
+    }
+    return st;
+}
+static co_status_t port_nvm_write(void *ctx, co_nvm_area_t a, uint32_t off, const void *d, size_t len)
+{
+    return nvm_file_write(&((emu_node_t *)ctx)->nvm, a, off, d, len);
+}
+static co_status_t port_nvm_commit(void *ctx, co_nvm_area_t a, uint32_t total)
+{
+    return nvm_file_commit(&((emu_node_t *)ctx)->nvm, a, total);
+}
+static co_status_t port_nvm_read(void *ctx, co_nvm_area_t a, uint32_t off, void *d, size_t len)
+{
+    return nvm_file_read(&((emu_node_t *)ctx)->nvm, a, off, d, len);
+}
+static co_status_t port_bit_rate(void *ctx, uint32_t kbit)
+{
+    emu_node_t *n = (emu_node_t *)ctx;
+    logline(LOG_NORMAL, "node %u (%s): bit rate %lu kbit/s requested; the interface's rate is the system's "
+            "(ip link set %s type can bitrate %lu000)", co_node_id(&n->dev.node), n->dev.cls->name,
+            (unsigned long)kbit, n->can.ifname, (unsigned long)kbit);
+    return CO_OK;
+}
+
+/* ---- command line ---- */
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: canopen-emu [-i IFACE] [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID] ...\n"
+            "Emulates CANopen devices on a SocketCAN interface (default vcan0).\n\n"
+            "  -i, --interface IFACE   CAN interface (default vcan0)\n"
+            "      --nvm-dir DIR       where stored parameters live (default $XDG_STATE_HOME/canopen-emu\n"
+            "                          or ~/.local/state/canopen-emu)\n"
+            "      --control -         read control commands from stdin even when it is not a terminal\n"
+            "      --script FILE       run control commands from FILE ('@MS command' lines, see docs/emulator.md)\n"
+            "      --list-devices      list the device types and exit\n"
+            "  -v, --verbose           log every frame sent as well\n"
+            "  -q, --quiet             log only problems\n"
+            "  -h, --help              this help;  --version  the version\n\n"
+            "NODE-ID is 1..127, decimal or 0x-hex; default: the device's own (see --list-devices).\n"
+            "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12\n");
+}
+
+static void list_devices(FILE *out)
+{
+    for (size_t i = 0U; device_classes[i] != NULL; i++) {
+        const device_class_t *c = device_classes[i];
+        fprintf(out, "%-12s node-ID %-3u %s", c->name, c->default_node_id, c->summary);
+        if (c->variants != NULL) {
+            fprintf(out, " (variants:");
+            for (size_t v = 0U; c->variants[v] != NULL; v++) {
+                fprintf(out, " %s%s", c->variants[v], v == 0U ? "*" : "");
+            }
+            fprintf(out, ")");
+        }
+        fprintf(out, "\n");
+    }
+}
+
+/* DEVICE[/VARIANT][:NODE-ID] */
+static bool parse_spec(const char *spec, const device_class_t **cls, char *variant, size_t vlen, uint8_t *id)
+{
+    char name[64];
+    const char *colon = strchr(spec, ':');
+    const size_t nlen = colon != NULL ? (size_t)(colon - spec) : strlen(spec);
+    if (nlen == 0U || nlen >= sizeof name) {
+        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID]\n", spec);
+        return false;
+    }
+    memcpy(name, spec, nlen);
+    name[nlen] = '\0';
+    variant[0] = '\0';
+    char *slash = strchr(name, '/');
+    if (slash != NULL) {
+        *slash = '\0';
+        (void)snprintf(variant, vlen, "%s", slash + 1);
+    }
+    *cls = device_find_class(name);
+    if (*cls == NULL) {
+        fprintf(stderr, "canopen-emu: unknown device '%s'; known devices:\n", name);
+        list_devices(stderr);
+        return false;
+    }
+    *id = (*cls)->default_node_id;
+    if (colon != NULL) {
+        long long v;
+        if (!device_parse_int(colon + 1, 1, 127, &v)) {
+            fprintf(stderr, "canopen-emu: bad node-ID '%s' in '%s': use 1..127 (decimal or 0x-hex)\n", colon + 1, spec);
+            return false;
+        }
+        *id = (uint8_t)v;
+    }
+    if (variant[0] != '\0') {
+        bool found = false;
+        for (size_t v = 0U; (*cls)->variants != NULL && (*cls)->variants[v] != NULL; v++) {
+            found = found || strcmp((*cls)->variants[v], variant) == 0;
+        }
+        if (!found) {
+            fprintf(stderr, "canopen-emu: device %s has no variant '%s' (see --list-devices)\n", name, variant);
+            return false;
+        }
+    }
+    return true;
+}
+
+static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint8_t id, const char *iface,
+                            const char *nvm_dir)
+{
+    emu_node_t *n = calloc(1U, sizeof *n);
+    if (n == NULL) {
+        fprintf(stderr, "canopen-emu: out of memory\n");
+        return NULL;
+    }
+    n->values = calloc(1U, cls->od->values_size);
+    n->model = cls->model_size > 0U ? calloc(1U, cls->model_size) : NULL;
+    if (n->values == NULL || (cls->model_size > 0U && n->model == NULL)) {
+        fprintf(stderr, "canopen-emu: out of memory\n");
+        return NULL;
+    }
+    n->cmdline_id = id;
+    (void)snprintf(n->key, sizeof n->key, "%s-%u", cls->name, id);
+    char err[512];
+    n->dev.cls = cls; /* for logs before device_init */
+    if (nvm_file_open(&n->nvm, nvm_dir, n->key, err, sizeof err) != 0 ||
+        socketcan_open(&n->can, iface, can_log, n, err, sizeof err) != 0) {
+        fprintf(stderr, "canopen-emu: %s\n", err);
+        return NULL;
+    }
+    n->port.send = port_send;
+    n->port.nvm_write = port_nvm_write;
+    n->port.nvm_commit = port_nvm_commit;
+    n->port.nvm_read = port_nvm_read;
+    n->port.set_bit_rate = port_bit_rate;
+    device_cfg_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.node_id = id;
+    cfg.variant = variant[0] != '\0' ? variant : NULL;
+    cfg.port = &n->port;
+    cfg.port_ctx = n;
+    cfg.print = device_print;
+    cfg.on_event = device_event;
+    const co_status_t st = device_init(&n->dev, cls, n->values, n->model, &cfg, socketcan_now_us());
+    if (st != CO_OK) {
+        fprintf(stderr, "canopen-emu: %s:%u: the node could not start (%d)\n", cls->name, id, (int)st);
+        return NULL;
+    }
+    logline(LOG_NORMAL, "node %u (%s%s%s) on %s, NVM %s/%s.*", co_node_id(&n->dev.node), cls->name,
+            variant[0] != '\0' ? "/" : "", variant, iface, nvm_dir, n->key);
+    return n;
+}
+
+/* ---- control commands ---- */
+
+static int split(char *line, char **argv)
+{
+    int argc = 0;
+    char *p = line;
+    while (*p != '\0' && argc < MAX_ARGS) {
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
+            p++;
+        }
+        if (*p == '\0' || *p == '#') {
+            break;
+        }
+        if (*p == '"') {
+            argv[argc++] = ++p;
+            while (*p != '\0' && *p != '"') {
+                p++;
+            }
+        } else {
+            argv[argc++] = p;
+            while (*p != '\0' && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n') {
+                p++;
+            }
+        }
+        if (*p != '\0') {
+            *p++ = '\0';
+        }
+    }
+    return argc;
+}
+
+static void help(void)
+{
+    printf("commands (NODE = node-ID, decimal or 0x-hex, or 'all'):\n"
+           "  list                         the nodes\n"
+           "  show NODE                    NMT state, node-ID, active errors\n"
+           "  get NODE INDEX[:SUB]         an object's value (hex index/sub: 0x2002:06 or 2002:6)\n"
+           "  set NODE INDEX[:SUB] VALUE   write a value as the device itself would (inputs, measurements)\n"
+           "  power-cycle NODE             restart the node as switching its supply off and on would\n"
+           "  help [NODE]                  this text, or the device commands of NODE\n"
+           "  quit                         stop the emulator\n");
+    fflush(stdout);
+}
+
+static void run_command(char *line)
+{
+    char *argv[MAX_ARGS];
+    const int argc = split(line, argv);
+    if (argc == 0) {
+        return;
+    }
+    const co_time_us_t now = socketcan_now_us();
+    if (strcmp(argv[0], "quit") == 0 || strcmp(argv[0], "exit") == 0) {
+        emu.quit = true;
+        return;
+    }
+    if (strcmp(argv[0], "help") == 0 && argc == 1) {
+        help();
+        return;
+    }
+    if (strcmp(argv[0], "list") == 0) {
+        for (size_t i = 0U; i < emu.n_nodes; i++) {
+            const emu_node_t *n = emu.nodes[i];
+            printf("node %u: %s (started as %u) %s\n", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
+                   nmt_name(co_node_state(&n->dev.node)));
+        }
+        fflush(stdout);
+        return;
+    }
+    if (argc < 2) {
+        printf("error: '%s' needs a NODE (try help)\n", argv[0]);
+        fflush(stdout);
+        return;
+    }
+    long long id = -1;
+    const bool all = strcmp(argv[1], "all") == 0;
+    if (!all && !device_parse_int(argv[1], 0, 255, &id)) {
+        printf("error: '%s' is not a node-ID\n", argv[1]);
+        fflush(stdout);
+        return;
+    }
+    bool matched = false;
+    for (size_t i = 0U; i < emu.n_nodes; i++) {
+        emu_node_t *n = emu.nodes[i];
+        if (!all && co_node_id(&n->dev.node) != id && !(co_node_id(&n->dev.node) == CO_NODE_ID_UNCONFIGURED && n->cmdline_id == id)) {
+            continue;
+        }
+        matched = true;
+        if (strcmp(argv[0], "help") == 0) {
+            printf("node %u (%s) commands:\n%s\n", co_node_id(&n->dev.node), n->dev.cls->name,
+                   n->dev.cls->commands_help != NULL ? n->dev.cls->commands_help : "  (only the common ones)");
+            fflush(stdout);
+            continue;
+        }
+        argv[1] = argv[0];
+        const device_cmd_result_t r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
+        argv[1] = argv[0];
+        if (r == DEVICE_CMD_UNKNOWN) {
+            printf("node %u: error: unknown command '%s' (try help %u)\n", co_node_id(&n->dev.node), argv[0],
+                   co_node_id(&n->dev.node));
+            fflush(stdout);
+        }
+    }
+    if (!matched) {
+        printf("error: no node %s\n", argv[1]);
+        fflush(stdout);
+    }
+}
+
+static bool load_script(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (f == NULL) {
+        fprintf(stderr, "canopen-emu: cannot read script %s: %s\n", path, strerror(errno));
+        return false;
+    }
+    char line[LINE_MAX_LEN];
+    co_time_us_t at = 0U;
+    size_t cap = 0U;
+    unsigned lineno = 0U;
+    while (fgets(line, sizeof line, f) != NULL) {
+        lineno++;
+        char *p = line;
+        while (*p == ' ' || *p == '\t') {
+            p++;
+        }
+        if (*p == '\0' || *p == '\n' || *p == '#') {
+            continue;
+        }
+        if (*p == '@') {
+            char *end = NULL;
+            const bool relative = p[1] == '+';
+            const double ms = strtod(p + (relative ? 2 : 1), &end);
+            if (end == p + 1 || ms < 0.0 || (*end != ' ' && *end != '\t' && *end != '\n' && *end != '\0')) {
+                fprintf(stderr, "canopen-emu: %s:%u: bad time (use '@MS command' or '@+MS command')\n", path, lineno);
+                fclose(f);
+                return false;
+            }
+            at = (relative ? at : 0U) + (co_time_us_t)(ms * 1000.0);
+            p = end;
+        }
+        if (emu.script_len == cap) {
+            cap = cap == 0U ? 32U : cap * 2U;
+            script_line_t *grown = realloc(emu.script, cap * sizeof *grown);
+            if (grown == NULL) {
+                fclose(f);
+                return false;
+            }
+            emu.script = grown;
+        }
+        emu.script[emu.script_len].at = at;
+        (void)snprintf(emu.script[emu.script_len].text, LINE_MAX_LEN, "%s", p);
+        emu.script_len++;
+    }
+    fclose(f);
+    return true;
+}
+
+static void read_stdin(void)
+{
+    const ssize_t r = read(STDIN_FILENO, emu.stdin_buf + emu.stdin_fill, sizeof emu.stdin_buf - emu.stdin_fill - 1U);
+    if (r <= 0) {
+        if (r == 0 || (errno != EAGAIN && errno != EINTR)) {
+            emu.stdin_open = false; /* end of input: keep running (stop with a signal or 'quit') */
+        }
+        return;
+    }
+    emu.stdin_fill += (size_t)r;
+    emu.stdin_buf[emu.stdin_fill] = '\0';
+    char *start = emu.stdin_buf;
+    char *nl;
+    while ((nl = strchr(start, '\n')) != NULL) {
+        *nl = '\0';
+        run_command(start);
+        start = nl + 1;
+    }
+    emu.stdin_fill = strlen(start);
+    memmove(emu.stdin_buf, start, emu.stdin_fill);
+    if (emu.stdin_fill >= sizeof emu.stdin_buf - 1U) {
+        emu.stdin_fill = 0U; /* an overlong line is dropped */
+    }
+}
+
+static const char *default_nvm_dir(char *buf, size_t len)
+{
+    const char *state = getenv("XDG_STATE_HOME");
+    const char *home = getenv("HOME");
+    if (state != NULL && state[0] == '/') {
+        (void)snprintf(buf, len, "%s/canopen-emu", state);
+    } else if (home != NULL && home[0] != '\0') {
+        (void)snprintf(buf, len, "%s/.local/state/canopen-emu", home);
+    } else {
+        (void)snprintf(buf, len, "./canopen-emu-nvm");
+    }
+    return buf;
+}
+
+int main(int argc, char **argv)
+{
+    const char *iface = "vcan0";
+    const char *nvm_dir = NULL;
+    const char *script = NULL;
+    char nvm_default[PATH_MAX];
+    emu.log_level = LOG_NORMAL;
+    emu.start = socketcan_now_us();
+    emu.control_stdin = isatty(STDIN_FILENO) != 0;
+    static const struct option opts[] = {
+        {"interface", required_argument, NULL, 'i'}, {"nvm-dir", required_argument, NULL, 'n'},
+        {"control", required_argument, NULL, 'c'},   {"script", required_argument, NULL, 's'},
+        {"list-devices", no_argument, NULL, 'l'},    {"verbose", no_argument, NULL, 'v'},
+        {"quiet", no_argument, NULL, 'q'},           {"help", no_argument, NULL, 'h'},
+        {"version", no_argument, NULL, 'V'},         {NULL, 0, NULL, 0}};
+    int opt;
+    while ((opt = getopt_long(argc, argv, "i:vqh", opts, NULL)) != -1) {
+        switch (opt) {
+        case 'i':
+            iface = optarg;
+            break;
+        case 'n':
+            nvm_dir = optarg;
+            break;
+        case 'c':
+            if (strcmp(optarg, "-") != 0) {
+                fprintf(stderr, "canopen-emu: --control takes '-' (stdin)\n");
+                return 2;
+            }
+            emu.control_stdin = true;
+            break;
+        case 's':
+            script = optarg;
+            break;
+        case 'l':
+            list_devices(stdout);
+            return 0;
+        case 'v':
+            emu.log_level = LOG_VERBOSE;
+            break;
+        case 'q':
+            emu.log_level = LOG_QUIET;
+            break;
+        case 'h':
+            usage(stdout);
+            return 0;
+        case 'V':
+            printf("canopen-emu %s\n", EMU_VERSION);
+            return 0;
+        default:
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (optind >= argc) {
+        fprintf(stderr, "canopen-emu: no device given\n");
+        usage(stderr);
+        return 2;
+    }
+    if (argc - optind > MAX_NODES) {
+        fprintf(stderr, "canopen-emu: at most %d nodes\n", MAX_NODES);
+        return 2;
+    }
+    if (nvm_dir == NULL) {
+        nvm_dir = default_nvm_dir(nvm_default, sizeof nvm_default);
+    }
+    char err[512];
+    if (nvm_file_check_dir(nvm_dir, err, sizeof err) != 0) {
+        fprintf(stderr, "canopen-emu: %s\n", err);
+        return 1;
+    }
+    if (script != NULL && !load_script(script)) {
+        return 2;
+    }
+    /* Parse every spec first, so a bad one fails before anything starts. */
+    const device_class_t *cls[MAX_NODES];
+    char variants[MAX_NODES][32];
+    uint8_t ids[MAX_NODES];
+    const size_t n_specs = (size_t)(argc - optind);
+    for (size_t i = 0U; i < n_specs; i++) {
+        if (!parse_spec(argv[optind + (int)i], &cls[i], variants[i], sizeof variants[i], &ids[i])) {
+            return 2;
+        }
+        for (size_t k = 0U; k < i; k++) {
+            if (ids[k] == ids[i]) {
+                fprintf(stderr, "canopen-emu: node-ID %u is given twice (%s and %s); each node needs its own\n", ids[i],
+                        argv[optind + (int)k], argv[optind + (int)i]);
+                return 2;
+            }
+        }
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    (void)sigaction(SIGINT, &sa, NULL);
+    (void)sigaction(SIGTERM, &sa, NULL);
+    signal(SIGPIPE, SIG_IGN);
+    for (size_t i = 0U; i < n_specs; i++) {
+        emu_node_t *n = add_node(cls[i], variants[i], ids[i], iface, nvm_dir);
+        if (n == NULL) {
+            return 1;
+        }
+        emu.nodes[emu.n_nodes++] = n;
+    }
+    if (emu.control_stdin) {
+        (void)fcntl(STDIN_FILENO, F_SETFL, fcntl(STDIN_FILENO, F_GETFL) | O_NONBLOCK);
+        emu.stdin_open = true;
+    }
+
+    struct pollfd pfd[MAX_NODES + 1];
+    while (!emu.quit && stop_signal == 0) {
+        co_time_us_t now = socketcan_now_us();
+        while (emu.script_pos < emu.script_len && now - emu.start >= emu.script[emu.script_pos].at) {
+            char line[LINE_MAX_LEN];
+            (void)snprintf(line, sizeof line, "%s", emu.script[emu.script_pos++].text);
+            run_command(line);
+        }
+        co_time_us_t next = CO_NEVER;
+        for (size_t i = 0U; i < emu.n_nodes; i++) {
+            emu_node_t *n = emu.nodes[i];
+            const co_time_us_t d = device_process(&n->dev, now);
+            const co_time_us_t r = socketcan_service(&n->can, now);
+            next = d < next ? d : next;
+            next = r < next ? r : next;
+            pfd[i].fd = n->can.fd;
+            pfd[i].events = (short)(POLLIN | (n->dev.node.txq.count > 0U ? POLLOUT : 0));
+            pfd[i].revents = 0;
+        }
+        if (emu.script_pos < emu.script_len && emu.start + emu.script[emu.script_pos].at < next) {
+            next = emu.start + emu.script[emu.script_pos].at;
+        }
+        nfds_t nfds = (nfds_t)emu.n_nodes;
+        if (emu.stdin_open) {
+            pfd[nfds].fd = STDIN_FILENO;
+            pfd[nfds].events = POLLIN;
+            pfd[nfds].revents = 0;
+            nfds++;
+        }
+        now = socketcan_now_us();
+        struct timespec ts;
+        struct timespec *timeout = NULL;
+        if (next != CO_NEVER) {
+            const co_time_us_t wait = next > now ? next - now : 0U;
+            ts.tv_sec = (time_t)(wait / 1000000U);
+            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
+            timeout = &ts;
+        }
+        const int ready = ppoll(pfd, nfds, timeout, NULL);
+        if (ready < 0) {
+            if (errno == EINTR) {
+                continue;
+            }
+            fprintf(stderr, "canopen-emu: poll: %s\n", strerror(errno));
+            return 1;
+        }
+        now = socketcan_now_us();
+        for (size_t i = 0U; i < emu.n_nodes; i++) {
+            if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) == 0) {
+                continue;
+            }
+            emu_node_t *n = emu.nodes[i];
+            co_frame_t f;
+            for (int k = 0; k < 256 && socketcan_read(&n->can, &f) == 1; k++) {
+                device_rx(&n->dev, &f, now);
+            }
+        }
+        if (emu.stdin_open && (pfd[nfds - 1U].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+            read_stdin();
+        }
+    }
+    logline(LOG_NORMAL, "stopping%s", stop_signal != 0 ? " (signal)" : "");
+    for (size_t i = 0U; i < emu.n_nodes; i++) {
+        socketcan_close(&emu.nodes[i]->can);
+        nvm_file_close(&emu.nodes[i]->nvm);
+        free(emu.nodes[i]->values);
+        free(emu.nodes[i]->model);
+        free(emu.nodes[i]);
+    }
+    free(emu.script);
+    return 0;
+}

@@ -1,0 +1,225 @@
+/* Linux SocketCAN channel: see socketcan.h. */
+#define _GNU_SOURCE
+#include "socketcan.h"
+
+#include <errno.h>
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#define REOPEN_INTERVAL_US 500000U
+
+co_time_us_t socketcan_now_us(void)
+{
+    struct timespec ts;
+    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (co_time_us_t)ts.tv_sec * 1000000U + (co_time_us_t)ts.tv_nsec / 1000U;
+}
+
+static void logf_(socketcan_t *c, const char *fmt, const char *detail)
+{
+    if (c->log != NULL) {
+        char line[256];
+        (void)snprintf(line, sizeof line, fmt, c->ifname, detail);
+        c->log(c->log_ctx, line);
+    }
+}
+
+static int open_socket(socketcan_t *c, char *err, size_t errlen)
+{
+    const int fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+    if (fd < 0) {
+        const int e = errno;
+        if (err != NULL) {
+            if (e == EAFNOSUPPORT || e == EPROTONOSUPPORT) {
+                (void)snprintf(err, errlen, "this kernel has no SocketCAN support (%s); on Linux with CAN: "
+                               "sudo modprobe can_raw; without it see docs/vcan.md (tools/vcan-run)", strerror(e));
+            } else if (e == EPERM || e == EACCES) {
+                (void)snprintf(err, errlen, "no permission to open a CAN socket (%s)", strerror(e));
+            } else {
+                (void)snprintf(err, errlen, "cannot open a CAN socket: %s", strerror(e));
+            }
+        }
+        return e;
+    }
+    struct ifreq ifr;
+    memset(&ifr, 0, sizeof ifr);
+    (void)snprintf(ifr.ifr_name, sizeof ifr.ifr_name, "%s", c->ifname);
+    if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0) {
+        const int e = errno;
+        (void)close(fd);
+        if (err != NULL) {
+            if (e == ENODEV) {
+                (void)snprintf(err, errlen, "interface %s does not exist; create a virtual one with:\n"
+                               "  sudo modprobe vcan\n  sudo ip link add dev %s type vcan\n  sudo ip link set up %s\n"
+                               "(a kernel without CAN support: tools/vcan-run, see docs/vcan.md)",
+                               c->ifname, c->ifname, c->ifname);
+            } else {
+                (void)snprintf(err, errlen, "interface %s: %s", c->ifname, strerror(e));
+            }
+        }
+        return e;
+    }
+    const can_err_mask_t errors = CAN_ERR_MASK;
+    (void)setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors);
+    struct sockaddr_can addr;
+    memset(&addr, 0, sizeof addr);
+    addr.can_family = AF_CAN;
+    addr.can_ifindex = ifr.ifr_ifindex;
+    if (bind(fd, (struct sockaddr *)&addr, sizeof addr) < 0) {
+        const int e = errno;
+        (void)close(fd);
+        if (err != NULL) {
+            (void)snprintf(err, errlen, "cannot bind to %s: %s", c->ifname, strerror(e));
+        }
+        return e;
+    }
+    c->fd = fd;
+    return 0;
+}
+
+int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, void *log_ctx, char *err, size_t errlen)
+{
+    memset(c, 0, sizeof *c);
+    c->fd = -1;
+    c->log = log;
+    c->log_ctx = log_ctx;
+    if (strlen(ifname) >= sizeof c->ifname) {
+        (void)snprintf(err, errlen, "interface name '%s' is too long", ifname);
+        return EINVAL;
+    }
+    (void)snprintf(c->ifname, sizeof c->ifname, "%s", ifname);
+    return open_socket(c, err, errlen);
+}
+
+void socketcan_close(socketcan_t *c)
+{
+    if (c->fd >= 0) {
+        (void)close(c->fd);
+        c->fd = -1;
+    }
+}
+
+static void went_away(socketcan_t *c, int e)
+{
+    if (!c->gone) {
+        logf_(c, "%s: interface gone (%s); waiting for it to come back", strerror(e));
+    }
+    socketcan_close(c);
+    c->gone = true;
+    c->next_reopen = 0U;
+}
+
+co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+{
+    socketcan_t *c = (socketcan_t *)ctx;
+    if (c->fd < 0) {
+        c->lost_while_down++;
+        return CO_ERR_IO;
+    }
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = frame->id & CAN_SFF_MASK;
+    if ((frame->flags & CO_FRAME_RTR) != 0U) {
+        cf.can_id |= CAN_RTR_FLAG;
+    }
+    cf.can_dlc = frame->len;
+    memcpy(cf.data, frame->data, frame->len);
+    const ssize_t n = write(c->fd, &cf, sizeof cf);
+    if (n == (ssize_t)sizeof cf) {
+        if (c->down) {
+            c->down = false;
+            logf_(c, "%s: interface is up again%s", "");
+        }
+        return CO_OK;
+    }
+    const int e = errno;
+    if (e == ENOBUFS || e == EAGAIN || e == EINTR) {
+        return CO_ERR_BUSY; /* kept by the core and sent when the queue drains */
+    }
+    if (e == ENETDOWN) {
+        if (!c->down) {
+            c->down = true;
+            logf_(c, "%s: interface is down; frames are lost until it is up again%s", "");
+        }
+        c->lost_while_down++;
+        return CO_ERR_IO;
+    }
+    if (e == ENODEV || e == ENXIO) {
+        went_away(c, e);
+        return CO_ERR_IO;
+    }
+    logf_(c, "%s: send failed: %s", strerror(e));
+    return CO_ERR_IO;
+}
+
+int socketcan_read(socketcan_t *c, co_frame_t *frame)
+{
+    for (;;) {
+        if (c->fd < 0) {
+            return 0;
+        }
+        struct can_frame cf;
+        const ssize_t n = read(c->fd, &cf, sizeof cf);
+        if (n < 0) {
+            const int e = errno;
+            if (e == EAGAIN || e == EINTR) {
+                return 0;
+            }
+            if (e == ENETDOWN) {
+                if (!c->down) {
+                    c->down = true;
+                    logf_(c, "%s: interface is down%s", "");
+                }
+                return 0;
+            }
+            went_away(c, e);
+            return -1;
+        }
+        if (n != (ssize_t)sizeof cf) {
+            continue; /* not a classic CAN frame */
+        }
+        if (c->down) {
+            c->down = false;
+            logf_(c, "%s: interface is up again%s", "");
+        }
+        if ((cf.can_id & CAN_ERR_FLAG) != 0U) {
+            char detail[96];
+            c->error_frames++;
+            (void)snprintf(detail, sizeof detail, " (class 0x%03X, data %02X %02X %02X %02X)",
+                           (unsigned)(cf.can_id & CAN_ERR_MASK), cf.data[1], cf.data[2], cf.data[3], cf.data[4]);
+            logf_(c, "%s: CAN error frame%s", detail);
+            continue;
+        }
+        memset(frame, 0, sizeof *frame);
+        frame->flags = (uint8_t)(((cf.can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
+                                 ((cf.can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
+        frame->id = (cf.can_id & CAN_EFF_FLAG) != 0U ? (cf.can_id & CAN_EFF_MASK) : (cf.can_id & CAN_SFF_MASK);
+        frame->len = cf.can_dlc > 8U ? 8U : cf.can_dlc;
+        memcpy(frame->data, cf.data, frame->len);
+        return 1;
+    }
+}
+
+co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
+{
+    if (!c->gone) {
+        return CO_NEVER;
+    }
+    if (now >= c->next_reopen) {
+        if (open_socket(c, NULL, 0U) == 0) {
+            c->gone = false;
+            c->down = false;
+            logf_(c, "%s: interface is back%s", "");
+            return CO_NEVER;
+        }
+        c->next_reopen = now + REOPEN_INTERVAL_US;
+    }
+    return c->next_reopen;
+}

@@ -1,0 +1,48 @@
+/**
+ * @file socketcan.h
+ * @brief Linux SocketCAN channel for one emulated node: a non-blocking raw CAN socket on an interface.
+ *
+ * send never blocks: a full transmit queue (ENOBUFS/EAGAIN) answers CO_ERR_BUSY, so the core keeps the
+ * frame and retries; an interface that is down answers CO_ERR_IO (the frame is lost, as on a real bus
+ * that is off) and is reported once. A vanished interface is reopened by socketcan_service() until it is
+ * back. Classic CAN only; error frames are reported through the log callback.
+ */
+#ifndef SOCKETCAN_H
+#define SOCKETCAN_H
+
+#include <net/if.h>
+#include <stdbool.h>
+
+#include "co/co.h"
+
+typedef void (*socketcan_log_fn)(void *ctx, const char *line);
+
+typedef struct socketcan {
+    char ifname[IF_NAMESIZE];
+    int fd;                   /**< -1 while the interface is gone. */
+    bool down;                /**< Sends fail because the interface is down (reported once). */
+    bool gone;                /**< The interface disappeared; reopened by socketcan_service(). */
+    co_time_us_t next_reopen;
+    unsigned long lost_while_down;
+    unsigned long error_frames;
+    socketcan_log_fn log;
+    void *log_ctx;
+} socketcan_t;
+
+/** Opens the channel. Returns 0, or an errno value with a message for the user in err. */
+int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, void *log_ctx, char *err, size_t errlen);
+void socketcan_close(socketcan_t *c);
+
+/** co_port_t.send for this channel (ctx = socketcan_t *). */
+co_status_t socketcan_send(void *ctx, const co_frame_t *frame);
+
+/** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later). */
+int socketcan_read(socketcan_t *c, co_frame_t *frame);
+
+/** Reopens a vanished interface when due; returns the next time it wants to run, or CO_NEVER. */
+co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now);
+
+/** CLOCK_MONOTONIC in µs. */
+co_time_us_t socketcan_now_us(void);
+
+#endif
