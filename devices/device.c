@@ -37,7 +37,9 @@ static void tramp_nmt(void *ctx, co_node_t *node, co_nmt_state_t from, co_nmt_st
 static void tramp_reset(void *ctx, co_node_t *node, co_reset_t what)
 {
     device_t *dev = dev_of(ctx);
-    (void)node;
+    if (what == CO_RESET_COMMUNICATION && dev->cfg.serial != 0U) {
+        (void)co_od_set_u32(node, 0x1018, 4, dev->cfg.serial); /* the 0x1000 area was just re-initialised */
+    }
     if (dev->cls->on_reset != NULL) {
         dev->cls->on_reset(dev, what);
     }
@@ -355,6 +357,16 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
         return DEVICE_CMD_OK;
     }
     return DEVICE_CMD_UNKNOWN;
+}
+
+uint32_t device_default_serial(const device_class_t *cls)
+{
+    const co_od_entry_t *e = co_od_find(cls->od, 0x1018, 4);
+    uint32_t serial = 0U;
+    if (e != NULL && e->size == sizeof serial) {
+        memcpy(&serial, (const uint8_t *)cls->od->defaults + e->offset, sizeof serial);
+    }
+    return serial;
 }
 
 const device_class_t *device_find_class(const char *name)

@@ -67,6 +67,8 @@ typedef struct device_class {
 /** What the runner gives an instance. */
 typedef struct device_cfg {
     uint8_t node_id;               /**< 0 = the class default. */
+    uint32_t serial;               /**< 0x1018:04 of this node (0 = the OD default). Several nodes of one
+                                        type need distinct serials, or LSS selects them all at once. */
     const char *variant;           /**< NULL = the class default. */
     const co_port_t *port;         /**< CAN + NVM of this node. */
     void *port_ctx;
@@ -115,6 +117,9 @@ void device_printf(const device_t *dev, const char *fmt, ...)
 
 /** Parses an unsigned/signed number (decimal or 0x-hex). Returns false if it is not one or out of [lo, hi]. */
 bool device_parse_int(const char *text, long long lo, long long hi, long long *out);
+
+/** The OD default of 0x1018:04 (serial number) of a class, 0 if it has none. */
+uint32_t device_default_serial(const device_class_t *cls);
 
 /** The registered device classes, NULL-terminated. */
 extern const device_class_t *const device_classes[];

@@ -318,6 +318,7 @@ static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint
     device_cfg_t cfg;
     memset(&cfg, 0, sizeof cfg);
     cfg.node_id = id;
+    cfg.serial = device_default_serial(cls) + id; /* distinct LSS identities (docs/emulator.md) */
     cfg.variant = variant[0] != '\0' ? variant : NULL;
     cfg.port = &n->port;
     cfg.port_ctx = n;
