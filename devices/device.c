@@ -348,6 +348,30 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
     if (strcmp(cmd, "set") == 0 && argc == 3) {
         return cmd_set(dev, argv[1], argv[2]);
     }
+    if ((strcmp(cmd, "emcy") == 0 || strcmp(cmd, "emcy-clear") == 0) && argc >= 2) {
+        /* Raw CiA EMCY injection: emcy CODE [REGISTER [B0 B1 B2 B3 B4]], emcy-clear CODE [B0 B1 B2 B3 B4]. */
+        const bool raise = strcmp(cmd, "emcy") == 0;
+        const int first_msef = raise ? 3 : 2;
+        long long code, reg = 0x01, b;
+        uint8_t msef[5] = {0U, 0U, 0U, 0U, 0U};
+        if (!device_parse_int(argv[1], 1, 0xFFFF, &code) || (raise && argc >= 3 && !device_parse_int(argv[2], 0, 0xFF, &reg)) ||
+            argc > first_msef + 5) {
+            device_printf(dev, "error: usage: emcy CODE [REGISTER [B0..B4]] | emcy-clear CODE [B0..B4]");
+            return DEVICE_CMD_ERROR;
+        }
+        for (int i = first_msef; i < argc; i++) {
+            if (!device_parse_int(argv[i], 0, 0xFF, &b)) {
+                device_printf(dev, "error: '%s' is not a byte", argv[i]);
+                return DEVICE_CMD_ERROR;
+            }
+            msef[i - first_msef] = (uint8_t)b;
+        }
+        const bool ok = raise ? co_emcy_raise(&dev->node, (uint16_t)code, (uint8_t)reg, msef)
+                              : co_emcy_clear(&dev->node, (uint16_t)code, msef);
+        device_printf(dev, "%s 0x%04X: %s", raise ? "emcy" : "emcy-clear", (unsigned)code,
+                      ok ? "done" : (raise ? "refused (too many active errors)" : "not active"));
+        return ok ? DEVICE_CMD_OK : DEVICE_CMD_ERROR;
+    }
     if (strcmp(cmd, "power-cycle") == 0 && argc == 1) {
         if (device_power_cycle(dev, now) != CO_OK) {
             device_printf(dev, "error: power-on failed");

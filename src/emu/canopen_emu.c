@@ -3,9 +3,13 @@
  *
  *   canopen-emu [-i IFACE] [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID] ...
  *
- * Each DEVICE becomes one node with its own CAN socket (so nodes see each other's frames, as separate
- * devices on a bus would) and its own NVM files. One poll loop sleeps until the earliest deadline any node
- * returns or until a frame, a control command or a signal arrives. See docs/emulator.md.
+ * Each DEVICE becomes one node with its own NVM files. All nodes share one CAN socket: a frame read from the
+ * bus is offered to every node (the core ignores what is not for it), and a frame one node sends is also
+ * offered to the other local nodes (the kernel does not loop a socket's frames back to itself), through a
+ * queue drained by the main loop so that no node is re-entered while it runs. One socket instead of one
+ * per node keeps the system calls per bus frame at one, which matters with 127 nodes. One poll loop sleeps
+ * until the earliest deadline any node returns or until a frame, a control command or a signal arrives.
+ * See docs/emulator.md.
  */
 #define _GNU_SOURCE
 #include <errno.h>
@@ -31,16 +35,24 @@
 
 enum { LOG_QUIET = 0, LOG_NORMAL = 1, LOG_VERBOSE = 2 };
 
+#define LOCAL_QUEUE_LEN 4096U
+
 typedef struct emu_node {
     device_t dev;
     void *values;
     void *model;
     co_port_t port;
-    socketcan_t can;
     nvm_file_t nvm;
     uint8_t cmdline_id;
+    size_t index;           /* position in emu.nodes */
     char key[64];
 } emu_node_t;
+
+/* Frames sent by local nodes, waiting to be offered to the other local nodes. */
+typedef struct local_frame {
+    co_frame_t frame;
+    size_t sender;
+} local_frame_t;
 
 typedef struct script_line {
     co_time_us_t at;
@@ -50,6 +62,11 @@ typedef struct script_line {
 typedef struct emu {
     emu_node_t *nodes[MAX_NODES];
     size_t n_nodes;
+    socketcan_t can;
+    local_frame_t local[LOCAL_QUEUE_LEN];
+    size_t local_head;
+    size_t local_count;
+    unsigned long local_lost;
     co_time_us_t start;
     int log_level;
     script_line_t *script;
@@ -85,8 +102,8 @@ static void logline(int level, const char *fmt, ...)
 
 static void can_log(void *ctx, const char *line)
 {
-    const emu_node_t *n = (const emu_node_t *)ctx;
-    logline(LOG_NORMAL, "node %u (%s): %s", co_node_id(&n->dev.node), n->dev.cls->name, line);
+    (void)ctx;
+    logline(LOG_NORMAL, "%s", line);
 }
 
 static void device_print(void *ctx, const device_t *dev, const char *line)
@@ -174,7 +191,17 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
 static co_status_t port_send(void *ctx, const co_frame_t *f)
 {
     emu_node_t *n = (emu_node_t *)ctx;
-    const co_status_t st = socketcan_send(&n->can, f);
+    const co_status_t st = socketcan_send(&emu.can, f);
+    if (st == CO_OK && emu.n_nodes > 1U) {
+        if (emu.local_count == LOCAL_QUEUE_LEN) {
+            emu.local_lost++; /* the other local nodes miss this frame; counted, reported at exit */
+        } else {
+            local_frame_t *l = &emu.local[(emu.local_head + emu.local_count) % LOCAL_QUEUE_LEN];
+            l->frame = *f;
+            l->sender = n->index;
+            emu.local_count++;
+        }
+    }
     if (st == CO_OK && emu.log_level >= LOG_VERBOSE) {
         char hex[24] = "";
         for (uint8_t i = 0U; i < f->len; i++) {
@@ -201,7 +228,7 @@ static co_status_t port_bit_rate(void *ctx, uint32_t kbit)
     emu_node_t *n = (emu_node_t *)ctx;
     logline(LOG_NORMAL, "node %u (%s): bit rate %lu kbit/s requested; the interface's rate is the system's "
             "(ip link set %s type can bitrate %lu000)", co_node_id(&n->dev.node), n->dev.cls->name,
-            (unsigned long)kbit, n->can.ifname, (unsigned long)kbit);
+            (unsigned long)kbit, emu.can.ifname, (unsigned long)kbit);
     return CO_OK;
 }
 
@@ -288,7 +315,7 @@ static bool parse_spec(const char *spec, const device_class_t **cls, char *varia
 }
 
 static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint8_t id, const char *iface,
-                            const char *nvm_dir)
+                            const char *nvm_dir, size_t index)
 {
     emu_node_t *n = calloc(1U, sizeof *n);
     if (n == NULL) {
@@ -302,11 +329,11 @@ static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint
         return NULL;
     }
     n->cmdline_id = id;
+    n->index = index;
     (void)snprintf(n->key, sizeof n->key, "%s-%u", cls->name, id);
     char err[512];
     n->dev.cls = cls; /* for logs before device_init */
-    if (nvm_file_open(&n->nvm, nvm_dir, n->key, err, sizeof err) != 0 ||
-        socketcan_open(&n->can, iface, can_log, n, err, sizeof err) != 0) {
+    if (nvm_file_open(&n->nvm, nvm_dir, n->key, err, sizeof err) != 0) {
         fprintf(stderr, "canopen-emu: %s\n", err);
         return NULL;
     }
@@ -373,6 +400,8 @@ static void help(void)
            "  get NODE INDEX[:SUB]         an object's value (hex index/sub: 0x2002:06 or 2002:6)\n"
            "  set NODE INDEX[:SUB] VALUE   write a value as the device itself would (inputs, measurements)\n"
            "  power-cycle NODE             restart the node as switching its supply off and on would\n"
+           "  emcy NODE CODE [REG [B0..B4]]  raise a raw CiA error (EMCY, 0x1001, 0x1003)\n"
+           "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
            "  help [NODE]                  this text, or the device commands of NODE\n"
            "  quit                         stop the emulator\n");
     fflush(stdout);
@@ -628,8 +657,12 @@ int main(int argc, char **argv)
     (void)sigaction(SIGINT, &sa, NULL);
     (void)sigaction(SIGTERM, &sa, NULL);
     signal(SIGPIPE, SIG_IGN);
+    if (socketcan_open(&emu.can, iface, can_log, NULL, err, sizeof err) != 0) {
+        fprintf(stderr, "canopen-emu: %s\n", err);
+        return 1;
+    }
     for (size_t i = 0U; i < n_specs; i++) {
-        emu_node_t *n = add_node(cls[i], variants[i], ids[i], iface, nvm_dir);
+        emu_node_t *n = add_node(cls[i], variants[i], ids[i], iface, nvm_dir, i);
         if (n == NULL) {
             return 1;
         }
@@ -640,7 +673,7 @@ int main(int argc, char **argv)
         emu.stdin_open = true;
     }
 
-    struct pollfd pfd[MAX_NODES + 1];
+    struct pollfd pfd[2];
     while (!emu.quit && stop_signal == 0) {
         co_time_us_t now = socketcan_now_us();
         while (emu.script_pos < emu.script_len && now - emu.start >= emu.script[emu.script_pos].at) {
@@ -648,21 +681,38 @@ int main(int argc, char **argv)
             (void)snprintf(line, sizeof line, "%s", emu.script[emu.script_pos++].text);
             run_command(line);
         }
+        /* Frames local nodes sent are offered to the others (which may answer: loop until quiet). */
         co_time_us_t next = CO_NEVER;
-        for (size_t i = 0U; i < emu.n_nodes; i++) {
-            emu_node_t *n = emu.nodes[i];
-            const co_time_us_t d = device_process(&n->dev, now);
-            const co_time_us_t r = socketcan_service(&n->can, now);
-            next = d < next ? d : next;
-            next = r < next ? r : next;
-            pfd[i].fd = n->can.fd;
-            pfd[i].events = (short)(POLLIN | (n->dev.node.txq.count > 0U ? POLLOUT : 0));
-            pfd[i].revents = 0;
-        }
+        bool tx_pending = false;
+        do {
+            while (emu.local_count > 0U) {
+                const local_frame_t l = emu.local[emu.local_head];
+                emu.local_head = (emu.local_head + 1U) % LOCAL_QUEUE_LEN;
+                emu.local_count--;
+                for (size_t i = 0U; i < emu.n_nodes; i++) {
+                    if (i != l.sender) {
+                        device_rx(&emu.nodes[i]->dev, &l.frame, now);
+                    }
+                }
+            }
+            next = CO_NEVER;
+            tx_pending = false;
+            for (size_t i = 0U; i < emu.n_nodes; i++) {
+                const co_time_us_t d = device_process(&emu.nodes[i]->dev, now);
+                next = d < next ? d : next;
+                tx_pending = tx_pending || emu.nodes[i]->dev.node.txq.count > 0U;
+            }
+        } while (emu.local_count > 0U);
+        const co_time_us_t r = socketcan_service(&emu.can, now);
+        next = r < next ? r : next;
         if (emu.script_pos < emu.script_len && emu.start + emu.script[emu.script_pos].at < next) {
             next = emu.start + emu.script[emu.script_pos].at;
         }
-        nfds_t nfds = (nfds_t)emu.n_nodes;
+        nfds_t nfds = 0U;
+        pfd[nfds].fd = emu.can.fd; /* -1 while the interface is gone: poll ignores it */
+        pfd[nfds].events = (short)(POLLIN | (tx_pending ? POLLOUT : 0));
+        pfd[nfds].revents = 0;
+        nfds++;
         if (emu.stdin_open) {
             pfd[nfds].fd = STDIN_FILENO;
             pfd[nfds].events = POLLIN;
@@ -686,24 +736,28 @@ int main(int argc, char **argv)
             fprintf(stderr, "canopen-emu: poll: %s\n", strerror(errno));
             return 1;
         }
-        now = socketcan_now_us();
-        for (size_t i = 0U; i < emu.n_nodes; i++) {
-            if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) == 0) {
-                continue;
-            }
-            emu_node_t *n = emu.nodes[i];
+        if ((pfd[0].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
+            now = socketcan_now_us();
             co_frame_t f;
-            for (int k = 0; k < 256 && socketcan_read(&n->can, &f) == 1; k++) {
-                device_rx(&n->dev, &f, now);
+            for (int k = 0; k < 1024 && socketcan_read(&emu.can, &f) == 1; k++) {
+                if (emu.log_level >= LOG_VERBOSE) {
+                    logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
+                }
+                for (size_t i = 0U; i < emu.n_nodes; i++) {
+                    device_rx(&emu.nodes[i]->dev, &f, now);
+                }
             }
         }
-        if (emu.stdin_open && (pfd[nfds - 1U].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+        if (emu.stdin_open && nfds > 1U && (pfd[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
             read_stdin();
         }
     }
     logline(LOG_NORMAL, "stopping%s", stop_signal != 0 ? " (signal)" : "");
+    if (emu.local_lost > 0U) {
+        logline(LOG_QUIET, "%lu frame(s) between local nodes were lost (queue full)", emu.local_lost);
+    }
+    socketcan_close(&emu.can);
     for (size_t i = 0U; i < emu.n_nodes; i++) {
-        socketcan_close(&emu.nodes[i]->can);
         nvm_file_close(&emu.nodes[i]->nvm);
         free(emu.nodes[i]->values);
         free(emu.nodes[i]->model);

@@ -1,0 +1,149 @@
+"""Fixtures of the vcan integration suite: a real SocketCAN bus (vcan0, made by tools/vcan-run), the
+canopen-emu program started with the devices a test asks for, python-canopen as the master, and a raw
+capture of every frame on the bus with its time."""
+import os
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import can
+import canopen
+import pytest
+
+SRC = Path(os.environ.get("CO_SOURCE_DIR", Path(__file__).resolve().parents[2]))
+EMU = os.environ.get("CO_EMU", "")
+IFACE = os.environ.get("CO_VCAN_IFACE", "vcan0")
+EDS = {"pro-ionizer": SRC / "od/pro-ionizer.eds", "sds": SRC / "od/sds.eds",
+       "buerkert": SRC / "od/buerkert-flow-controller.eds"}
+
+
+class Capture(can.Listener):
+    """Every frame seen on the bus, with the receive time."""
+
+    def __init__(self):
+        self.frames = []
+        self.lock = threading.Lock()
+
+    def on_message_received(self, msg):
+        with self.lock:
+            self.frames.append(msg)
+
+    def clear(self):
+        with self.lock:
+            self.frames.clear()
+
+    def matching(self, can_id, since=0.0):
+        with self.lock:
+            return [m for m in self.frames if m.arbitration_id == can_id and not m.is_error_frame
+                    and m.timestamp >= since]
+
+    def wait_for(self, can_id, count=1, timeout=2.0, since=0.0, data=None):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            got = [m for m in self.matching(can_id, since) if data is None or bytes(m.data) == data]
+            if len(got) >= count:
+                return got
+            time.sleep(0.01)
+        got = [m for m in self.matching(can_id, since) if data is None or bytes(m.data) == data]
+        raise AssertionError(f"expected {count} frame(s) 0x{can_id:03X}{' ' + data.hex() if data else ''} within "
+                             f"{timeout} s, saw {[(hex(m.arbitration_id), bytes(m.data).hex()) for m in got]}")
+
+
+@pytest.fixture
+def capture():
+    bus = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
+    cap = Capture()
+    notifier = can.Notifier(bus, [cap], timeout=0.05)
+    yield cap
+    notifier.stop()
+    bus.shutdown()
+
+
+class Emulator:
+    def __init__(self, args, nvm_dir, control=True):
+        assert EMU, "CO_EMU (path of canopen-emu) is not set"
+        self.args = [EMU, "-i", IFACE, "--nvm-dir", str(nvm_dir)] + (["--control", "-"] if control else []) + list(args)
+        self.proc = subprocess.Popen(self.args, stdin=subprocess.PIPE if control else subprocess.DEVNULL,
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, bufsize=1)
+        self.out_lines, self.err_lines = [], []
+        self._threads = [threading.Thread(target=self._pump, args=(self.proc.stdout, self.out_lines), daemon=True),
+                         threading.Thread(target=self._pump, args=(self.proc.stderr, self.err_lines), daemon=True)]
+        for t in self._threads:
+            t.start()
+
+    @staticmethod
+    def _pump(stream, lines):
+        for line in stream:
+            lines.append(line.rstrip("\n"))
+
+    def command(self, line, expect=None, timeout=2.0):
+        """Sends a control command; with expect, waits for an output line containing it and returns it."""
+        start = len(self.out_lines)
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
+        if expect is None:
+            return None
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            for text in self.out_lines[start:]:
+                if expect in text:
+                    return text
+            time.sleep(0.01)
+        raise AssertionError(f"no output containing {expect!r} after {line!r}; got {self.out_lines[start:]}")
+
+    def log_contains(self, text, timeout=2.0):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if any(text in line for line in self.err_lines):
+                return True
+            time.sleep(0.01)
+        return False
+
+    def stop(self, sig=None, timeout=5.0):
+        if self.proc.poll() is None:
+            if sig is None:
+                self.proc.terminate()
+            else:
+                self.proc.send_signal(sig)
+        try:
+            rc = self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            raise AssertionError("canopen-emu did not stop within %.1f s" % timeout)
+        for t in self._threads:
+            t.join(timeout=1.0)
+        return rc
+
+
+@pytest.fixture
+def emulator(tmp_path):
+    """emulator(args..., nvm_dir=None) starts canopen-emu; all instances are stopped at the end."""
+    started = []
+
+    def start(*args, nvm_dir=None, control=True):
+        emu = Emulator(args, nvm_dir or tmp_path / "nvm", control)
+        started.append(emu)
+        return emu
+
+    yield start
+    for emu in started:
+        emu.stop()
+
+
+@pytest.fixture
+def network():
+    net = canopen.Network()
+    net.connect(interface="socketcan", channel=IFACE)
+    yield net
+    net.disconnect()
+
+
+def remote(network, device, node_id):
+    node = canopen.RemoteNode(node_id, str(EDS[device]))
+    # python-canopen waits 0.3 s for an SDO answer. Inside User-Mode Linux (one virtual CPU shared by the
+    # emulator, this master and a capture thread) its receive thread can lag behind a busy bus for longer
+    # than that although the answer is on the wire within milliseconds; the master may wait longer.
+    node.sdo.RESPONSE_TIMEOUT = 2.0
+    network.add_node(node)
+    return node
