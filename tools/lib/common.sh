@@ -1,0 +1,33 @@
+# Shared by tools/run-tests and tools/demo (sourced, POSIX sh): Debian packages and the Python venv.
+
+# need_tools "cmd:package ..." installs the packages whose command is missing (as root, with apt-get).
+need_tools() {
+  _need=""
+  for _t in $1; do
+    command -v "${_t%%:*}" >/dev/null 2>&1 || _need="$_need ${_t#*:}"
+  done
+  [ -z "$_need" ] && return 0
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "installing$_need"
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $_need >/dev/null
+  else
+    echo "missing$_need; install them (Debian: apt-get install$_need)" >&2
+    return 1
+  fi
+}
+
+# make_venv DIR: a venv with tests/requirements.txt, made once and refreshed when the file changes.
+make_venv() {
+  if ! python3 -c 'import ensurepip, venv' >/dev/null 2>&1; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+      apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
+    else
+      echo "python3 cannot make a venv (Debian: apt-get install python3-venv)" >&2; return 1
+    fi
+  fi
+  if ! cmp -s tests/requirements.txt "$1/requirements.txt" 2>/dev/null; then
+    echo "== python venv ($1)"
+    python3 -m venv "$1" && "$1/bin/pip" install -q --disable-pip-version-check -r tests/requirements.txt &&
+      cp tests/requirements.txt "$1/requirements.txt" || { echo "pip install failed" >&2; return 1; }
+  fi
+}
