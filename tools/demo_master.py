@@ -66,17 +66,21 @@ def main():
     network = canopen.Network()
     network.connect(interface="socketcan", channel=args.iface)
     nodes = {}
+    booted = {}
     for device, node_id, eds in NODES:
         node = canopen.RemoteNode(node_id, str(eds))
         node.sdo.RESPONSE_TIMEOUT = 2.0
         network.add_node(node)
         nodes[device] = node
+        # Listen before the emulator starts: its boot-ups come within milliseconds.
+        booted[node_id] = threading.Event()
+        network.subscribe(0x700 + node_id, lambda can_id, data, ts: data == b"\x00" and booted[can_id - 0x700].set())
     emu = subprocess.Popen(emu_args, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True, bufsize=1)
     threading.Thread(target=pump, args=(emu.stderr, "emu"), daemon=True).start()
     threading.Thread(target=pump, args=(emu.stdout, "emu"), daemon=True).start()
     try:
-        run(network, nodes, emu)
+        run(network, nodes, emu, booted)
     finally:
         if emu.poll() is None:
             emu.terminate()
@@ -86,10 +90,11 @@ def main():
     return 0
 
 
-def run(network, nodes, emu):
+def run(network, nodes, emu, booted):
     step("Boot-up: every node says hello on 0x700 + node-ID with state 0x00")
     for device, node in nodes.items():
-        node.nmt.wait_for_bootup(timeout=5)
+        if not booted[node.id].wait(timeout=5):
+            raise SystemExit(f"no boot-up from {device} (node {node.id})")
         say(f"{device}: boot-up from node {node.id} (0x{0x700 + node.id:03X}#00)")
 
     step("Identity and device name by SDO")

@@ -1,0 +1,103 @@
+"""Interface trouble (down/up, gone/back), --script timing, and the README's demo session."""
+import subprocess
+import sys
+import time
+
+import can
+import pytest
+
+from conftest import EMU, SRC
+
+
+def ip(*args):
+    subprocess.run(["ip", "link", *args], check=True, capture_output=True, timeout=10)
+
+
+def have_vcan1():
+    return subprocess.run(["ip", "link", "show", "vcan1"], capture_output=True).returncode == 0
+
+
+def test_interface_down_and_up_is_reported_once_and_survived(emulator):
+    # No master sockets here: theirs would report ENETDOWN too; the point is the emulator's.
+    emu = emulator("buerkert:0x60")
+    assert emu.log_contains("NMT INITIALISING -> PRE-OPERATIONAL", timeout=3)
+    ip("set", "vcan0", "down")
+    try:
+        time.sleep(1.6)  # three 500 ms heartbeats fail meanwhile
+    finally:
+        ip("set", "vcan0", "up")
+    assert emu.log_contains("interface is down", timeout=1)
+    assert sum("interface is down" in line for line in emu.err_lines) == 1, emu.err_lines
+    # sockets opened before stay usable after the interface is up again
+    bus = can.Bus(channel="vcan0", interface="socketcan")
+    try:
+        end = time.monotonic() + 3
+        got = None
+        while time.monotonic() < end and got is None:
+            msg = bus.recv(0.2)
+            if msg is not None and msg.arbitration_id == 0x760:
+                got = msg
+        assert got is not None and bytes(got.data) == b"\x7f", "no heartbeat after the interface came back"
+    finally:
+        bus.shutdown()
+    assert emu.proc.poll() is None
+
+
+@pytest.mark.skipif(not have_vcan1(), reason="needs a second virtual interface (tools/vcan-run makes vcan1)")
+def test_interface_gone_and_back(tmp_path):
+    emu = subprocess.Popen([EMU, "-i", "vcan1", "--nvm-dir", str(tmp_path), "sds:0x61"], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(0.5)
+        ip("delete", "vcan1")
+        time.sleep(1.0)
+        subprocess.run(["ip", "link", "add", "dev", "vcan1", "type", "vcan"], check=True, timeout=10)
+        ip("set", "vcan1", "up")
+        bus = can.Bus(channel="vcan1", interface="socketcan")
+        try:
+            bus.send(can.Message(arbitration_id=0x661, data=bytes([0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0]),
+                                 is_extended_id=False))
+            end = time.monotonic() + 3
+            answer = None
+            while time.monotonic() < end and answer is None:
+                msg = bus.recv(0.2)
+                if msg is not None and msg.arbitration_id == 0x5E1:
+                    answer = msg
+                elif time.monotonic() > end - 2.5 and answer is None and msg is None:
+                    bus.send(can.Message(arbitration_id=0x661, data=bytes([0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0]),
+                                         is_extended_id=False))
+            assert answer is not None and bytes(answer.data)[:4] == bytes([0x43, 0x00, 0x10, 0x00])
+        finally:
+            bus.shutdown()
+        assert emu.poll() is None
+    finally:
+        emu.terminate()
+        out, err = emu.communicate(timeout=5)
+    assert "interface gone" in err and "interface is back" in err, err
+    assert err.count("interface gone") == 1
+
+
+def test_script_runs_commands_at_their_times(tmp_path, capture):
+    script = tmp_path / "faults.script"
+    script.write_text("# a fault at 0.8 s, cleared 0.5 s later, then stop\n"
+                      "@800 emcy 0x62 0x5000 0x01\n@+500 emcy-clear 0x62 0x5000\n@+300 quit\n")
+    start = time.time()
+    r = subprocess.run([EMU, "--nvm-dir", str(tmp_path), "--script", str(script), "sds:0x62"], capture_output=True,
+                       text=True, timeout=10, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stderr
+    frames = capture.wait_for(0x0E2, count=2, timeout=1)
+    boot = capture.wait_for(0x762, data=b"\x00", timeout=1)[0].timestamp
+    assert 0.7 < frames[0].timestamp - boot < 1.0, frames[0].timestamp - boot
+    assert 0.4 < frames[1].timestamp - frames[0].timestamp < 0.65
+    assert bytes(frames[0].data)[:3] == b"\x00\x50\x01" and bytes(frames[1].data)[:3] == b"\x00\x00\x00"
+    assert "emcy 0x5000: done" in r.stdout
+
+
+def test_readme_demo_session_runs(tmp_path):
+    r = subprocess.run([sys.executable, str(SRC / "tools/demo_master.py"), "--emu", EMU], capture_output=True,
+                       text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    out = r.stdout
+    for text in ("boot-up from node 16", "name \"ES61\"", "name \"SDS\"", "NMT start", "l/min",
+                 "EMCY 0x3210", "EMCY 0x0000 (error reset)", "NMT state from its heartbeat: STOPPED"):
+        assert text in out, f"{text!r} missing from the demo output"
