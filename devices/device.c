@@ -158,20 +158,6 @@ bool device_parse_int(const char *text, long long lo, long long hi, long long *o
     return true;
 }
 
-static const char *state_name(co_nmt_state_t s)
-{
-    switch (s) {
-    case CO_NMT_INITIALISING:
-        return "INITIALISING";
-    case CO_NMT_STOPPED:
-        return "STOPPED";
-    case CO_NMT_OPERATIONAL:
-        return "OPERATIONAL";
-    default:
-        return "PRE-OPERATIONAL";
-    }
-}
-
 /* One hex field of an address: optional 0x, hex digits only. */
 static bool parse_hex(const char *text, size_t n, unsigned long max, unsigned long *out)
 {
@@ -325,7 +311,7 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
         const co_node_t *n = &dev->node;
         device_printf(dev, "%s node-ID %u%s: %s, error register 0x%02X, %u active error(s), tx %lu, rx %lu, dropped %lu",
                       dev->cls->name, n->node_id, n->node_id == CO_NODE_ID_UNCONFIGURED ? " (unconfigured)" : "",
-                      state_name(n->nmt_state), co_od_get_u8(&dev->node, 0x1001, 0), n->emcy.n_active,
+                      co_nmt_state_name(n->nmt_state), co_od_get_u8(&dev->node, 0x1001, 0), n->emcy.n_active,
                       (unsigned long)n->stats.tx_frames, (unsigned long)n->stats.rx_frames,
                       (unsigned long)n->stats.tx_dropped);
         for (uint8_t i = 0U; i < n->emcy.n_active; i++) {

@@ -33,3 +33,19 @@ void co_nmt_rx(co_node_t *node, const co_frame_t *f)
         break; /* unknown command: ignored, no state change */
     }
 }
+
+const char *co_nmt_state_name(co_nmt_state_t state)
+{
+    switch (state) {
+    case CO_NMT_INITIALISING:
+        return "INITIALISING";
+    case CO_NMT_STOPPED:
+        return "STOPPED";
+    case CO_NMT_OPERATIONAL:
+        return "OPERATIONAL";
+    case CO_NMT_PRE_OPERATIONAL:
+        return "PRE-OPERATIONAL";
+    default:
+        return "UNKNOWN";
+    }
+}

@@ -308,6 +308,9 @@ co_nmt_state_t co_node_state(const co_node_t *node);
 /** Active node-ID (0xFF while unconfigured). */
 uint8_t co_node_id(const co_node_t *node);
 
+/** Name of an NMT state for logs: "INITIALISING", "STOPPED", "OPERATIONAL", "PRE-OPERATIONAL" (else "UNKNOWN"). */
+const char *co_nmt_state_name(co_nmt_state_t state);
+
 /**
  * Raises an error: sets its bits in 0x1001 (bit 0 always), records it in 0x1003 (newest first) and sends
  * an EMCY frame `code | 0x1001 | msef[0..4]` (subject to the inhibit time 0x1015; queued while Stopped).

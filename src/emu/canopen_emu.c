@@ -113,20 +113,6 @@ static void device_print(void *ctx, const device_t *dev, const char *line)
     fflush(stdout);
 }
 
-static const char *nmt_name(uint32_t s)
-{
-    switch (s) {
-    case CO_NMT_INITIALISING:
-        return "INITIALISING";
-    case CO_NMT_STOPPED:
-        return "STOPPED";
-    case CO_NMT_OPERATIONAL:
-        return "OPERATIONAL";
-    default:
-        return "PRE-OPERATIONAL";
-    }
-}
-
 static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
 {
     (void)ctx;
@@ -134,7 +120,7 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
     const char *name = dev->cls->name;
     switch (ev->kind) {
     case CO_EV_NMT_STATE:
-        logline(LOG_NORMAL, "node %u (%s): NMT %s -> %s", id, name, nmt_name(ev->code), nmt_name(ev->value));
+        logline(LOG_NORMAL, "node %u (%s): NMT %s -> %s", id, name, co_nmt_state_name((co_nmt_state_t)ev->code), co_nmt_state_name((co_nmt_state_t)ev->value));
         break;
     case CO_EV_SDO_ABORT:
         logline(LOG_NORMAL, "node %u (%s): SDO abort 0x%08lX on 0x%04X:%02X (%s)", id, name, (unsigned long)ev->code,
@@ -427,7 +413,7 @@ static void run_command(char *line)
         for (size_t i = 0U; i < emu.n_nodes; i++) {
             const emu_node_t *n = emu.nodes[i];
             printf("node %u: %s (started as %u) %s\n", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
-                   nmt_name(co_node_state(&n->dev.node)));
+                   co_nmt_state_name(co_node_state(&n->dev.node)));
         }
         fflush(stdout);
         return;
