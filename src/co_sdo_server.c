@@ -251,6 +251,10 @@ co_time_us_t co_sdo_process(co_node_t *node)
     if (node->sdo.state == SDO_IDLE) {
         return CO_NEVER;
     }
+    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
+        node->sdo.state = SDO_IDLE; /* Stopped: the transfer ends silently (SDO says nothing in Stopped) */
+        return CO_NEVER;
+    }
     if (node->now >= node->sdo.deadline) {
         sdo_abort(node, node->sdo.index, node->sdo.sub, CO_ABORT_TIMEOUT);
         return CO_NEVER;

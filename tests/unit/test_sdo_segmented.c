@@ -144,6 +144,19 @@ static void client_abort_and_new_initiate_end_a_transfer(void)
     TEST_ASSERT_EQUAL_HEX8(0x43, fx.port.sent[fx.port.n_sent - 1U].data[0]); /* no timeout abort */
 }
 
+static void stopped_node_drops_an_open_transfer_silently(void)
+{
+    SDO(0x21, 0x05, 0x20, 0x00, 16, 0, 0, 0);
+    RX(0x000, 0x02, 0x05);
+    const uint32_t sent = fx.port.n_sent;
+    fx_advance(2U * CO_SDO_TIMEOUT_US);
+    TEST_ASSERT_EQUAL_UINT32(sent, fx.port.n_sent); /* no timeout abort while Stopped */
+    RX(0x000, 0x80, 0x05);
+    SDO(0x00, 's', 'e', 'g', 'm', 'e', 'n', 't'); /* the transfer is gone */
+    EXPECT(0x80, 0x00, 0x00, 0x00, 0x01, 0x00, 0x04, 0x05);
+    TEST_ASSERT_EQUAL_STRING("test node", fx.values.x2005_description);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -157,5 +170,6 @@ int main(void)
     RUN_TEST(access_checked_at_initiate);
     RUN_TEST(device_refusal_at_the_end);
     RUN_TEST(client_abort_and_new_initiate_end_a_transfer);
+    RUN_TEST(stopped_node_drops_an_open_transfer_silently);
     return UNITY_END();
 }
