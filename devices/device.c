@@ -49,6 +49,9 @@ static void tramp_event(void *ctx, co_node_t *node, const co_event_t *ev)
 {
     device_t *dev = dev_of(ctx);
     (void)node;
+    if (dev->cls->on_event != NULL) {
+        dev->cls->on_event(dev, ev);
+    }
     if (dev->cfg.on_event != NULL) {
         dev->cfg.on_event(dev->cfg.event_ctx, dev, ev);
     }

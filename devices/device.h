@@ -62,6 +62,9 @@ typedef struct device_class {
     co_time_us_t (*step)(device_t *dev, co_time_us_t now);
     /** A control command (argv[0] is the command word). */
     device_cmd_result_t (*command)(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
+    /** A core event, before the runner's cfg.on_event sees it (may be NULL): lets a model follow what the
+     *  core did on its own, e.g. an LSS store (CO_EV_STORE with index 0x7E5). */
+    void (*on_event)(device_t *dev, const co_event_t *ev);
 } device_class_t;
 
 /** What the runner gives an instance. */

@@ -49,6 +49,23 @@ bool co_lss_set_pending_node_id(co_node_t *node, uint8_t node_id)
     return true;
 }
 
+bool co_lss_set_pending_bit_timing(co_node_t *node, uint8_t index)
+{
+    if (index >= CO_LSS_BIT_TIMING_COUNT || node->bit_rates_kbit[index] == 0U) {
+        return false;
+    }
+    node->lss.pending_bit_timing = index;
+    return true;
+}
+
+co_status_t co_lss_store(co_node_t *node)
+{
+    if (node->port->nvm_write == NULL || node->port->nvm_commit == NULL) {
+        return CO_ERR_IO;
+    }
+    return co_store_lss_save(node, node->lss.pending_node_id, node->lss.pending_bit_timing);
+}
+
 static void switch_global(co_node_t *node, uint8_t mode)
 {
     co_lss_slave_t *l = &node->lss;

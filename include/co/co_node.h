@@ -63,7 +63,10 @@ typedef struct co_event {
 /**
  * Device behaviour hooks. Each gets ctx = co_node_cfg_t.hooks_ctx. All are optional (NULL).
  * They run inside co_node_rx/co_node_process/co_od_* calls: they may read and write OD values with the
- * co_od_* functions of the same node, raise/clear EMCY, but must not call co_node_rx/co_node_process.
+ * co_od_* functions of the same node, raise/clear EMCY, but must not call co_node_rx/co_node_process, nor
+ * co_node_reset: a reset from a write hook would run before the SDO confirmation is sent (the boot-up first,
+ * then the confirmation from the new node-ID) and the written value would land in the freshly reset OD.
+ * Defer such work to the next co_node_process() call (a device model does it in its step()).
  */
 typedef struct co_hooks {
     /**
@@ -334,6 +337,15 @@ void co_tpdo_trigger(co_node_t *node, uint8_t n);
 
 /** Sets the pending node-ID (as LSS configure node-ID does); it becomes active at the next communication reset. */
 bool co_lss_set_pending_node_id(co_node_t *node, uint8_t node_id);
+
+/** Sets the pending bit-timing index (as LSS configure bit timing does); false if the device's table lacks it. */
+bool co_lss_set_pending_bit_timing(co_node_t *node, uint8_t index);
+
+/**
+ * Stores the pending node-ID and bit timing as LSS store configuration does (area CO_NVM_LSS), for devices
+ * whose own objects are the same setting (e.g. Bürkert 0x2001:01/02). CO_ERR_IO without NVM or on failure.
+ */
+co_status_t co_lss_store(co_node_t *node);
 
 #ifdef __cplusplus
 }

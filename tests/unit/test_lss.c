@@ -898,6 +898,25 @@ static void lss_frames_with_rtr_or_extended_id_ignored(void)
     EXPECT_NONE();
 }
 
+static void api_pending_bit_timing_and_store(void)
+{
+    TEST_ASSERT_FALSE(co_lss_set_pending_bit_timing(&fx.node, 5U));  /* not in the CiA 305 table */
+    TEST_ASSERT_FALSE(co_lss_set_pending_bit_timing(&fx.node, 10U));
+    TEST_ASSERT_TRUE(co_lss_set_pending_bit_timing(&fx.node, 3U));
+    TEST_ASSERT_TRUE(co_lss_set_pending_node_id(&fx.node, 0x0BU));
+    TEST_ASSERT_EQUAL_INT(CO_OK, co_lss_store(&fx.node));
+    TEST_ASSERT_EQUAL_HEX8(5U, co_node_id(&fx.node)); /* pending until the next reset */
+    fx_power_cycle();
+    TEST_ASSERT_EQUAL_HEX8(0x0BU, co_node_id(&fx.node));
+    TEST_ASSERT_EQUAL_UINT8(3U, fx.node.lss.active_bit_timing);
+    TEST_ASSERT_EQUAL_UINT32(250U, fx.port.bit_rate_kbit); /* applied through the port at power-on */
+    co_port_t no_nvm = fx.port.port;
+    no_nvm.nvm_write = NULL;
+    fx.node.port = &no_nvm;
+    TEST_ASSERT_EQUAL_INT(CO_ERR_IO, co_lss_store(&fx.node));
+    fx.node.port = &fx.port.port;
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -951,5 +970,6 @@ int main(void)
     RUN_TEST(unconfigured_node_id_lost_without_store);
     RUN_TEST(unconfigured_node_configured_by_selective_and_stored);
     RUN_TEST(lss_frames_with_rtr_or_extended_id_ignored);
+    RUN_TEST(api_pending_bit_timing_and_store);
     return UNITY_END();
 }
