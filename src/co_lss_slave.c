@@ -66,6 +66,21 @@ co_status_t co_lss_store(co_node_t *node)
     return co_store_lss_save(node, node->lss.pending_node_id, node->lss.pending_bit_timing);
 }
 
+co_status_t co_lss_apply_bit_timing(co_node_t *node)
+{
+    co_lss_slave_t *l = &node->lss;
+    const uint16_t kbit = l->pending_bit_timing < CO_LSS_BIT_TIMING_COUNT ? node->bit_rates_kbit[l->pending_bit_timing] : 0U;
+    if (kbit == 0U) {
+        return CO_ERR_ARG;
+    }
+    l->active_bit_timing = l->pending_bit_timing;
+    if (node->port->set_bit_rate != NULL) {
+        (void)node->port->set_bit_rate(node->port_ctx, kbit);
+    }
+    co_node_event(node, CO_EV_LSS_ACTIVATE, 0U, 0U, kbit, 0U);
+    return CO_OK;
+}
+
 static void switch_global(co_node_t *node, uint8_t mode)
 {
     co_lss_slave_t *l = &node->lss;

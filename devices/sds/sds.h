@@ -1,4 +1,5 @@
-/* The sds device model: see docs/devices/ for its behaviour and control commands. */
+/* The sds device model (Eltex SDS ionising bar): see docs/devices/sds-behaviour.md for its behaviour,
+ * simulation model, error table and control commands. */
 #ifndef SDS_H
 #define SDS_H
 

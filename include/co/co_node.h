@@ -347,6 +347,14 @@ bool co_lss_set_pending_bit_timing(co_node_t *node, uint8_t index);
  */
 co_status_t co_lss_store(co_node_t *node);
 
+/**
+ * Makes the pending bit timing the active one at once, as LSS activate bit timing does after its delay
+ * (port set_bit_rate, CO_EV_LSS_ACTIVATE), for devices whose own object switches the bit rate at a reset
+ * (e.g. Eltex 0x2002:07): call it from on_reset(CO_RESET_COMMUNICATION), before the boot-up.
+ * @return CO_ERR_ARG if the pending index is not in the device's table.
+ */
+co_status_t co_lss_apply_bit_timing(co_node_t *node);
+
 #ifdef __cplusplus
 }
 #endif

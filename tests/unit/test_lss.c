@@ -910,6 +910,12 @@ static void api_pending_bit_timing_and_store(void)
     TEST_ASSERT_EQUAL_HEX8(0x0BU, co_node_id(&fx.node));
     TEST_ASSERT_EQUAL_UINT8(3U, fx.node.lss.active_bit_timing);
     TEST_ASSERT_EQUAL_UINT32(250U, fx.port.bit_rate_kbit); /* applied through the port at power-on */
+    TEST_ASSERT_TRUE(co_lss_set_pending_bit_timing(&fx.node, 6U));
+    const uint32_t calls = fx.port.bit_rate_calls;
+    TEST_ASSERT_EQUAL_INT(CO_OK, co_lss_apply_bit_timing(&fx.node));
+    TEST_ASSERT_EQUAL_UINT32(calls + 1U, fx.port.bit_rate_calls);
+    TEST_ASSERT_EQUAL_UINT32(50U, fx.port.bit_rate_kbit);
+    TEST_ASSERT_EQUAL_UINT8(6U, fx.node.lss.active_bit_timing);
     co_port_t no_nvm = fx.port.port;
     no_nvm.nvm_write = NULL;
     fx.node.port = &no_nvm;
