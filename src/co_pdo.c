@@ -217,7 +217,8 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
 {
     uint8_t buf[8];
     (void)tpdo_sample(node, p, buf);
-    const bool changed = !p->sent_once || p->event || memcmp(buf, p->last, 8U) != 0;
+    const bool cos = (node->options & CO_OPT_TPDO_NO_COS) == 0U && memcmp(buf, p->last, 8U) != 0;
+    const bool changed = !p->sent_once || p->event || cos;
     const bool timer = p->event_due != CO_NEVER && node->now >= p->event_due;
     if (changed || timer) {
         if (node->now < p->next_allowed) {

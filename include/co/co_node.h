@@ -94,7 +94,9 @@ typedef struct co_hooks {
 enum co_node_option {
     CO_OPT_NMT_ACCEPT_LONG = 0x01U,   /**< Accept NMT frames with DLC > 2 (extra bytes ignored). Default: DLC == 2 only. */
     CO_OPT_SDO_SEGMENTED = 0x02U,     /**< Segmented SDO transfer (needs CO_CONFIG_SDO_SEGMENTED). */
-    CO_OPT_LSS_NO_UNCONFIGURE = 0x04U /**< LSS configure node-ID refuses 0xFF (only 1..127), as Bürkert devices do. */
+    CO_OPT_LSS_NO_UNCONFIGURE = 0x04U, /**< LSS configure node-ID refuses 0xFF (only 1..127), as Bürkert devices do. */
+    CO_OPT_TPDO_NO_COS = 0x08U         /**< Event-driven TPDOs go out on co_tpdo_trigger() and the event timer only,
+                                            not when a mapped value changes (devices that send cyclically). */
 };
 
 /** Number of entries of an LSS bit-timing table (CiA 305 indices 0..9). */

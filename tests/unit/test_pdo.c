@@ -184,6 +184,20 @@ static void change_of_state_sent_without_application_call(void)
     ASSERT_FRAME((uint32_t)fx_last(0x185U), 0x185U, 1, 0x05);
 }
 
+static void option_no_cos_sends_only_on_trigger_and_timer(void)
+{
+    fx_start(5U, CO_OPT_TPDO_NO_COS);
+    start();
+    TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x185U)); /* entering Operational still sends once */
+    fx.values.x1001_error_register = 0x42U;
+    fx_advance(100000U);
+    TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x185U)); /* a change alone sends nothing */
+    co_tpdo_trigger(&fx.node, 0U);
+    (void)fx_process();
+    TEST_ASSERT_EQUAL_UINT32(2U, fx_count(0x185U));
+    ASSERT_FRAME((uint32_t)fx_last(0x185U), 0x185U, 1, 0x42);
+}
+
 static void inhibit_time_spaces_transmissions(void)
 {
     W(0x1800, 1, 0x80000185UL, 4);
@@ -292,6 +306,7 @@ int main(void)
     RUN_TEST(communication_parameter_rules);
     RUN_TEST(tpdos_only_in_operational);
     RUN_TEST(change_of_state_sent_without_application_call);
+    RUN_TEST(option_no_cos_sends_only_on_trigger_and_timer);
     RUN_TEST(inhibit_time_spaces_transmissions);
     RUN_TEST(trigger_sends_unchanged_data);
     RUN_TEST(invalid_tpdo_sends_nothing);
