@@ -7,8 +7,13 @@
 
 #include "co/co.h"
 
+/* Frames recorded and bytes per NVM area. A RAM-constrained target build (tests/target/) may lower them. */
+#ifndef FAKE_PORT_MAX_FRAMES
 #define FAKE_PORT_MAX_FRAMES 4096U
+#endif
+#ifndef FAKE_NVM_SIZE
 #define FAKE_NVM_SIZE 4096U
+#endif
 
 typedef struct fake_nvm_area {
     uint8_t stored[FAKE_NVM_SIZE];

@@ -7,6 +7,13 @@
 #include "test_od.h"
 #include "unity.h"
 
+/* Nodes of many_nodes_of_one_type: every node-ID. A RAM-constrained target build (tests/target/) may lower it. */
+#ifndef TEST_MULTI_NODE_COUNT
+#define TEST_MULTI_NODE_COUNT 127U
+#endif
+/* The node that answers the SDO request: 99, or the last node when there are fewer. */
+#define TEST_MULTI_NODE_SDO_ID (TEST_MULTI_NODE_COUNT < 99U ? TEST_MULTI_NODE_COUNT : 99U)
+
 /* A second, minimal device type: identity, heartbeat, one TPDO. */
 typedef struct mini_values {
     uint32_t device_type;
@@ -135,20 +142,20 @@ static void emcy_of_one_node_stays_there(void)
 
 static void many_nodes_of_one_type(void)
 {
-    static co_node_t nodes[127];
-    static test_od_values_t vals[127];
+    static co_node_t nodes[TEST_MULTI_NODE_COUNT];
+    static test_od_values_t vals[TEST_MULTI_NODE_COUNT];
     bus.n_sent = 0U;
-    for (uint8_t i = 0U; i < 127U; i++) {
+    for (uint8_t i = 0U; i < TEST_MULTI_NODE_COUNT; i++) {
         const co_node_cfg_t cfg = {&test_od, &vals[i], &bus.port, &bus, NULL, NULL, (uint8_t)(i + 1U), 4U, NULL, 0U};
         TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&nodes[i], &cfg, now));
     }
-    TEST_ASSERT_EQUAL_UINT32(127U, bus.n_sent);
-    const co_frame_t read = {0x600U + 99U, 8U, 0U, {0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0}};
-    for (uint8_t i = 0U; i < 127U; i++) {
+    TEST_ASSERT_EQUAL_UINT32(TEST_MULTI_NODE_COUNT, bus.n_sent);
+    const co_frame_t read = {0x600U + TEST_MULTI_NODE_SDO_ID, 8U, 0U, {0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0}};
+    for (uint8_t i = 0U; i < TEST_MULTI_NODE_COUNT; i++) {
         co_node_rx(&nodes[i], &read, now);
     }
-    TEST_ASSERT_EQUAL_UINT32(128U, bus.n_sent);
-    TEST_ASSERT_EQUAL_HEX32(0x580U + 99U, bus.sent[127].id);
+    TEST_ASSERT_EQUAL_UINT32(TEST_MULTI_NODE_COUNT + 1U, bus.n_sent);
+    TEST_ASSERT_EQUAL_HEX32(0x580U + TEST_MULTI_NODE_SDO_ID, bus.sent[TEST_MULTI_NODE_COUNT].id);
 }
 
 int main(void)

@@ -1,0 +1,40 @@
+/*
+ * Configuration profile "eltex": what the two Eltex devices need (PRO IONIZER, SDS), nothing more.
+ * Use it as the core's configuration header: -DCO_PROFILE=eltex with CMake (or
+ * -DCO_CONFIG_HEADER='"path/to/eltex.h"'). Every value is checked against od/pro-ionizer.eds and
+ * od/sds.eds (the generated tables in <build>/od/) and against the device models:
+ *
+ * - No segmented SDO: every object of both dictionaries fits an expedited transfer (the longest are the
+ *   4-byte strings 0x1008/0x100A), and the device models do not set CO_OPT_SDO_SEGMENTED. The SDO
+ *   buffer must still hold the largest object read by SDO (uploads are staged in it): 8 bytes.
+ * - No SYNC: neither dictionary has 0x1005/0x1006/0x1007/0x1019, and the PDO transmission types
+ *   (0x1400:02, 0x1800:02, 0x1801:02, 0x1802:02) are read-only and event-driven (254/255).
+ * - No node guarding: neither dictionary has 0x100C/0x100D (heartbeat only).
+ * - No dynamic PDO mapping: 0x1600/0x1A00.. are read-only in both.
+ * - LSS fastscan kept: both manuals claim CiA 305 LSS, and the emulator relies on fastscan to
+ *   tell several nodes of one type apart (distinct serial numbers).
+ * - PDO counts: 1 RPDO (both), 3 TPDOs (PRO IONIZER; the SDS has 2).
+ * - Heartbeat consumer: neither dictionary has 0x1016; one slot is the C99 minimum (no zero-length array).
+ * - EMCY: the defaults (8 active errors, 8 queued frames): the PRO IONIZER can have several warnings and
+ *   errors active at once and logs when the list is full; keeping the default keeps its behaviour.
+ * - TX queue: 8 frames. The largest burst of these devices is boot-up + 3 TPDOs on entering
+ *   Operational + an EMCY + an SDO response + a heartbeat (7 frames) against a port that is busy.
+ *
+ * The device tests of both devices pass with this profile on the host (see docs/footprint.md, which
+ * also gives sizeof(co_node_t) with it).
+ */
+#ifndef CO_PROFILE_ELTEX_H
+#define CO_PROFILE_ELTEX_H
+
+#define CO_CONFIG_SDO_SEGMENTED 0
+#define CO_SDO_BUF_SIZE 8U
+#define CO_CONFIG_SYNC 0
+#define CO_CONFIG_NODE_GUARDING 0
+#define CO_CONFIG_PDO_DYNAMIC_MAPPING 0
+#define CO_CONFIG_LSS_FASTSCAN 1
+#define CO_RPDO_MAX 1U
+#define CO_TPDO_MAX 3U
+#define CO_HB_CONSUMER_MAX 1U
+#define CO_TX_QUEUE_LEN 8U
+
+#endif /* CO_PROFILE_ELTEX_H */

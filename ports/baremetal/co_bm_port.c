@@ -1,0 +1,52 @@
+#include "co_bm_port.h"
+
+static co_status_t port_send(void *ctx, const co_frame_t *frame)
+{
+    co_bm_port_t *p = (co_bm_port_t *)ctx;
+    return p->can->send(p->can->ctx, frame);
+}
+
+static co_status_t port_bit_rate(void *ctx, uint32_t kbit)
+{
+    co_bm_port_t *p = (co_bm_port_t *)ctx;
+    return p->can->set_bit_rate(p->can->ctx, kbit);
+}
+
+static co_status_t port_nvm_write(void *ctx, co_nvm_area_t area, uint32_t offset, const void *data, size_t len)
+{
+    return co_bm_nvm_write(((co_bm_port_t *)ctx)->nvm, area, offset, data, len);
+}
+
+static co_status_t port_nvm_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
+{
+    return co_bm_nvm_commit(((co_bm_port_t *)ctx)->nvm, area, total_len);
+}
+
+static co_status_t port_nvm_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *data, size_t len)
+{
+    return co_bm_nvm_read(((co_bm_port_t *)ctx)->nvm, area, offset, data, len);
+}
+
+void co_bm_port_init(co_bm_port_t *p, const co_bm_can_t *can, co_bm_nvm_t *nvm, co_bm_clock_t *clock)
+{
+    p->can = can;
+    p->nvm = nvm;
+    p->clock = clock;
+    p->port.send = port_send;
+    p->port.set_bit_rate = can->set_bit_rate != NULL ? port_bit_rate : NULL;
+    p->port.nvm_write = nvm != NULL ? port_nvm_write : NULL;
+    p->port.nvm_commit = nvm != NULL ? port_nvm_commit : NULL;
+    p->port.nvm_read = nvm != NULL ? port_nvm_read : NULL;
+    co_bm_ring_init(&p->rx);
+}
+
+bool co_bm_port_rx_isr(co_bm_port_t *p, const co_frame_t *frame) { return co_bm_ring_push(&p->rx, frame); }
+
+co_time_us_t co_bm_port_poll(co_bm_port_t *p, co_node_t *node)
+{
+    co_frame_t f;
+    while (co_bm_ring_pop(&p->rx, &f)) {
+        co_node_rx(node, &f, co_bm_clock_now(p->clock));
+    }
+    return co_node_process(node, co_bm_clock_now(p->clock));
+}

@@ -1,0 +1,48 @@
+/*
+ * Reference bare-metal port: one CAN controller, a receive ring filled by the CAN interrupt, a clock,
+ * optional flash storage. Ties co_bm_ring, co_bm_clock and co_bm_nvm to the core's co_port_t.
+ *
+ *   CAN RX interrupt ──► co_bm_port_rx_isr() ──► ring ──► co_bm_port_poll() in the main loop
+ *                                                           ├─► co_node_rx(node, frame, now)
+ *                                                           └─► co_node_process(node, now) ─► next deadline
+ *
+ * The board supplies co_bm_can_t: send() puts a frame into a free TX mailbox/FIFO slot and returns
+ * CO_ERR_BUSY when there is none (the core keeps the frame and retries), CO_ERR_IO when the controller
+ * is bus-off or the frame can never go out. It is called from the main loop only.
+ */
+#ifndef CO_BM_PORT_H
+#define CO_BM_PORT_H
+
+#include "co/co.h"
+#include "co_bm_clock.h"
+#include "co_bm_nvm.h"
+#include "co_bm_ring.h"
+
+typedef struct co_bm_can {
+    co_status_t (*send)(void *ctx, const co_frame_t *frame);      /**< Mandatory; never blocks. */
+    co_status_t (*set_bit_rate)(void *ctx, uint32_t kbit_per_s);  /**< NULL: the bit rate is fixed. */
+    void *ctx;
+} co_bm_can_t;
+
+typedef struct co_bm_port {
+    co_port_t port;          /**< Give &port.port and port_ctx = &port to co_node_init(). */
+    const co_bm_can_t *can;
+    co_bm_nvm_t *nvm;        /**< NULL: no storage (0x1010 answers 0x06060000, LSS store "not supported"). */
+    co_bm_clock_t *clock;
+    co_bm_ring_t rx;
+} co_bm_port_t;
+
+/** Sets up the port (empties the ring). Call before enabling the CAN receive interrupt. */
+void co_bm_port_init(co_bm_port_t *p, const co_bm_can_t *can, co_bm_nvm_t *nvm, co_bm_clock_t *clock);
+
+/** From the CAN receive interrupt, once per received frame. False when the ring was full (frame dropped). */
+bool co_bm_port_rx_isr(co_bm_port_t *p, const co_frame_t *frame);
+
+/**
+ * One main-loop step: feeds every queued frame to the node (with the current time), runs
+ * co_node_process() and returns its next deadline (CO_NEVER when nothing is pending). Call it again
+ * when a frame arrives (the interrupt wakes the CPU) or when the deadline is reached.
+ */
+co_time_us_t co_bm_port_poll(co_bm_port_t *p, co_node_t *node);
+
+#endif /* CO_BM_PORT_H */
