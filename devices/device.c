@@ -61,9 +61,8 @@ static co_status_t boot(device_t *dev, co_time_us_t now)
 {
     dev->now = now;
     memcpy(dev->values, dev->cls->od->defaults, dev->cls->od->values_size);
-    if (dev->cls->model_size > 0U) {
-        memset(dev->model, 0, dev->cls->model_size);
-    }
+    /* The model block is not cleared here: power_on re-initialises the running state and keeps the
+     * environment (device.h). */
     if (dev->cls->power_on != NULL) {
         dev->cls->power_on(dev, now);
     }
@@ -113,10 +112,27 @@ co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, 
     dev->hooks.on_nmt_change = tramp_nmt;
     dev->hooks.on_reset = tramp_reset;
     dev->hooks.on_event = tramp_event;
+    if (cls->model_size > 0U) {
+        memset(model, 0, cls->model_size); /* only here: a power cycle keeps the environment */
+    }
+    if (cls->init != NULL) {
+        cls->init(dev);
+    }
     return boot(dev, now);
 }
 
 co_status_t device_power_cycle(device_t *dev, co_time_us_t now) { return boot(dev, now); }
+
+void device_clear_running_state(device_t *dev, size_t env_offset, size_t env_size)
+{
+    uint8_t *m = (uint8_t *)dev->model;
+    const size_t size = dev->cls->model_size;
+    if (m == NULL || env_offset > size || env_size > size - env_offset) {
+        return;
+    }
+    memset(m, 0, env_offset);
+    memset(m + env_offset + env_size, 0, size - env_offset - env_size);
+}
 
 void device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now)
 {

@@ -9,7 +9,7 @@
  * persistent data of its own (operating-hour counters) in the port's CO_NVM_DEVICE area.
  *
  * Life of an instance:
- *   device_init(dev, cls, cfg, now)      set up model + node (power-on: loads NVM, boot-up)
+ *   device_init(dev, cls, cfg, now)      set up model (zeroed, environment defaults) + node (power-on: loads NVM, boot-up)
  *   loop: device_rx(dev, frame, t)       for every received frame
  *         next = device_process(dev, now)  model step + core processing; call again at `next` at the latest
  *         device_command(dev, argv, now)   control commands (inputs, faults, power cycle)
@@ -50,8 +50,16 @@ typedef struct device_class {
     const char *const *variants;   /**< NULL-terminated variant names (first = default), or NULL. */
     const char *commands_help;     /**< Help text of the device's own commands (lines, '\n'-separated). */
 
-    /** Initialises the model state for a power-on (called before co_node_init and at every power cycle).
-     *  The values block already holds the defaults; NVM is not loaded yet. */
+    /** Sets the model's environment inputs (the simulated outside world: loads, pollution, temperature,
+     *  supply voltage, sensor signals ...) to their defaults. Called once, by device_init(), on the zeroed
+     *  model block, before the first power_on(). May be NULL (then the environment starts zeroed). */
+    void (*init)(device_t *dev);
+    /** A power-on (device_init() and every device_power_cycle(), before co_node_init). The model block is
+     *  zeroed only by device_init(), never at a power cycle: power_on must re-initialise the model's running
+     *  state itself (release, timers, measured values, active faults that the environment does not cause,
+     *  persistent data reloaded from NVM) and keep its environment inputs as they are, since switching the
+     *  device off and on does not change the world around it. The values block already holds the defaults;
+     *  NVM is not loaded yet. */
     void (*power_on)(device_t *dev, co_time_us_t now);
     /** The core's hooks, with dev as context (any may be NULL). */
     uint32_t (*on_write)(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len, co_od_origin_t origin);
@@ -100,7 +108,8 @@ struct device {
 co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, void *model, const device_cfg_t *cfg,
                         co_time_us_t now);
 
-/** A power cycle: the model restarts, the node re-initialises from NVM and boots. */
+/** A power cycle: the model restarts (power_on; the environment inputs stay), the node re-initialises from NVM
+ *  and boots. */
 co_status_t device_power_cycle(device_t *dev, co_time_us_t now);
 
 void device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now);
@@ -110,6 +119,13 @@ co_time_us_t device_process(device_t *dev, co_time_us_t now);
 
 /** Runs a control command: the device's own first, then the common ones (see device.c). */
 device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
+
+/**
+ * For a class's power_on: zeroes the model block except the environment inputs, which are the bytes
+ * [env_offset, env_offset + env_size) (e.g. offsetof(my_model_t, env), sizeof(my_env_t)). The running state
+ * must then be set up again by power_on itself.
+ */
+void device_clear_running_state(device_t *dev, size_t env_offset, size_t env_size);
 
 /** printf-style reply/log line through cfg.print. */
 void device_printf(const device_t *dev, const char *fmt, ...)

@@ -17,6 +17,7 @@
 #include "buerkert.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -94,15 +95,19 @@ static const fault_def_t faults[F_COUNT] = {
  * All numbers little-endian. */
 #define BLOB_LEN 36U
 
+/* The environment (set by the temperature/supply commands): the outside world, kept over a power cycle. */
+typedef struct bk_env {
+    uint16_t temp_c;
+    float supply_v;
+} bk_env_t;
+
 typedef struct bk_model {
+    bk_env_t env;
     /* physics */
     float q;                    /* physical flow */
     float hold;                 /* flow at which the stuck valve holds */
     bool moving;
     co_time_us_t next_tick;
-    /* environment */
-    uint16_t temp_c;
-    float supply_v;
     /* faults and status */
     bool sensor_fault;
     bool valve_fault;
@@ -225,7 +230,7 @@ static bool nvm_load(device_t *dev)
     m->vmax = bits_float(get_u32(&b[16]));
     m->vmin = bits_float(get_u32(&b[20]));
     if (!isfinite(m->vmax) || !isfinite(m->vmin)) {
-        m->vmax = m->vmin = SUPPLY_NOMINAL;
+        m->vmax = m->vmin = m->env.supply_v;
     }
     return true;
 }
@@ -258,11 +263,11 @@ static bool fault_condition(const bk_model_t *m, unsigned f)
     case F_VALVE:
         return m->valve_fault;
     case F_SUPPLY_LOW:
-        return m->supply_v < SUPPLY_LOW;
+        return m->env.supply_v < SUPPLY_LOW;
     case F_SUPPLY_HIGH:
-        return m->supply_v > SUPPLY_HIGH;
+        return m->env.supply_v > SUPPLY_HIGH;
     default:
-        return m->temp_c > TEMP_HIGH;
+        return m->env.temp_c > TEMP_HIGH;
     }
 }
 
@@ -307,22 +312,22 @@ static void measure(device_t *dev)
     bk_model_t *m = model_of(dev);
     buerkert_fc_od_values_t *v = values_of(dev);
     bool changed = false;
-    v->x2004_02 = m->temp_c;
-    v->x2004_03 = m->supply_v;
-    if (m->temp_c > m->tmax) {
-        m->tmax = m->temp_c;
+    v->x2004_02 = m->env.temp_c;
+    v->x2004_03 = m->env.supply_v;
+    if (m->env.temp_c > m->tmax) {
+        m->tmax = m->env.temp_c;
         changed = true;
     }
-    if (m->temp_c < m->tmin) {
-        m->tmin = m->temp_c;
+    if (m->env.temp_c < m->tmin) {
+        m->tmin = m->env.temp_c;
         changed = true;
     }
-    if (m->supply_v > m->vmax) {
-        m->vmax = m->supply_v;
+    if (m->env.supply_v > m->vmax) {
+        m->vmax = m->env.supply_v;
         changed = true;
     }
-    if (m->supply_v < m->vmin) {
-        m->vmin = m->supply_v;
+    if (m->env.supply_v < m->vmin) {
+        m->vmin = m->env.supply_v;
         changed = true;
     }
     v->x2004_05 = m->tmax;
@@ -403,13 +408,22 @@ static void publish(device_t *dev)
 
 /* ---- class hooks --------------------------------------------------------------------------------------- */
 
+/* The environment at the first power-on (device_init). */
+static void bk_init(device_t *dev)
+{
+    bk_model_t *m = model_of(dev);
+    m->env.temp_c = TEMP_NOMINAL;
+    m->env.supply_v = SUPPLY_NOMINAL;
+}
+
+/* A power-on: the running state starts afresh (flow 0, no faults, no injected errors, auto mode, bus
+ * configuration from the core); the environment stays as it was (decision 19). */
 static void bk_power_on(device_t *dev, co_time_us_t now)
 {
     bk_model_t *m = model_of(dev);
-    m->temp_c = TEMP_NOMINAL;
-    m->supply_v = SUPPLY_NOMINAL;
-    m->tmax = m->tmin = TEMP_NOMINAL;
-    m->vmax = m->vmin = SUPPLY_NOMINAL;
+    device_clear_running_state(dev, offsetof(bk_model_t, env), sizeof(bk_env_t));
+    m->tmax = m->tmin = m->env.temp_c; /* drag indicators without a stored blob: the present values */
+    m->vmax = m->vmin = m->env.supply_v;
     m->mode = MODE_AUTO;
     m->last_now = now;
     m->next_save = now + SAVE_PERIOD_US;
@@ -632,8 +646,8 @@ static void print_status(device_t *dev)
                   (double)target_flow(dev), (double)m->q, (double)v->x2500_01, m->sensor_fault ? ", SENSOR FAULT" : "",
                   m->valve_fault ? ", VALVE FAULT" : "");
     device_printf(dev, "status 0x%02X: %s, mode %s; temperature %u C (min %u, max %u); supply %g V (min %g, max %g)",
-                  m->status, state_names[m->status & 0x0FU], mode_names[(m->status >> 4) & 0x03U], m->temp_c,
-                  m->tmin, m->tmax, (double)m->supply_v, (double)m->vmin, (double)m->vmax);
+                  m->status, state_names[m->status & 0x0FU], mode_names[(m->status >> 4) & 0x03U], m->env.temp_c,
+                  m->tmin, m->tmax, (double)m->env.supply_v, (double)m->vmin, (double)m->vmax);
     device_printf(dev, "operating time %lu s; bit rate index %u (configured %u); address %u (active %u)",
                   (unsigned long)(m->op_us / 1000000U), m->baud_active, m->baud_cfg, dev->node.lss.pending_node_id,
                   co_node_id(&dev->node));
@@ -741,7 +755,7 @@ static device_cmd_result_t bk_command(device_t *dev, int argc, const char *const
             device_printf(dev, "error: supply voltage 0..60 V");
             return DEVICE_CMD_ERROR;
         }
-        m->supply_v = f;
+        m->env.supply_v = f;
         measure(dev);
         evaluate(dev);
         device_printf(dev, "supply %g V, status 0x%02X", (double)f, m->status);
@@ -753,10 +767,10 @@ static device_cmd_result_t bk_command(device_t *dev, int argc, const char *const
             device_printf(dev, "error: temperature 0..150 (degrees C, whole numbers: 0x2004:02 is UNSIGNED16)");
             return DEVICE_CMD_ERROR;
         }
-        m->temp_c = (uint16_t)t;
+        m->env.temp_c = (uint16_t)t;
         measure(dev);
         evaluate(dev);
-        device_printf(dev, "temperature %u C, status 0x%02X", m->temp_c, m->status);
+        device_printf(dev, "temperature %u C, status 0x%02X", m->env.temp_c, m->status);
         return DEVICE_CMD_OK;
     }
     if (strcmp(cmd, "error") == 0) {
@@ -805,6 +819,7 @@ const device_class_t buerkert_class = {
         "  clear-error CODE          clear an error raised with 'error'\n"
         "  mode auto|hand|flashing   NAMUR mode bits; hand: bus set-points refused (0x08000021), 'setpoint' acts\n"
         "  status                    set-point, flow, faults, NAMUR status, temperature, supply, operating time",
+    .init = bk_init,
     .power_on = bk_power_on,
     .on_write = bk_on_write,
     .on_read = bk_on_read,

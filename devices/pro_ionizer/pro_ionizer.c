@@ -10,11 +10,17 @@
  * pollution follow; inputs (loads, temperature, supply, sensors) come from control commands; errors and
  * warnings come from a fixed table and go out as Eltex EMCY frames; operating/discharging time is counted
  * and kept in the port's CO_NVM_DEVICE area. Portable C99: no allocation, no clock, no OS.
+ *
+ * What the Eltex devices share (0x2002:06/07 as the LSS configuration, 0x1017, errors and warnings through
+ * 0x2003, the 0x2002:01 TPDO grid, the 0x2000 counters in CO_NVM_DEVICE) is in devices/eltex/eltex.c
+ * (rules E1..., docs/devices/eltex.md).
  */
 #include "pro_ionizer.h"
 
+#include <stddef.h>
 #include <string.h>
 
+#include "../eltex/eltex.h"
 #include "pro_ionizer_od.h"
 
 /* ---- Simulation constants (documented in pro-ionizer-behaviour.md, "Simulation model") ---------------- */
@@ -36,12 +42,10 @@
 #define SUPPLY_ERR_LOW_MV 19200U
 #define SUPPLY_ERR_HIGH_MV 28800U
 #define MINUTE_US 60000000ULL
-#define ENV_MAGIC 0x50494E56UL    /* "PINV": the environment block holds valid inputs */
-#define NVM_LEN 24U
-#define NONE8 0xFFU               /* "no value" in the persistent record (bit timing) */
 
-#define T_ERR 0x01U               /* Eltex EMCY type byte: error */
-#define T_WARN 0x05U              /* ... warning */
+#define T_ERR ELTEX_ERROR
+#define T_WARN ELTEX_WARNING
+#define F_HVOFF ELTEX_HV_OFF      /* switches the high voltage off and deletes the software release */
 
 /* ---- Variants: feature groups of docs/devices/pro-ionizer.md, "Device variants" -------------------------- */
 enum {
@@ -66,19 +70,8 @@ static const uint8_t variant_groups[] = {
 };
 
 /* ---- Errors and warnings (the emulator's own table: the operating manual with the real list is not available) */
-enum { F_HVOFF = 0x01U };
 
-typedef struct pi_item {
-    uint8_t type;      /* T_ERR / T_WARN */
-    uint8_t code;      /* Eltex code: EMCY byte 4, the value written to 0x2003:01/02 */
-    uint16_t cia;      /* CiA 301 emergency error code */
-    uint8_t reg;       /* error register bits (the core adds bit 0) */
-    uint8_t flags;     /* F_HVOFF: switches the high voltage off and deletes the software release */
-    uint8_t group;     /* feature group the item needs (0: every variant) */
-    const char *text;
-} pi_item_t;
-
-static const pi_item_t items[] = {
+static const eltex_fault_t items[] = {
     {T_ERR, 1U, 0x5000U, 0x01U, F_HVOFF, 0U, "HV generator fault"},
     {T_ERR, 2U, 0x3120U, 0x04U, F_HVOFF, 0U, "supply voltage too low (< 19.2 V)"},
     {T_ERR, 3U, 0x3110U, 0x04U, F_HVOFF, 0U, "supply voltage too high (> 28.8 V)"},
@@ -118,13 +111,13 @@ static const pi_item_t items[] = {
     {T_WARN, 51U, 0x9000U, 0x80U, 0U, G_EXTBOX, "sensor extension box: sensor warning"},
 };
 #define N_ITEMS (sizeof items / sizeof items[0])
+typedef char pi_items_fit[N_ITEMS <= ELTEX_FAULTS_MAX ? 1 : -1]; /* one bit each in eltex_t.active */
 
 /* ---- Model state ----------------------------------------------------------------------------------------- */
 
-/* Inputs from the device's surroundings (set by control commands). Kept across a power cycle when the
- * framework keeps the model memory; re-initialised when it finds the block zeroed (magic missing). */
+/* Inputs from the device's surroundings (set by control commands): the outside world, kept across a power
+ * cycle and NMT resets; the defaults (B15) are set once by pi_init. */
 typedef struct pi_env {
-    uint32_t magic;
     uint16_t load_mw[4];    /* power each connection draws at Umax; 0 = nothing connected */
     bool shorted[4];
     int16_t temp_c;
@@ -137,25 +130,9 @@ typedef struct pi_env {
     uint8_t box[12];        /* sensor extension box: D1..D10, A1, A2, states 0..3 */
 } pi_env_t;
 
-/* The persistent record (CO_NVM_DEVICE): counters and the node-ID / bit-timing bookkeeping. */
-typedef struct pi_rec {
-    uint32_t op_s;          /* operating time, s */
-    uint32_t dis_s;         /* discharging time (HV on), s */
-    uint8_t p_seen;         /* stored 0x2002:06 seen at the last reset application (0 = none) */
-    uint8_t l_seen;         /* LSS-stored node-ID seen then (0 = none) */
-    uint8_t id_cfg;         /* node-ID of the stored configuration (0 = none: the runner's) */
-    uint8_t p7_seen;        /* same for the bit timing (NONE8 = none) */
-    uint8_t l7_seen;
-    uint8_t bt_cfg;
-} pi_rec_t;
-
 typedef struct pi_model {
+    eltex_t eltex;          /* shared Eltex state (counters, errors, TPDO grid, node-ID): first member */
     pi_env_t env;
-    pi_rec_t rec;
-    uint64_t op_us;
-    uint64_t dis_us;
-    uint64_t saved_min;     /* operating minute of the last NVM write */
-    co_time_us_t last_t;    /* counters advanced up to here */
     co_time_us_t next_tick;
     int32_t v_mv;           /* actual output voltage */
     bool limited;           /* voltage limiter active (0x2001:05 bit 8) */
@@ -169,16 +146,9 @@ typedef struct pi_model {
     co_time_us_t ref_next;
     uint8_t pollution[4];
     bool pol_warn[4];
-    bool active[N_ITEMS];
-    bool injected[N_ITEMS];
-    co_time_us_t tpdo_next;
-    bool can_off;           /* bit timing 9: the node is kept unconfigured (silent but for LSS) */
-    uint8_t bt_active;
-    uint8_t lss_bt_seen;
-    uint8_t id_active;
-    bool powered;           /* false until the first reset application after power-on */
-    bool nvm_error_logged;
 } pi_model_t;
+/* devices/eltex finds its state at dev->model: eltex_t must be the first member. */
+typedef char pi_model_eltex_first[offsetof(pi_model_t, eltex) == 0U ? 1 : -1];
 
 static pi_model_t *M(device_t *dev) { return (pi_model_t *)dev->model; }
 static pro_ionizer_od_values_t *V(device_t *dev) { return (pro_ionizer_od_values_t *)dev->values; }
@@ -190,63 +160,9 @@ static const uint16_t bit_rates[CO_LSS_BIT_TIMING_COUNT] = {1000U, 800U, 500U, 2
 
 /* ---- Small helpers --------------------------------------------------------------------------------------- */
 
-static uint32_t crc32(uint32_t crc, const uint8_t *data, size_t len)
-{
-    crc = ~crc;
-    for (size_t i = 0U; i < len; i++) {
-        crc ^= data[i];
-        for (uint8_t b = 0U; b < 8U; b++) {
-            crc = (crc >> 1) ^ (0xEDB88320UL & (0U - (crc & 1U)));
-        }
-    }
-    return ~crc;
-}
-
-static uint32_t get_le32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
-}
-
-static void put_le32(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)v;
-    p[1] = (uint8_t)(v >> 8);
-    p[2] = (uint8_t)(v >> 16);
-    p[3] = (uint8_t)(v >> 24);
-}
-
-static uint32_t isqrt64(uint64_t v)
-{
-    uint64_t r = 0U;
-    uint64_t bit = (uint64_t)1U << 62;
-    while (bit > v) {
-        bit >>= 2;
-    }
-    while (bit != 0U) {
-        if (v >= r + bit) {
-            v -= r + bit;
-            r = (r >> 1) + bit;
-        } else {
-            r >>= 1;
-        }
-        bit >>= 2;
-    }
-    return (uint32_t)r;
-}
-
 static uint16_t clamp_u16(uint64_t v) { return v > 0xFFFFU ? (uint16_t)0xFFFFU : (uint16_t)v; }
 static int16_t clamp_i16(int32_t v) { return v > 32767 ? (int16_t)32767 : (v < -32768 ? (int16_t)-32768 : (int16_t)v); }
 static co_time_us_t min_t(co_time_us_t a, co_time_us_t b) { return a < b ? a : b; }
-
-static int item_index(uint8_t type, uint8_t code)
-{
-    for (size_t i = 0U; i < N_ITEMS; i++) {
-        if (items[i].type == type && items[i].code == code) {
-            return (int)i;
-        }
-    }
-    return -1;
-}
 
 static const char *type_name(uint8_t type) { return type == T_ERR ? "error" : "warning"; }
 
@@ -348,147 +264,10 @@ static bool hidden(const device_t *dev, const co_od_entry_t *e)
     return g != 0U && !has(dev, g);
 }
 
-/* ---- Persistent record (CO_NVM_DEVICE) --------------------------------------------------------------------
- * 24 bytes, little-endian: "PIC1" | op_s u32 | dis_s u32 | p_seen l_seen id_cfg p7_seen l7_seen bt_cfg | 0 0 |
- * CRC-32 (IEEE) of bytes 0..19. */
+/* ---- Counters (0x2000, in CO_NVM_DEVICE: devices/eltex) ------------------------------------------------------- */
 
-static void rec_defaults(pi_rec_t *r)
-{
-    memset(r, 0, sizeof *r);
-    r->p7_seen = NONE8;
-    r->l7_seen = NONE8;
-    r->bt_cfg = NONE8;
-}
-
-static void nvm_load(device_t *dev)
-{
-    pi_model_t *m = M(dev);
-    const co_port_t *port = dev->cfg.port;
-    uint8_t b[NVM_LEN];
-    rec_defaults(&m->rec);
-    if (port == NULL || port->nvm_read == NULL ||
-        port->nvm_read(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b) != CO_OK) {
-        return;
-    }
-    if (memcmp(b, "PIC1", 4U) != 0 || get_le32(&b[20]) != crc32(0U, b, 20U)) {
-        device_printf(dev, "pro-ionizer: counter memory damaged; counters start at 0");
-        return;
-    }
-    m->rec.op_s = get_le32(&b[4]);
-    m->rec.dis_s = get_le32(&b[8]);
-    m->rec.p_seen = b[12];
-    m->rec.l_seen = b[13];
-    m->rec.id_cfg = b[14];
-    m->rec.p7_seen = b[15];
-    m->rec.l7_seen = b[16];
-    m->rec.bt_cfg = b[17];
-}
-
-static void nvm_save(device_t *dev)
-{
-    pi_model_t *m = M(dev);
-    const co_port_t *port = dev->cfg.port;
-    uint8_t b[NVM_LEN];
-    m->rec.op_s = (uint32_t)(m->op_us / 1000000U);
-    m->rec.dis_s = (uint32_t)(m->dis_us / 1000000U);
-    m->saved_min = m->op_us / MINUTE_US;
-    if (port == NULL || port->nvm_write == NULL || port->nvm_commit == NULL) {
-        return;
-    }
-    memcpy(b, "PIC1", 4U);
-    put_le32(&b[4], m->rec.op_s);
-    put_le32(&b[8], m->rec.dis_s);
-    b[12] = m->rec.p_seen;
-    b[13] = m->rec.l_seen;
-    b[14] = m->rec.id_cfg;
-    b[15] = m->rec.p7_seen;
-    b[16] = m->rec.l7_seen;
-    b[17] = m->rec.bt_cfg;
-    b[18] = 0U;
-    b[19] = 0U;
-    put_le32(&b[20], crc32(0U, b, 20U));
-    if ((port->nvm_write(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b) != CO_OK ||
-         port->nvm_commit(dev->cfg.port_ctx, CO_NVM_DEVICE, NVM_LEN) != CO_OK) &&
-        !m->nvm_error_logged) {
-        m->nvm_error_logged = true;
-        device_printf(dev, "pro-ionizer: counters could not be stored (NVM error)");
-    }
-}
-
-/* A value of the core's stored parameter blob (area CO_NVM_PARAMS, format in src/co_store.c: "COS1" |
- * signature | payload length | CRC | records index u16, sub u8, len u8, value). Only called when the core
- * reported CO_NVM_LOADED (header and CRC valid). See the report: a core API would be cleaner. */
-static bool stored_u8(device_t *dev, uint16_t index, uint8_t sub, uint8_t *out)
-{
-    const co_port_t *port = dev->cfg.port;
-    uint8_t h[16];
-    if (dev->node.nvm_status != CO_NVM_LOADED || port->nvm_read == NULL ||
-        port->nvm_read(dev->cfg.port_ctx, CO_NVM_PARAMS, 0U, h, sizeof h) != CO_OK || memcmp(h, "COS1", 4U) != 0) {
-        return false;
-    }
-    const uint32_t end = get_le32(&h[8]);
-    for (uint32_t pos = 0U; pos + 4U <= end;) {
-        uint8_t r[5];
-        if (port->nvm_read(dev->cfg.port_ctx, CO_NVM_PARAMS, 16U + pos, r, 4U) != CO_OK) {
-            return false;
-        }
-        const uint16_t ri = (uint16_t)(r[0] | (uint16_t)(r[1] << 8));
-        if (ri == index && r[2] == sub && r[3] == 1U) {
-            if (port->nvm_read(dev->cfg.port_ctx, CO_NVM_PARAMS, 16U + pos + 4U, &r[4], 1U) != CO_OK) {
-                return false;
-            }
-            *out = r[4];
-            return true;
-        }
-        pos += 4U + r[3];
-    }
-    return false;
-}
-
-/* The core's LSS blob (area CO_NVM_LSS: "COL1" | node-ID | bit timing | 0 0 | CRC-32 of bytes 0..7). */
-static void stored_lss(device_t *dev, uint8_t *id, uint8_t *bt)
-{
-    const co_port_t *port = dev->cfg.port;
-    uint8_t b[12];
-    *id = 0U;
-    *bt = NONE8;
-    if (port->nvm_read == NULL || port->nvm_read(dev->cfg.port_ctx, CO_NVM_LSS, 0U, b, sizeof b) != CO_OK ||
-        memcmp(b, "COL1", 4U) != 0 || get_le32(&b[8]) != crc32(0U, b, 8U)) {
-        return;
-    }
-    *id = b[4];
-    *bt = b[5];
-}
-
-/* ---- Counters ---------------------------------------------------------------------------------------------- */
-
-static void advance(device_t *dev, co_time_us_t now)
-{
-    pi_model_t *m = M(dev);
-    if (now <= m->last_t) {
-        return;
-    }
-    const co_time_us_t dt = now - m->last_t;
-    m->op_us += dt;
-    if (m->hv_on) {
-        m->dis_us += dt;
-    }
-    m->last_t = now;
-    if (m->op_us / MINUTE_US != m->saved_min) {
-        nvm_save(dev); /* once per emulated minute of operating time */
-    }
-}
-
-static void split_time(uint64_t us, uint8_t *years, uint16_t *days, uint8_t *hours, uint8_t *minutes)
-{
-    const uint64_t min = us / MINUTE_US;
-    const uint64_t y = min / 525600U; /* 365-day years */
-    const uint64_t rest = min % 525600U;
-    *years = y > 255U ? (uint8_t)255U : (uint8_t)y;
-    *days = (uint16_t)(rest / 1440U);
-    *hours = (uint8_t)((rest % 1440U) / 60U);
-    *minutes = (uint8_t)(rest % 60U);
-}
+/* The time up to now counts with the HV state it had. */
+static void advance(device_t *dev, co_time_us_t now) { eltex_count(dev, now, M(dev)->hv_on); }
 
 /* ---- The electrical model ------------------------------------------------------------------------------- */
 
@@ -523,7 +302,7 @@ static uint32_t target_mv(device_t *dev, bool *limited)
     /* demand at t: sum x (t / Umax)^2 */
     const uint64_t p = pset_mw(dev);
     if (sum > 0U && sum * t * t > p * UMAX_MV * UMAX_MV) {
-        const uint64_t lim = isqrt64(p * UMAX_MV * UMAX_MV / sum);
+        const uint64_t lim = eltex_isqrt(p * UMAX_MV * UMAX_MV / sum);
         if (lim < t) {
             t = lim;
             *limited = true;
@@ -597,15 +376,6 @@ static void tick(device_t *dev)
 
 /* ---- Errors and warnings ---------------------------------------------------------------------------------- */
 
-static void msef_of(const pi_item_t *it, uint8_t msef[5])
-{
-    msef[0] = it->type;
-    msef[1] = it->code;
-    msef[2] = 0U;
-    msef[3] = 0U;
-    msef[4] = 0U;
-}
-
 static void drop_release(device_t *dev, const char *why)
 {
     pi_model_t *m = M(dev);
@@ -615,48 +385,6 @@ static void drop_release(device_t *dev, const char *why)
     m->sw_rel = false;
     m->bus_owned = false;
     m->ref_request = false;
-}
-
-static void raise_item(device_t *dev, size_t i)
-{
-    pi_model_t *m = M(dev);
-    uint8_t msef[5];
-    if (m->active[i]) {
-        return;
-    }
-    m->active[i] = true;
-    msef_of(&items[i], msef);
-    if (!co_emcy_raise(&dev->node, items[i].cia, items[i].reg, msef)) {
-        device_printf(dev, "pro-ionizer: %s %u not reported by EMCY (active list full)", type_name(items[i].type),
-                      items[i].code);
-    }
-    device_printf(dev, "pro-ionizer: %s %u raised: %s", type_name(items[i].type), items[i].code, items[i].text);
-    if ((items[i].flags & F_HVOFF) != 0U) {
-        drop_release(dev, "error");
-        m->hv_on = false;
-        m->ref_active = false;
-    }
-}
-
-static void clear_item_now(device_t *dev, size_t i)
-{
-    pi_model_t *m = M(dev);
-    uint8_t msef[5];
-    m->active[i] = false;
-    m->injected[i] = false;
-    msef_of(&items[i], msef);
-    (void)co_emcy_clear(&dev->node, items[i].cia, msef);
-    device_printf(dev, "pro-ionizer: %s %u cleared", type_name(items[i].type), items[i].code);
-}
-
-static bool any_active(device_t *dev, uint8_t type, uint8_t flags)
-{
-    for (size_t i = 0U; i < N_ITEMS; i++) {
-        if (M(dev)->active[i] && items[i].type == type && (items[i].flags & flags) == flags) {
-            return true;
-        }
-    }
-    return false;
 }
 
 /* E-field sensor s reading after the zero-point correction (0x6401:05/07), and its magnitude. */
@@ -672,12 +400,13 @@ static int32_t efield_abs(device_t *dev, unsigned s)
     return x < 0 ? -x : x;
 }
 
-/* Whether the cause of an item is present now (inputs, parameters, state). */
-static bool cause(device_t *dev, size_t i)
+/* Whether the cause of an item is present now (inputs, parameters, state): raises it, and is the "internal
+ * check" that refuses its deletion. */
+static bool cause(device_t *dev, unsigned i)
 {
     pi_model_t *m = M(dev);
     const pro_ionizer_od_values_t *v = V(dev);
-    const pi_item_t *it = &items[i];
+    const eltex_fault_t *it = &items[i];
     const uint8_t mode = sensor_mode(dev);
     if (it->group != 0U && !has(dev, it->group)) {
         return false;
@@ -752,35 +481,36 @@ static bool cause(device_t *dev, size_t i)
     return false;
 }
 
-static void update_items(device_t *dev)
+static bool cause_pred(device_t *dev, unsigned i, const void *ctx)
+{
+    (void)ctx;
+    return cause(dev, i);
+}
+
+static bool item_available(const device_t *dev, unsigned i) { return items[i].group == 0U || has(dev, items[i].group); }
+
+/* An item was raised or deleted (devices/eltex): an HV-off error switches the HV off and deletes the
+ * software release (B6); the status follows at the next publish. */
+static void item_changed(device_t *dev, unsigned i, bool raised)
 {
     pi_model_t *m = M(dev);
-    for (size_t i = 0U; i < N_ITEMS; i++) {
-        const bool c = cause(dev, i);
-        if (c && !m->active[i]) {
-            raise_item(dev, i);
-        } else if (!c && m->active[i] && items[i].type == T_WARN && !m->injected[i]) {
-            clear_item_now(dev, i); /* warnings go when their cause goes; errors are latched */
-        }
+    if (raised && (items[i].flags & F_HVOFF) != 0U) {
+        drop_release(dev, "error");
+        m->hv_on = false;
+        m->ref_active = false;
     }
 }
 
-/* The clear request of 0x2003:01/02 and of the clear-error/clear-warning commands ("internal check"). */
-static uint32_t clear_request(device_t *dev, uint8_t type, uint8_t code)
-{
-    const int i = item_index(type, code);
-    if (i < 0) {
-        return CO_ABORT_INVALID_VALUE;
-    }
-    if (!M(dev)->active[i]) {
-        return CO_ABORT_NO_DATA;
-    }
-    if (cause(dev, (size_t)i)) {
-        return CO_ABORT_DEVICE_STATE;
-    }
-    clear_item_now(dev, (size_t)i);
-    return 0U;
-}
+static const eltex_class_t pi_eltex = {
+    .faults = items,
+    .n_faults = (uint8_t)N_ITEMS,
+    .cause = cause,
+    .available = item_available,
+    .changed = item_changed,
+    .nvm_magic = {'P', 'I', 'C', '2'},
+    .hv_counter_sub = 0x09U,
+    .bit_timing_9_off = true, /* "9 - CANopen Communication deactivated" (B11) */
+};
 
 /* ---- HV release --------------------------------------------------------------------------------------------- */
 
@@ -817,7 +547,7 @@ static uint8_t conn_status(device_t *dev, unsigned n)
     if (!has(dev, G_MONITOR)) {
         return 0U;
     }
-    if (m->active[item_index(T_ERR, (uint8_t)(11U + n))]) {
+    if (eltex_fault_active(dev, (unsigned)eltex_fault_find(dev, T_ERR, (uint8_t)(11U + n)))) {
         return 4U;
     }
     if (m->env.load_mw[n] == 0U && !m->env.shorted[n]) {
@@ -842,10 +572,10 @@ static uint8_t status_byte(device_t *dev)
             s |= 0x10U;
         }
     }
-    if (any_active(dev, T_ERR, 0U)) {
+    if (eltex_any_active(dev, T_ERR, 0U)) {
         s |= 0x02U;
     }
-    if (any_active(dev, T_WARN, 0U)) {
+    if (eltex_any_active(dev, T_WARN, 0U)) {
         s |= 0x04U;
     }
     if (m->sw_rel) {
@@ -932,9 +662,6 @@ static void publish(device_t *dev)
     const uint64_t u_set = (uint64_t)v->x2002_08 * v->x2002_0b / 100U;
     v->x2002_09 = u_set > 0U ? clamp_u16((uint64_t)pset_mw(dev) * 1000U / u_set) : 0U;
     v->x2002_0a = (uint16_t)(pset_mw(dev) / 100U);
-
-    split_time(m->op_us, &v->x2000_01, &v->x2000_02, &v->x2000_03, &v->x2000_04);
-    split_time(m->dis_us, &v->x2000_09, &v->x2000_0a, &v->x2000_0b, &v->x2000_0c);
 }
 
 /* Pollution monitoring switched off or nothing connected: no pollution. Otherwise the warning compares the
@@ -962,7 +689,7 @@ static void evaluate(device_t *dev, co_time_us_t now)
         drop_release(dev, "release timeout 0x2002:04");
     }
     for (int pass = 0; pass < 2; pass++) {
-        const bool on = release_conditions(dev) && !any_active(dev, T_ERR, F_HVOFF);
+        const bool on = release_conditions(dev) && !eltex_any_active(dev, T_ERR, F_HVOFF);
         if (on && !m->hv_on) {
             device_printf(dev, "pro-ionizer: high voltage on");
             if (V(dev)->x2002_2d != 6U && V(dev)->x2002_2d != 1U) {
@@ -998,167 +725,61 @@ static void evaluate(device_t *dev, co_time_us_t now)
             }
         }
         update_pollution_warnings(dev);
-        update_items(dev); /* may switch the HV off (second pass settles the state) */
-    }
-}
-
-static co_time_us_t tpdo_period_us(device_t *dev)
-{
-    const uint16_t ms = V(dev)->x2002_01;
-    return (co_time_us_t)(ms < 100U ? 100U : ms) * 1000U;
-}
-
-/* ---- Node-ID and bit timing (decisions B9-B11) -------------------------------------------------------------- */
-
-static void apply_node_config(device_t *dev)
-{
-    pi_model_t *m = M(dev);
-    co_node_t *node = &dev->node;
-    pro_ionizer_od_values_t *v = V(dev);
-    const pi_rec_t before = m->rec;
-    uint8_t p = 0U;
-    uint8_t p7 = NONE8;
-    uint8_t l;
-    uint8_t l7;
-    if (!stored_u8(dev, 0x2002U, 0x06U, &p) || p < 1U || p > 127U) {
-        p = 0U;
-    }
-    if (!stored_u8(dev, 0x2002U, 0x07U, &p7) || p7 >= CO_LSS_BIT_TIMING_COUNT) {
-        p7 = NONE8;
-    }
-    stored_lss(dev, &l, &l7);
-    /* the stored configuration: the newest of a saved 0x2002:06 and an LSS store wins */
-    if (p != 0U && p != m->rec.p_seen) {
-        m->rec.id_cfg = p;
-    } else if (l != 0U && l != m->rec.l_seen) {
-        m->rec.id_cfg = l;
-    }
-    if (p7 != NONE8 && p7 != m->rec.p7_seen) {
-        m->rec.bt_cfg = p7;
-    } else if (l7 != NONE8 && l7 != m->rec.l7_seen) {
-        m->rec.bt_cfg = l7;
-    }
-    m->rec.p_seen = p;
-    m->rec.l_seen = l;
-    m->rec.p7_seen = p7;
-    m->rec.l7_seen = l7;
-    /* an LSS-configured node-ID not yet active (NMT 0x81 after LSS configure) takes precedence, as CiA 305 says */
-    const uint8_t pend = node->lss.pending_node_id;
-    uint8_t id = node->node_id;
-    if (pend != node->node_id) {
-        id = pend;
-    } else if (m->rec.id_cfg != 0U) {
-        id = m->rec.id_cfg;
-    }
-    const uint8_t bt = m->rec.bt_cfg != NONE8 ? m->rec.bt_cfg : node->lss.active_bit_timing;
-    const uint8_t bt_before = m->powered ? m->bt_active : node->lss.active_bit_timing;
-    if (bt == 9U) {
-        if (!m->can_off) {
-            device_printf(dev, "pro-ionizer: bit timing 9: CANopen communication deactivated (only LSS answers; "
-                               "'bit-timing N' and 'power-cycle' bring it back)");
-        }
-        m->can_off = true;
-        (void)co_lss_set_pending_node_id(node, CO_NODE_ID_UNCONFIGURED);
-    } else {
-        m->can_off = false;
-        if (id != CO_NODE_ID_UNCONFIGURED && !co_lss_set_pending_node_id(node, id)) {
-            id = node->node_id;
-        }
-        if (bt != bt_before && bt < CO_LSS_BIT_TIMING_COUNT && bit_rates[bt] != 0U &&
-            dev->cfg.port->set_bit_rate != NULL) {
-            (void)dev->cfg.port->set_bit_rate(dev->cfg.port_ctx, bit_rates[bt]);
-        }
-    }
-    m->bt_active = bt;
-    m->lss_bt_seen = node->lss.active_bit_timing;
-    if (id >= 1U && id <= 127U) {
-        v->x2002_06 = id; /* 0x2002:06 shows the node-ID in effect after the reset */
-        m->id_active = id;
-    }
-    v->x2002_07 = bt;
-    if (memcmp(&before, &m->rec, sizeof before) != 0) {
-        nvm_save(dev);
+        eltex_faults_raise_where(dev, cause_pred, NULL); /* may switch the HV off (second pass settles it) */
     }
 }
 
 /* ---- Hooks ------------------------------------------------------------------------------------------------- */
 
+/* The environment at the first power-on (B15). */
+static void pi_init(device_t *dev)
+{
+    pi_env_t *env = &M(dev)->env;
+    env->load_mw[0] = 1500U; /* one ionizing bar at connection 1 */
+    env->temp_c = 35;
+    env->supply_mv = 24000U;
+    for (unsigned s = 0U; s < 12U; s++) {
+        env->box[s] = 1U;
+    }
+}
+
+/* A power-on: the running state starts afresh (no release, HV off, no active items, voltage 0, the
+ * measurement grid from now); the environment stays as it was. */
 static void power_on(device_t *dev, co_time_us_t now)
 {
     pi_model_t *m = M(dev);
-    const pi_env_t env = m->env;
-    memset(m, 0, sizeof *m);
-    if (env.magic == ENV_MAGIC) {
-        m->env = env;
-    } else {
-        m->env.magic = ENV_MAGIC;
-        m->env.load_mw[0] = 1500U; /* one ionizing bar at connection 1 (decision B15) */
-        m->env.temp_c = 35;
-        m->env.supply_mv = 24000U;
-        for (unsigned s = 0U; s < 12U; s++) {
-            m->env.box[s] = 1U;
-        }
-    }
-    nvm_load(dev);
-    m->op_us = (uint64_t)m->rec.op_s * 1000000U;
-    m->dis_us = (uint64_t)m->rec.dis_s * 1000000U;
-    m->saved_min = m->op_us / MINUTE_US;
-    m->last_t = now;
+    device_clear_running_state(dev, offsetof(pi_model_t, env), sizeof(pi_env_t));
     m->next_tick = now + TICK_US;
-    m->tpdo_next = CO_NEVER;
-    m->bt_active = NONE8;
+    eltex_power_on(dev, &pi_eltex, now);
 }
 
 static void on_reset(device_t *dev, co_reset_t what)
 {
     pi_model_t *m = M(dev);
-    co_node_t *node = &dev->node;
-    if (what == CO_RESET_APPLICATION) {
-        advance(dev, dev->now); /* the time up to the reset counts with the state it had */
-        apply_node_config(dev);
-        m->powered = true;
-        /* the device application restarts: release off (autostart sets it), errors re-evaluated */
-        m->sw_rel = (V(dev)->x2002_02 & 0x01U) != 0U;
-        if (m->sw_rel) {
-            device_printf(dev, "pro-ionizer: autostart: software release set");
-        }
-        m->bus_owned = false;
-        m->hv_on = false;
-        m->ref_active = false;
-        m->ref_request = false;
-        memset(m->active, 0, sizeof m->active);
-        memset(m->injected, 0, sizeof m->injected);
-        memset(m->pollution, 0, sizeof m->pollution);
-        memset(m->pol_warn, 0, sizeof m->pol_warn);
-        publish(dev);
+    if (what == CO_RESET_COMMUNICATION) {
+        eltex_on_reset(dev, what); /* node-ID / bit timing view, active items reported again (E1-E4, E11) */
         return;
     }
-    /* communication reset: the node-ID may have changed by LSS; the core forgot the active errors */
-    if (node->node_id != CO_NODE_ID_UNCONFIGURED) {
-        if (m->can_off) {
-            m->can_off = false; /* an LSS master gave the silent node a node-ID */
-            m->bt_active = node->lss.active_bit_timing;
-            V(dev)->x2002_07 = m->bt_active;
-        }
-        if (node->node_id != m->id_active) {
-            m->id_active = node->node_id;
-            V(dev)->x2002_06 = node->node_id;
-        }
+    advance(dev, dev->now); /* the time up to the reset counts with the state it had */
+    /* the device application restarts (B12): release off (autostart sets it), HV off, pollution 0 */
+    m->sw_rel = (V(dev)->x2002_02 & 0x01U) != 0U;
+    if (m->sw_rel) {
+        device_printf(dev, "pro-ionizer: autostart: software release set");
     }
-    for (size_t i = 0U; i < N_ITEMS; i++) {
-        if (m->active[i]) {
-            uint8_t msef[5];
-            msef_of(&items[i], msef);
-            (void)co_emcy_raise(node, items[i].cia, items[i].reg, msef);
-        }
-    }
+    m->bus_owned = false;
+    m->hv_on = false;
+    m->ref_active = false;
+    m->ref_request = false;
+    memset(m->pollution, 0, sizeof m->pollution);
+    memset(m->pol_warn, 0, sizeof m->pol_warn);
+    eltex_on_reset(dev, what); /* items whose cause is gone are forgotten (E10) */
+    publish(dev);
 }
 
 static void on_nmt_change(device_t *dev, co_nmt_state_t from, co_nmt_state_t to)
 {
-    pi_model_t *m = M(dev);
     (void)from;
-    m->tpdo_next = to == CO_NMT_OPERATIONAL ? dev->now + tpdo_period_us(dev) : CO_NEVER;
+    eltex_on_nmt_change(dev, to); /* E12 */
 }
 
 /* 0x6200:01 from SDO, RPDO or the set command. */
@@ -1238,35 +859,27 @@ static void efield_type_defaults(device_t *dev, unsigned s, uint8_t type)
 
 static uint32_t on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len, co_od_origin_t origin)
 {
-    (void)origin;
     if (hidden(dev, e)) {
         return CO_ABORT_NO_SUBINDEX;
     }
-    if (e->index == 0x1017U && len == 2U) {
-        const uint16_t ms = (uint16_t)(data[0] | (uint16_t)(data[1] << 8));
-        if (ms == 0U) {
-            return 0U;
-        }
-        if (ms < 100U) {
-            return CO_ABORT_VALUE_LOW;
-        }
-        if (ms > 60000U) {
-            return CO_ABORT_VALUE_HIGH;
-        }
-        return (ms % 100U) != 0U ? CO_ABORT_INVALID_VALUE : 0U;
+    if (e->index == 0x2003U) {
+        advance(dev, dev->now);
+    }
+    const uint32_t r = eltex_on_write(dev, e, data, len, origin); /* 0x1017, 0x2002:01/07, 0x2003, E6 */
+    if (r != 0U) {
+        return r;
+    }
+    if (e->index == 0x2003U) {
+        publish(dev); /* a deleted item: status at once */
+        return 0U;
     }
     if (e->index == 0x6200U && e->sub == 0x01U) {
         return write_release(dev, data[0]);
-    }
-    if (e->index == 0x2003U && (e->sub == 0x01U || e->sub == 0x02U)) {
-        return clear_request(dev, e->sub == 0x01U ? T_ERR : T_WARN, data[0]);
     }
     if (e->index != 0x2002U) {
         return 0U;
     }
     switch (e->sub) {
-    case 0x07:
-        return data[0] == 5U ? CO_ABORT_INVALID_VALUE : 0U; /* "5 - not supported" */
     case 0x2F: {
         static const uint8_t need[4] = {0U, G_SPEED, G_EFIELD, G_EXTBOX};
         return (data[0] <= 3U && has(dev, need[data[0]])) ? 0U : CO_ABORT_INVALID_VALUE;
@@ -1302,7 +915,6 @@ static uint32_t on_read(device_t *dev, const co_od_entry_t *e)
 static co_time_us_t step(device_t *dev, co_time_us_t now)
 {
     pi_model_t *m = M(dev);
-    co_node_t *node = &dev->node;
     advance(dev, now);
     if (m->next_tick <= now) {
         const co_time_us_t missed = (now - m->next_tick) / TICK_US + 1U;
@@ -1319,24 +931,9 @@ static co_time_us_t step(device_t *dev, co_time_us_t now)
         }
     }
     evaluate(dev, now);
-    if (node->lss.active_bit_timing != m->lss_bt_seen && !m->can_off) {
-        m->lss_bt_seen = node->lss.active_bit_timing; /* LSS activate bit timing */
-        m->bt_active = m->lss_bt_seen;
-        V(dev)->x2002_07 = m->bt_active;
-    }
     publish(dev);
 
-    co_time_us_t next = m->next_tick;
-    if (m->tpdo_next != CO_NEVER && node->nmt_state == CO_NMT_OPERATIONAL) {
-        if (now >= m->tpdo_next) {
-            for (uint8_t n = 0U; n < 3U && n < node->n_tpdo; n++) {
-                co_tpdo_trigger(node, n);
-            }
-            const co_time_us_t p = tpdo_period_us(dev);
-            m->tpdo_next += p * (1U + (now - m->tpdo_next) / p); /* on the grid; missed periods skipped */
-        }
-        next = min_t(next, m->tpdo_next);
-    }
+    co_time_us_t next = min_t(m->next_tick, eltex_tpdo_step(dev, now)); /* TPDO1-3 on the 0x2002:01 grid */
     const uint16_t timeout = release_timeout_ms(dev);
     if (m->sw_rel && m->bus_owned && timeout != 0U) {
         next = min_t(next, m->bus_t + (co_time_us_t)timeout * 1000U);
@@ -1386,7 +983,8 @@ static void print_status(device_t *dev)
     device_printf(dev, "variant %s; HV %s (release: software %s%s, hardware input %s, mode 0x2002:02 = 0x%02X)%s%s",
                   variants[dev->variant], m->hv_on ? "on" : "off", m->sw_rel ? "set" : "not set",
                   m->sw_rel && m->bus_owned ? " by CANopen" : "", m->env.hw_in ? "on" : "off", v->x2002_02,
-                  m->ref_active ? ", reference point running" : "", m->can_off ? ", CANopen deactivated" : "");
+                  m->ref_active ? ", reference point running" : "",
+                  co_node_id(&dev->node) == CO_NODE_ID_UNCONFIGURED ? ", CANopen deactivated (LSS only)" : "");
     device_printf(dev, "voltage %u V (target %u V%s), current %u uA, power %u.%u W, capacity %u %%", v->x6401_01,
                   (unsigned)((target + 500U) / 1000U), lim ? ", power-limited" : "", v->x6401_02,
                   (unsigned)(v->x6401_04 / 10U), (unsigned)(v->x6401_04 % 10U), v->x6000_02);
@@ -1396,50 +994,13 @@ static void print_status(device_t *dev)
                       conn_status(dev, n), m->pollution[n]);
     }
     device_printf(dev, "temperature %d C, supply %u mV, operating %lu min, discharging %lu min",
-                  (int)m->env.temp_c, (unsigned)m->env.supply_mv, (unsigned long)(m->op_us / MINUTE_US),
-                  (unsigned long)(m->dis_us / MINUTE_US));
-    for (size_t i = 0U; i < N_ITEMS; i++) {
-        if (m->active[i]) {
-            device_printf(dev, "%s %u active%s: %s", type_name(items[i].type), items[i].code,
-                          m->injected[i] ? " (injected)" : "", items[i].text);
+                  (int)m->env.temp_c, (unsigned)m->env.supply_mv, (unsigned long)(m->eltex.op_us / MINUTE_US),
+                  (unsigned long)(m->eltex.hv_us / MINUTE_US));
+    for (unsigned i = 0U; i < N_ITEMS; i++) {
+        if (eltex_fault_active(dev, i)) {
+            device_printf(dev, "%s %u active: %s", type_name(items[i].type), items[i].code, items[i].text);
         }
     }
-}
-
-static device_cmd_result_t cmd_item(device_t *dev, uint8_t type, bool raise, const char *arg)
-{
-    long long code;
-    if (!device_parse_int(arg, 1, 255, &code)) {
-        device_printf(dev, "error: '%s' is not a code", arg);
-        return DEVICE_CMD_ERROR;
-    }
-    const int i = item_index(type, (uint8_t)code);
-    if (i < 0) {
-        device_printf(dev, "error: %s %lld is not in the table (see docs/devices/pro-ionizer-behaviour.md)",
-                      type_name(type), code);
-        return DEVICE_CMD_ERROR;
-    }
-    if (raise) {
-        if (items[i].group != 0U && !has(dev, items[i].group)) {
-            return need_group(dev, "such a feature");
-        }
-        if (M(dev)->active[i]) {
-            device_printf(dev, "%s %lld is already active", type_name(type), code);
-            return DEVICE_CMD_OK;
-        }
-        M(dev)->injected[i] = true;
-        raise_item(dev, (size_t)i);
-        publish(dev);
-        return DEVICE_CMD_OK;
-    }
-    const uint32_t r = clear_request(dev, type, (uint8_t)code);
-    if (r != 0U) {
-        device_printf(dev, "error: %s %lld not cleared: %s (0x%08lX)", type_name(type), code, co_abort_text(r),
-                      (unsigned long)r);
-        return DEVICE_CMD_ERROR;
-    }
-    publish(dev);
-    return DEVICE_CMD_OK;
 }
 
 static int box_sensor(const char *name)
@@ -1460,18 +1021,15 @@ static device_cmd_result_t command(device_t *dev, int argc, const char *const *a
     long long a;
     long long b;
     bool on;
-    (void)now;
     if (strcmp(cmd, "status") == 0) {
         print_status(dev);
         return DEVICE_CMD_OK;
     }
-    if (strcmp(cmd, "error") == 0 || strcmp(cmd, "warning") == 0 || strcmp(cmd, "clear-error") == 0 ||
-        strcmp(cmd, "clear-warning") == 0) {
-        if (argc != 2) {
-            return bad(dev, "error|warning|clear-error|clear-warning CODE");
-        }
-        const uint8_t type = strstr(cmd, "error") != NULL ? T_ERR : T_WARN;
-        return cmd_item(dev, type, strncmp(cmd, "clear-", 6U) != 0, argv[1]);
+    advance(dev, now);
+    const device_cmd_result_t fr = eltex_fault_command(dev, argc, argv); /* error, warning, clear-..., faults */
+    if (fr != DEVICE_CMD_UNKNOWN) {
+        publish(dev);
+        return fr;
     }
     if (strcmp(cmd, "load") == 0) {
         if (argc != 3 || !device_parse_int(argv[1], 1, 4, &a)) {
@@ -1608,7 +1166,7 @@ const device_class_t pro_ionizer_class = {
     .od = &pro_ionizer_od,
     .default_node_id = 99U,
     .default_bit_timing = 4U,
-    .core_options = CO_OPT_NMT_ACCEPT_LONG,
+    .core_options = CO_OPT_NMT_ACCEPT_LONG | CO_OPT_TPDO_NO_COS, /* TPDOs: the 0x2002:01 grid only (E12) */
     .bit_rates_kbit = bit_rates,
     .model_size = sizeof(pi_model_t),
     .variants = variants,
@@ -1622,10 +1180,9 @@ const device_class_t pro_ionizer_class = {
         "  speed N RPM|off             speed sensor N (1-10), variants full/speed\n"
         "  efield N VOLT [RIPPLE]      E-field sensor N (1-2) reading, variants full/efield\n"
         "  sensor D1..D10|A1|A2 STATE  extension-box sensor state 0-3, variants full/extbox\n"
-        "  error CODE / warning CODE   raise an error / warning of the table (EMCY type 0x01 / 0x05)\n"
-        "  clear-error CODE            clear it as 0x2003:01 would (refused while the cause persists)\n"
-        "  clear-warning CODE          clear it as 0x2003:02 would\n"
-        "  bit-timing N                keypad menu: set 0x2002:07 and store all parameters (way back from 9)",
+        "  bit-timing N                keypad menu: set 0x2002:07 and store all parameters (way back from 9)\n"
+        ELTEX_FAULT_COMMANDS_HELP,
+    .init = pi_init,
     .power_on = power_on,
     .on_write = on_write,
     .on_read = on_read,
@@ -1633,4 +1190,5 @@ const device_class_t pro_ionizer_class = {
     .on_reset = on_reset,
     .step = step,
     .command = command,
+    .on_event = eltex_on_event,
 };

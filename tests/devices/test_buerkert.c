@@ -805,6 +805,34 @@ static void error_commands_and_namur_mode(void)
     TEST_ASSERT_TRUE(n_lines >= 3U);
 }
 
+static void power_cycle_keeps_the_supply_voltage_and_restarts_the_controller(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write_f32(0x2540U, 1U, 50.0f));
+    advance(3000000U);
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, cmd("supply 20.5")); /* out of specification: EMCY 0x3120 */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, cmd("valve-fault on"));
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, cmd("error 0xFF01 2"));
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, cmd("mode hand"));
+    TEST_ASSERT_EQUAL_UINT32(0x15U, sdo_read(0x2004U, 1U));
+    clear();
+    power_cycle();
+    /* the supply is still 20.5 V: after the boot-up the device reports it again */
+    TEST_ASSERT_EQUAL_UINT32(2U, port.n_sent);
+    ASSERT_FRAME(0, 0x701U, 1, 0x00);
+    ASSERT_FRAME(1, 0x081U, 8, 0x20, 0x31, 0x05, 0x00, 0x00, 0x03, 0x00, 0x00);
+    TEST_ASSERT_EQUAL_FLOAT(20.5f, sdo_read_f32(0x2004U, 3U));
+    /* the running state restarted: no stuck valve, no injected error, auto mode, flow 0 */
+    TEST_ASSERT_EQUAL_UINT32(0x03U, sdo_read(0x2004U, 1U));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, flow());
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write_f32(0x2540U, 1U, 30.0f)); /* auto mode: the bus set-point acts */
+    advance(3000000U);
+    TEST_ASSERT_EQUAL_FLOAT(30.0f, flow()); /* the valve moves again */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("clear-error 0xFF01"));
+    clear();
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, cmd("supply 24"));
+    EXPECT_ONE(0x081U, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00);
+}
+
 /* ---- 0x2004: measurements, min/max, operating time ----------------------------------------------------- */
 
 static void min_max_tracking_persists(void)
@@ -824,10 +852,13 @@ static void min_max_tracking_persists(void)
     TEST_ASSERT_EQUAL_FLOAT(26.0f, sdo_read_f32(0x2004U, 7U));
     TEST_ASSERT_EQUAL_FLOAT(22.5f, sdo_read_f32(0x2004U, 8U));
     TEST_ASSERT_EQUAL_UINT32(0U, count(0x081U)); /* all inside the specification */
-    /* kept in the device's NVM area: a power cycle keeps them (the measurements return to nominal) */
+    /* kept in the device's NVM area: a power cycle keeps them (and the environment: 30 C, 24.2 V) */
     TEST_ASSERT_TRUE(port.nvm[CO_NVM_DEVICE].stored_len > 0U);
     power_cycle();
-    TEST_ASSERT_EQUAL_UINT32(25U, sdo_read(0x2004U, 2U));
+    TEST_ASSERT_EQUAL_UINT32(30U, sdo_read(0x2004U, 2U));
+    TEST_ASSERT_EQUAL_FLOAT(24.2f, sdo_read_f32(0x2004U, 3U));
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, cmd("temperature 25"));
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, cmd("supply 24.0"));
     TEST_ASSERT_EQUAL_UINT32(40U, sdo_read(0x2004U, 5U));
     TEST_ASSERT_EQUAL_UINT32(10U, sdo_read(0x2004U, 6U));
     TEST_ASSERT_EQUAL_FLOAT(26.0f, sdo_read_f32(0x2004U, 7U));
@@ -891,6 +922,7 @@ int main(void)
     RUN_TEST(faults_set_namur_bits_and_send_emcy);
     RUN_TEST(stuck_valve_freezes_the_flow_and_is_raised_again_after_a_reset);
     RUN_TEST(error_commands_and_namur_mode);
+    RUN_TEST(power_cycle_keeps_the_supply_voltage_and_restarts_the_controller);
     RUN_TEST(min_max_tracking_persists);
     RUN_TEST(operating_time_counts_and_is_saved_every_minute);
     return UNITY_END();

@@ -509,17 +509,17 @@ static void tpdos_every_transfer_time_in_operational_only(void)
     ASSERT_FRAME_AT(find_id(0x285U, first), 0x285U, 8, 0, 0, 0, 0, 0, 0, 0, 0);
     ASSERT_FRAME_AT(find_id(0x385U, first), 0x385U, 8, 0, 0, 0, 0, 0, 0, 0, 0);
 
-    wr_ok(0x2002U, 0x01U, 200U, 2U); /* from the next cycle (t = 5.5 s) on: 200 ms */
+    wr_ok(0x2002U, 0x01U, 200U, 2U); /* t = 5.0 s: a new grid starts at the write (E12) */
     const uint32_t second = port.n_sent;
     run_until(6300000U);
     uint32_t k = 0U;
     for (uint32_t i = second; i < port.n_sent; i++) {
         if (port.sent[i].id == 0x285U) {
-            TEST_ASSERT_EQUAL_UINT64(5500000U + 200000U * k, port.sent_at[i]);
+            TEST_ASSERT_EQUAL_UINT64(5200000U + 200000U * k, port.sent_at[i]);
             k++;
         }
     }
-    TEST_ASSERT_EQUAL_UINT32(5U, k); /* 5.5 5.7 5.9 6.1 6.3 */
+    TEST_ASSERT_EQUAL_UINT32(6U, k); /* 5.2 5.4 5.6 5.8 6.0 6.2 */
 
     RX(0x000U, 0x80, 0x05); /* Pre-operational: none */
     const uint32_t third = port.n_sent;
@@ -547,9 +547,15 @@ static void tpdo_carries_the_mapped_values(void)
 {
     wr_ok(0x2002U, 0x02U, 0x04U, 1U);
     cmd_ok("load 1 3500");
+    const uint32_t op = port.n_sent;
     RX(0x000U, 0x01, 0x05);
     RX(0x205U, 0x0F);
     advance_ms(5000U);
+    /* only cyclic frames while the voltage rises every 100 ms and the status changes (no change-of-state
+     * transmissions, CO_OPT_TPDO_NO_COS): the one at entry + 10 grid points */
+    TEST_ASSERT_EQUAL_UINT32(11U, count_id(0x185U, op));
+    TEST_ASSERT_EQUAL_UINT32(11U, count_id(0x285U, op));
+    TEST_ASSERT_EQUAL_UINT32(11U, count_id(0x385U, op));
     const uint32_t first = port.n_sent;
     advance_ms(500U);
     /* 5000 V, 700 uA, 0 uA DC, 3.5 W */
@@ -574,8 +580,8 @@ static void counters_advance_and_survive_power_cycle(void)
     TEST_ASSERT_EQUAL_UINT32(1U, rd(0x2000U, 0x04U));
     TEST_ASSERT_EQUAL_UINT32(0U, rd(0x2000U, 0x0BU));
     TEST_ASSERT_EQUAL_UINT32(30U, rd(0x2000U, 0x0CU));
-    /* written once per emulated minute (plus the node-ID bookkeeping at power-on) */
-    TEST_ASSERT_TRUE(port.nvm[CO_NVM_DEVICE].commits >= 61U && port.nvm[CO_NVM_DEVICE].commits <= 63U);
+    /* written once at the 0x1010 save (flags) and then once per emulated minute */
+    TEST_ASSERT_EQUAL_UINT32(1U + 61U, port.nvm[CO_NVM_DEVICE].commits);
     power_cycle();
     TEST_ASSERT_EQUAL_UINT32(1U, rd(0x2000U, 0x03U));
     TEST_ASSERT_EQUAL_UINT32(1U, rd(0x2000U, 0x04U));
@@ -617,17 +623,30 @@ static void node_id_takes_effect_only_after_save_and_reset(void)
 
     wr_ok(0x2002U, 0x06U, 10U, 1U);
     save();
-    first = port.n_sent;
-    RX(0x000U, 0x82, 0x05); /* reset communication does not re-read the application parameters */
+    TEST_ASSERT_EQUAL_UINT8(5U, node_id()); /* saving alone changes nothing */
+    advance_ms(1000U);
     TEST_ASSERT_EQUAL_UINT8(5U, node_id());
-    TEST_ASSERT_EQUAL_UINT32(0U, count_id(0x70AU, first));
-    RX(0x000U, 0x81, 0x05); /* reset node: boot-up on the new node-ID */
+    first = port.n_sent;
+    RX(0x000U, 0x82, 0x05); /* reset communication is "the NMT command" too (E1): boot-up on the new node-ID */
     ASSERT_FRAME_AT(find_id(0x70AU, first), 0x70AU, 1, 0x00);
+    TEST_ASSERT_EQUAL_UINT32(0U, count_id(0x705U, first));
     TEST_ASSERT_EQUAL_UINT8(10U, node_id());
     TEST_ASSERT_EQUAL_UINT32(10U, rd(0x2002U, 0x06U));
     TEST_ASSERT_EQUAL_HEX32(0x8AU, rd(0x1014U, 0x00U)); /* node-ID-relative COB-IDs follow */
     power_cycle();
     TEST_ASSERT_EQUAL_UINT8(10U, node_id());
+    /* and reset node: saved 0x2002:06 = 11, boot-up on 0x70B */
+    wr_ok(0x2002U, 0x06U, 11U, 1U);
+    save();
+    first = port.n_sent;
+    RX(0x000U, 0x81, 0x0A);
+    ASSERT_FRAME_AT(find_id(0x70BU, first), 0x70BU, 1, 0x00);
+    TEST_ASSERT_EQUAL_UINT8(11U, node_id());
+    /* the saved node-ID is the LSS configuration: without the stored parameters the node still boots on 11 */
+    port.nvm[CO_NVM_PARAMS].stored_len = 0U;
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT8(11U, node_id());
+    TEST_ASSERT_EQUAL_UINT32(11U, rd(0x2002U, 0x06U));
 }
 
 static void restore_defaults_keeps_node_id_and_bit_timing(void)
@@ -736,6 +755,120 @@ static void bit_timing_9_deactivates_canopen_until_changed_locally(void)
     TEST_ASSERT_EQUAL_UINT32(4U, rd(0x2002U, 0x07U));
 }
 
+static void bit_timing_9_applies_at_0x82_and_an_lss_store_brings_the_node_back(void)
+{
+    wr_ok(0x2002U, 0x07U, 9U, 1U);
+    save();
+    const uint32_t first = port.n_sent;
+    RX(0x000U, 0x82, 0x05); /* reset communication applies it too (E1, E3) */
+    TEST_ASSERT_EQUAL_UINT8(CO_NODE_ID_UNCONFIGURED, node_id());
+    TEST_ASSERT_EQUAL_UINT32(first, port.n_sent);
+    n_lines = 0U;
+    cmd_ok("get 0x2002:07");
+    TEST_ASSERT_TRUE(logged("0x2002:07 = 9"));
+    /* an LSS store is newer than the saved 9: an ordinary unconfigured LSS node after the power cycle */
+    RX(0x7E5U, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5U, 0x17, 0, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5U, 0x04, 0x00, 0, 0, 0, 0, 0, 0);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT8(CO_NODE_ID_UNCONFIGURED, node_id());
+    TEST_ASSERT_FALSE(logged("CANopen communication deactivated"));
+    cmd_ok("get 0x2002:07");
+    TEST_ASSERT_TRUE(logged("0x2002:07 = 4"));
+    /* an LSS master gives the silent node a node-ID and stores it: the newest store wins */
+    RX(0x7E5U, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5U, 0x11, 20, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5U, 0x17, 0, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5U, 0x04, 0x00, 0, 0, 0, 0, 0, 0);
+    ASSERT_FRAME_AT(find_id(0x714U, first), 0x714U, 1, 0x00);
+    TEST_ASSERT_EQUAL_UINT32(4U, rd(0x2002U, 0x07U));
+    TEST_ASSERT_EQUAL_UINT32(20U, rd(0x2002U, 0x06U));
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT8(20U, node_id());
+    TEST_ASSERT_EQUAL_UINT32(4U, rd(0x2002U, 0x07U));
+}
+
+static void saved_bit_timing_switches_at_any_nmt_reset_and_lss_activate_shows(void)
+{
+    const uint32_t calls = port.bit_rate_calls;
+    wr_ok(0x2002U, 0x07U, 3U, 1U);
+    save();
+    advance_ms(100U);
+    TEST_ASSERT_EQUAL_UINT32(calls, port.bit_rate_calls); /* saving alone changes nothing */
+    RX(0x000U, 0x82, 0x05);
+    TEST_ASSERT_EQUAL_UINT32(calls + 1U, port.bit_rate_calls);
+    TEST_ASSERT_EQUAL_UINT32(250U, port.bit_rate_kbit);
+    TEST_ASSERT_EQUAL_UINT32(3U, rd(0x2002U, 0x07U));
+    RX(0x000U, 0x82, 0x05); /* nothing new saved: no switch */
+    RX(0x000U, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT32(calls + 1U, port.bit_rate_calls);
+    /* written, not saved: gone at the reset */
+    wr_ok(0x2002U, 0x07U, 2U, 1U);
+    RX(0x000U, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_UINT32(3U, rd(0x2002U, 0x07U));
+    TEST_ASSERT_EQUAL_UINT32(calls + 1U, port.bit_rate_calls);
+    /* LSS configure + activate bit timing: the rate in effect shows at once */
+    RX(0x7E5U, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5U, 0x13, 0x00, 0x02, 0, 0, 0, 0, 0);
+    RX(0x7E5U, 0x15, 0x0A, 0x00, 0, 0, 0, 0, 0); /* 10 ms */
+    advance_ms(30U);
+    RX(0x7E5U, 0x04, 0x00, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_UINT32(500U, port.bit_rate_kbit);
+    TEST_ASSERT_EQUAL_UINT32(2U, rd(0x2002U, 0x07U));
+}
+
+static void local_writes_obey_the_eds_limits_and_leave_measured_values_alone(void)
+{
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x2002:06 200")); /* 1..127 */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x2002:01 50"));  /* 100..60000 */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x1017 150"));    /* 100 ms steps */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x2002:35 -101")); /* signed: IZD 10-110 zero point */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x2002:35 -1001")); /* below the EDS limit as well */
+    cmd_ok("set 0x2002:35 -100");
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x2000:04 5"));   /* counters belong to the model */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x6401:01 100")); /* measured */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x6000:01 1"));
+    TEST_ASSERT_EQUAL_UINT32(5U, rd(0x2002U, 0x06U));
+    TEST_ASSERT_EQUAL_UINT32(500U, rd(0x2002U, 0x01U));
+}
+
+static void power_cycle_keeps_the_environment_and_restarts_the_device(void)
+{
+    wr_ok(0x1017U, 0x00U, 0U, 2U);
+    cmd_ok("load 1 2500");
+    cmd_ok("load 2 6000");
+    cmd_ok("temperature 65"); /* warning 3: its cause is the environment */
+    cmd_ok("hw-release on");
+    cmd_ok("error 5");        /* parameter memory error: no cause in the environment */
+    cmd_ok("keypad release on");
+    advance_ms(3000U);
+    TEST_ASSERT_EQUAL_HEX8(0x77U, status());
+    const uint32_t first = port.n_sent;
+    power_cycle();
+    const int boot = find_id(0x705U, first);
+    const int e = find_id(0x85U, first);
+    ASSERT_FRAME_AT(boot, 0x705U, 1, 0x00);
+    ASSERT_FRAME_AT(e, 0x85U, 8, 0x10, 0x42, 0x09, 0x05, 0x03, 0x00, 0x00, 0x00); /* the temperature is still 65 C */
+    TEST_ASSERT_TRUE(boot < e);
+    TEST_ASSERT_EQUAL_UINT32(1U, count_id(0x85U, first)); /* error 5 is gone */
+    TEST_ASSERT_EQUAL_HEX8(0x44U, status()); /* no release, HV off; warning; the hardware input is still on */
+    TEST_ASSERT_EQUAL_UINT16(0U, volts());
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_DATA, wr(0x2003U, 0x01U, 5U, 1U));
+    TEST_ASSERT_EQUAL_UINT32(65U, rd(0x2001U, 0x04U));
+    TEST_ASSERT_EQUAL_UINT32(10U, rd(0x2002U, 0x0AU) / 10U); /* still derated */
+    cmd_ok("keypad release on");
+    advance_ms(6000U);
+    /* the loads are still connected (8.5 W at 5000 V, below the derated 10 W limit) */
+    TEST_ASSERT_EQUAL_UINT16(5000U, volts());
+    TEST_ASSERT_EQUAL_UINT32(2500U, rd(0x2001U, 0x06U));
+    TEST_ASSERT_EQUAL_UINT32(6000U, rd(0x2001U, 0x07U));
+    /* NMT reset node: the same application restart, the environment stays as well */
+    RX(0x000U, 0x81, 0x05);
+    TEST_ASSERT_EQUAL_HEX8(0x44U, status());
+    advance_ms(1000U);
+    TEST_ASSERT_EQUAL_UINT32(65U, rd(0x2001U, 0x04U));
+}
+
 static void heartbeat_time_in_100_ms_steps(void)
 {
     TEST_ASSERT_EQUAL_UINT32(1000U, rd(0x1017U, 0x00U)); /* default: every second */
@@ -781,7 +914,13 @@ static void error_raise_and_clear_via_0x2003(void)
     TEST_ASSERT_EQUAL_HEX8(0x06U, status()); /* error 4 and warning 3 (> 60 C) */
     SDO_EXPECT(0x2F, 0x03, 0x20, 0x01, 0x04, 0x00, 0x00, 0x00, 0x80, 0x03, 0x20, 0x01, 0x22, 0x00, 0x00, 0x08);
     TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("clear-error 4"));
-    cmd_ok("temperature 30"); /* warning goes by itself, the error is latched */
+    SDO_EXPECT(0x2F, 0x03, 0x20, 0x02, 0x03, 0x00, 0x00, 0x00, 0x80, 0x03, 0x20, 0x02, 0x22, 0x00, 0x00, 0x08);
+    first = port.n_sent;
+    cmd_ok("temperature 30"); /* cause gone: both stay until deleted (E7) */
+    TEST_ASSERT_EQUAL_UINT32(0U, count_id(0x85U, first));
+    TEST_ASSERT_EQUAL_HEX8(0x06U, status());
+    cmd_ok("clear-warning 3");
+    ASSERT_FRAME_AT(find_id(0x85U, first), 0x85U, 8, 0x00, 0x00, 0x09, 0x05, 0x03, 0x00, 0x00, 0x00);
     TEST_ASSERT_EQUAL_HEX8(0x02U, status());
     cmd_ok("clear-error 4");
     TEST_ASSERT_EQUAL_HEX8(0x00U, status());
@@ -802,15 +941,21 @@ static void warning_raise_and_clear_via_0x2003(void)
     TEST_ASSERT_EQUAL_HEX8(0x00U, status());
     SDO_EXPECT(0x2F, 0x03, 0x20, 0x02, 0x01, 0x00, 0x00, 0x00, 0x80, 0x03, 0x20, 0x02, 0x24, 0x00, 0x00, 0x08);
 
-    /* a warning with a cause comes and goes with it */
+    /* a warning with a cause is raised by it and stays, latched, until deleted (E7) */
     first = port.n_sent;
     cmd_ok("temperature 65");
     ASSERT_FRAME_AT(find_id(0x85U, first), 0x85U, 8, 0x10, 0x42, 0x09, 0x05, 0x03, 0x00, 0x00, 0x00);
     TEST_ASSERT_EQUAL_UINT32(10U, rd(0x2002U, 0x0AU) / 10U); /* power set point derated to 10.0 W */
+    SDO_EXPECT(0x2F, 0x03, 0x20, 0x02, 0x03, 0x00, 0x00, 0x00, 0x80, 0x03, 0x20, 0x02, 0x22, 0x00, 0x00, 0x08);
     first = port.n_sent;
     cmd_ok("temperature 40");
+    advance_ms(1000U);
+    TEST_ASSERT_EQUAL_UINT32(0U, count_id(0x85U, first));
+    TEST_ASSERT_EQUAL_HEX8(0x04U, status());
+    TEST_ASSERT_EQUAL_UINT32(200U, rd(0x2002U, 0x0AU)); /* the derating follows the temperature */
+    SDO_EXPECT(0x2F, 0x03, 0x20, 0x02, 0x03, 0x00, 0x00, 0x00, 0x60, 0x03, 0x20, 0x02, 0x00, 0x00, 0x00, 0x00);
     ASSERT_FRAME_AT(find_id(0x85U, first), 0x85U, 8, 0x00, 0x00, 0x00, 0x05, 0x03, 0x00, 0x00, 0x00);
-    TEST_ASSERT_EQUAL_UINT32(200U, rd(0x2002U, 0x0AU));
+    TEST_ASSERT_EQUAL_HEX8(0x00U, status());
 }
 
 static void active_errors_are_reported_again_after_communication_reset(void)
@@ -830,7 +975,7 @@ static void active_errors_are_reported_again_after_communication_reset(void)
     TEST_ASSERT_EQUAL_HEX32(0x00U, rd(0x1001U, 0x00U));
 }
 
-static void pollution_warning_follows_load_changes(void)
+static void pollution_warning_is_latched_until_deleted(void)
 {
     wr_ok(0x2002U, 0x11U, 1U, 1U);     /* monitoring on */
     wr_ok(0x2002U, 0x15U, 2000U, 2U);  /* nominal power = 0 % */
@@ -853,11 +998,15 @@ static void pollution_warning_follows_load_changes(void)
     advance_ms(200U);
     TEST_ASSERT_EQUAL_UINT32(60U, rd(0x2001U, 0x0AU));
     TEST_ASSERT_EQUAL_UINT32(0U, count_id(0x85U, first)); /* still above: nothing new */
-    cmd_ok("load 1 2400"); /* 20 % */
+    SDO_EXPECT(0x2F, 0x03, 0x20, 0x02, 0x15, 0x00, 0x00, 0x00, 0x80, 0x03, 0x20, 0x02, 0x22, 0x00, 0x00, 0x08);
+    cmd_ok("load 1 2400"); /* 20 %: the connection is clean again, the warning stays until deleted */
     advance_ms(200U);
     TEST_ASSERT_EQUAL_UINT32(20U, rd(0x2001U, 0x0AU));
+    TEST_ASSERT_EQUAL_UINT32(0U, count_id(0x85U, first));
+    TEST_ASSERT_EQUAL_UINT32(1U, rd(0x6000U, 0x03U)); /* connection status follows the pollution */
+    TEST_ASSERT_EQUAL_HEX8(0x35U, status());
+    wr_ok(0x2003U, 0x02U, 0x15U, 1U);
     ASSERT_FRAME_AT(find_id(0x85U, first), 0x85U, 8, 0x00, 0x00, 0x00, 0x05, 0x15, 0x00, 0x00, 0x00);
-    TEST_ASSERT_EQUAL_UINT32(1U, rd(0x6000U, 0x03U));
     TEST_ASSERT_EQUAL_HEX8(0x31U, status());
 }
 
@@ -881,6 +1030,8 @@ static void pollution_measured_at_hv_start_in_mode_0(void)
     cmd_ok("keypad release on");
     advance_ms(1100U);
     TEST_ASSERT_EQUAL_UINT32(0U, rd(0x2001U, 0x0AU));
+    TEST_ASSERT_EQUAL_HEX8(0x35U, status()); /* measured clean; the warning is latched */
+    cmd_ok("clear-warning 21");
     TEST_ASSERT_EQUAL_HEX8(0x31U, status());
 }
 
@@ -909,6 +1060,8 @@ static void sensor_inputs_of_the_variants(void)
     ASSERT_FRAME_AT(find_id(0x85U, first), 0x85U, 8, 0x00, 0x90, 0x81, 0x05, 0x2B, 0x00, 0x00, 0x00);
     first = port.n_sent;
     cmd_ok("speed 3 500");
+    TEST_ASSERT_EQUAL_UINT32(0U, count_id(0x85U, first)); /* latched */
+    wr_ok(0x2003U, 0x02U, 0x2BU, 1U);
     ASSERT_FRAME_AT(find_id(0x85U, first), 0x85U, 8, 0x00, 0x00, 0x81, 0x05, 0x2B, 0x00, 0x00, 0x00);
 
     wr_ok(0x2002U, 0x2FU, 3U, 1U); /* extension box */
@@ -983,6 +1136,14 @@ static void variant_hides_entries_with_0x06090011(void)
     TEST_ASSERT_EQUAL_UINT32(24000U, rd(0x2001U, 0x03U)); /* supply voltage */
     TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x2002:15 100"));
     TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("speed 1 100"));
+    /* the errors and warnings of missing features do not exist in this variant */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_INVALID_VALUE, wr(0x2003U, 0x01U, 21U, 1U)); /* E-field */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_INVALID_VALUE, wr(0x2003U, 0x02U, 11U, 1U)); /* connection monitoring */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_DATA, wr(0x2003U, 0x01U, 11U, 1U));       /* short circuit: every variant */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("error 21"));
+    n_lines = 0U;
+    cmd_ok("faults");
+    TEST_ASSERT_EQUAL_UINT32(13U, n_lines); /* errors 1-5, 11-14, warnings 1-4 */
 
     start(5U, "module");
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_SUBINDEX, rd_abort(0x2002U, 0x0FU));
@@ -1022,11 +1183,15 @@ int main(void)
     RUN_TEST(lss_stored_node_id_shows_in_0x2002_06);
     RUN_TEST(lss_configured_but_not_stored_is_lost_at_power_off);
     RUN_TEST(bit_timing_9_deactivates_canopen_until_changed_locally);
+    RUN_TEST(bit_timing_9_applies_at_0x82_and_an_lss_store_brings_the_node_back);
+    RUN_TEST(saved_bit_timing_switches_at_any_nmt_reset_and_lss_activate_shows);
+    RUN_TEST(local_writes_obey_the_eds_limits_and_leave_measured_values_alone);
+    RUN_TEST(power_cycle_keeps_the_environment_and_restarts_the_device);
     RUN_TEST(heartbeat_time_in_100_ms_steps);
     RUN_TEST(error_raise_and_clear_via_0x2003);
     RUN_TEST(warning_raise_and_clear_via_0x2003);
     RUN_TEST(active_errors_are_reported_again_after_communication_reset);
-    RUN_TEST(pollution_warning_follows_load_changes);
+    RUN_TEST(pollution_warning_is_latched_until_deleted);
     RUN_TEST(pollution_measured_at_hv_start_in_mode_0);
     RUN_TEST(cyclic_reference_point_every_minute);
     RUN_TEST(sensor_inputs_of_the_variants);
