@@ -138,18 +138,6 @@ static buerkert_fc_od_values_t *values_of(device_t *dev) { return (buerkert_fc_o
 
 /* ---- little helpers ------------------------------------------------------------------------------------ */
 
-static uint32_t crc32(uint32_t crc, const uint8_t *data, size_t len)
-{
-    crc = ~crc;
-    for (size_t i = 0U; i < len; i++) {
-        crc ^= data[i];
-        for (uint8_t b = 0U; b < 8U; b++) {
-            crc = (crc >> 1) ^ (0xEDB88320UL & (0U - (crc & 1U)));
-        }
-    }
-    return ~crc;
-}
-
 static void put_u16(uint8_t *p, uint16_t v)
 {
     p[0] = (uint8_t)v;
@@ -207,7 +195,7 @@ static void nvm_save(device_t *dev)
     put_u16(&b[14], m->tmin);
     put_u32(&b[16], float_bits(m->vmax));
     put_u32(&b[20], float_bits(m->vmin));
-    put_u32(&b[32], crc32(0U, b, 32U));
+    put_u32(&b[32], co_crc32(0U, b, 32U));
     if (p->nvm_write(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b) == CO_OK &&
         p->nvm_commit(dev->cfg.port_ctx, CO_NVM_DEVICE, BLOB_LEN) == CO_OK) {
         m->saves++;
@@ -221,7 +209,7 @@ static bool nvm_load(device_t *dev)
     const co_port_t *p = dev->cfg.port;
     uint8_t b[BLOB_LEN];
     if (p == NULL || p->nvm_read == NULL || p->nvm_read(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b) != CO_OK ||
-        memcmp(b, "BKF1", 4U) != 0 || b[4] != 2U || get_u32(&b[32]) != crc32(0U, b, 32U)) {
+        memcmp(b, "BKF1", 4U) != 0 || b[4] != 2U || get_u32(&b[32]) != co_crc32(0U, b, 32U)) {
         return false;
     }
     m->op_us = (uint64_t)get_u32(&b[8]) * 1000000U;

@@ -36,18 +36,6 @@ uint64_t eltex_isqrt(uint64_t x)
     return r;
 }
 
-static uint32_t crc32(const uint8_t *d, size_t n)
-{
-    uint32_t crc = 0xFFFFFFFFUL;
-    for (size_t i = 0U; i < n; i++) {
-        crc ^= d[i];
-        for (unsigned b = 0U; b < 8U; b++) {
-            crc = (crc >> 1) ^ (0xEDB88320UL & (0U - (crc & 1U)));
-        }
-    }
-    return ~crc;
-}
-
 static void put_u32(uint8_t *p, uint32_t v)
 {
     for (unsigned i = 0U; i < 4U; i++) {
@@ -142,7 +130,7 @@ static void nvm_load(device_t *dev)
     if (p == NULL || p->nvm_read == NULL || p->nvm_read(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, NVM_LEN) != CO_OK) {
         return; /* nothing stored: counters start at 0 */
     }
-    if (memcmp(b, x->cls->nvm_magic, 4U) != 0 || b[4] != NVM_VERSION || get_u32(&b[16]) != crc32(b, 16U)) {
+    if (memcmp(b, x->cls->nvm_magic, 4U) != 0 || b[4] != NVM_VERSION || get_u32(&b[16]) != co_crc32(0U, b, 16U)) {
         device_printf(dev, "%s: counter memory damaged; counters start at 0", dev->cls->name);
         return;
     }
@@ -167,7 +155,7 @@ static void nvm_save(device_t *dev)
     b[5] = (uint8_t)((x->params_stored ? NVM_FLAG_PARAMS_STORED : 0U) | (x->can_off ? NVM_FLAG_CAN_OFF : 0U));
     put_u32(&b[8], (uint32_t)(x->op_us / SEC_US));
     put_u32(&b[12], (uint32_t)(x->hv_us / SEC_US));
-    put_u32(&b[16], crc32(b, 16U));
+    put_u32(&b[16], co_crc32(0U, b, 16U));
     if ((p->nvm_write(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, NVM_LEN) != CO_OK ||
          p->nvm_commit(dev->cfg.port_ctx, CO_NVM_DEVICE, NVM_LEN) != CO_OK) &&
         !x->nvm_error_logged) {

@@ -23,6 +23,12 @@ typedef enum co_nvm_area {
     CO_NVM_DEVICE = 2  /**< The device model's own data (e.g. operating-hour counters); never used by the core. */
 } co_nvm_area_t;
 
+/**
+ * CRC-32 (IEEE 802.3, reflected, the zlib/PNG one) over len bytes, continuing from crc (0 to start). The core
+ * checks its NVM blobs with it; ports and device models may use it for their own data. Bitwise, no table.
+ */
+uint32_t co_crc32(uint32_t crc, const uint8_t *data, size_t len);
+
 typedef struct co_port {
     /**
      * Sends one frame. Must not block. Return CO_OK when the frame is queued in the controller or the
