@@ -279,7 +279,7 @@ co_time_us_t co_lss_process(co_node_t *node)
             return l->switch_at;
         }
         l->switch_pending = false;
-        l->active_bit_timing = l->pending_bit_timing;
+        l->active_bit_timing = l->pending_bit_timing < CO_LSS_BIT_TIMING_COUNT ? l->pending_bit_timing : 0U;
         const uint16_t kbit = node->bit_rates_kbit[l->active_bit_timing];
         if (node->port->set_bit_rate != NULL) {
             (void)node->port->set_bit_rate(node->port_ctx, kbit);

@@ -57,6 +57,9 @@ void co_node_send(co_node_t *node, const co_frame_t *frame)
 /* Sends queued frames in order until the port is busy. Returns the retry deadline or CO_NEVER. */
 static co_time_us_t txq_flush(co_node_t *node)
 {
+    if (node->txq.count > 0U && node->lss.silent_until != 0U && node->now < node->lss.silent_until) {
+        return node->lss.silent_until; /* CiA 305 bit-rate switch: queued frames wait for its end */
+    }
     while (node->txq.count > 0U) {
         const co_status_t st = node->port->send(node->port_ctx, &node->txq.frame[node->txq.head]);
         if (st == CO_ERR_BUSY) {
@@ -157,10 +160,12 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
     uint8_t node_id = cfg->node_id;
     uint8_t bit_timing = cfg->bit_timing;
     if (co_store_lss_load(node, &node_id, &bit_timing)) {
-        if (node->port->set_bit_rate != NULL && bit_timing < CO_LSS_BIT_TIMING_COUNT &&
-            node->bit_rates_kbit[bit_timing] != 0U) {
+        if (node->port->set_bit_rate != NULL && node->bit_rates_kbit[bit_timing] != 0U) {
             (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[bit_timing]);
         }
+    }
+    if (bit_timing >= CO_LSS_BIT_TIMING_COUNT) {
+        bit_timing = 0U; /* a bad configured default: index 0 of the table, never past its end */
     }
     node->node_id = node_id;
     node->lss.active_bit_timing = bit_timing;

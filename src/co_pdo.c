@@ -222,8 +222,8 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
     const bool timer = p->event_due != CO_NEVER && node->now >= p->event_due;
     if (changed || timer) {
         if (node->now < p->next_allowed) {
-            p->event = true; /* waits for the inhibit time */
-            return co_min_time(p->next_allowed, p->event_due);
+            p->event = true; /* waits for the inhibit time; the timer (if it fired) is served with it */
+            return p->next_allowed;
         }
         tpdo_send(node, p, buf);
         if (p->event_us == 0U) {

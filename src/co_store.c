@@ -268,8 +268,8 @@ bool co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing)
         memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
         return false;
     }
-    if ((b[4] < 1U || b[4] > 127U) && b[4] != CO_NODE_ID_UNCONFIGURED) {
-        return false;
+    if (((b[4] < 1U || b[4] > 127U) && b[4] != CO_NODE_ID_UNCONFIGURED) || b[5] >= CO_LSS_BIT_TIMING_COUNT) {
+        return false; /* a valid CRC over values we never write: not ours */
     }
     *node_id = b[4];
     *bit_timing = b[5];

@@ -923,6 +923,43 @@ static void api_pending_bit_timing_and_store(void)
     fx.node.port = &fx.port.port;
 }
 
+static void stored_bit_timing_out_of_range_is_not_used(void)
+{
+    /* found by fuzzing: a CRC-valid LSS blob with bit timing 200 indexed past the rate table */
+    uint8_t b[12] = {'C', 'O', 'L', '1', 0x0A, 200U, 0, 0, 0, 0, 0, 0};
+    const uint32_t crc = co_crc32(0U, b, 8U);
+    b[8] = (uint8_t)crc;
+    b[9] = (uint8_t)(crc >> 8);
+    b[10] = (uint8_t)(crc >> 16);
+    b[11] = (uint8_t)(crc >> 24);
+    memcpy(fx.port.nvm[CO_NVM_LSS].stored, b, sizeof b);
+    fx.port.nvm[CO_NVM_LSS].stored_len = sizeof b;
+    const uint32_t calls = fx.port.bit_rate_calls;
+    fx_power_cycle();
+    TEST_ASSERT_EQUAL_HEX8(5U, co_node_id(&fx.node)); /* the blob is not ours: the configured ID */
+    TEST_ASSERT_EQUAL_UINT8(4U, fx.node.lss.active_bit_timing);
+    TEST_ASSERT_EQUAL_UINT32(calls, fx.port.bit_rate_calls);
+}
+
+static void queued_frames_wait_for_the_end_of_the_silence(void)
+{
+    /* found by fuzzing: a frame waiting for a busy port went out during the bit-rate switch silence */
+    RX(0x7E5, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x13, 0x00, 0x03, 0, 0, 0, 0, 0);
+    fake_port_clear(&fx.port);
+    fx.port.busy_count = 2U;
+    RX(0x7E5, 0x5E, 0, 0, 0, 0, 0, 0, 0); /* answer queued: the port is busy */
+    TEST_ASSERT_EQUAL_UINT32(0U, fx.port.n_sent);
+    RX(0x7E5, 0x15, 0x64, 0x00, 0, 0, 0, 0, 0); /* activate: switch at +100 ms, silent until +200 ms */
+    const co_time_us_t t0 = fx.now;
+    fx_advance(199999U);
+    TEST_ASSERT_EQUAL_UINT32(0U, fx.port.n_sent);
+    fx_advance(1U);
+    TEST_ASSERT_EQUAL_UINT32(1U, fx.port.n_sent);
+    TEST_ASSERT_EQUAL_UINT64(t0 + 200000U, fx.port.sent_at[0]);
+    ASSERT_FRAME(0, 0x7E4U, 8, 0x5E, 0x05, 0, 0, 0, 0, 0, 0);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -977,5 +1014,7 @@ int main(void)
     RUN_TEST(unconfigured_node_configured_by_selective_and_stored);
     RUN_TEST(lss_frames_with_rtr_or_extended_id_ignored);
     RUN_TEST(api_pending_bit_timing_and_store);
+    RUN_TEST(stored_bit_timing_out_of_range_is_not_used);
+    RUN_TEST(queued_frames_wait_for_the_end_of_the_silence);
     return UNITY_END();
 }

@@ -219,6 +219,23 @@ static void inhibit_time_spaces_transmissions(void)
     TEST_ASSERT_EQUAL_UINT32(2U, fx_count(0x185U));
 }
 
+static void event_timer_expiring_during_inhibit_waits_for_it(void)
+{
+    /* found by fuzzing: the deadline returned was the expired timer, in the past: a caller would spin */
+    W(0x1800, 1, 0x80000185UL, 4);
+    W(0x1800, 3, 1000, 2); /* inhibit 100 ms */
+    W(0x1800, 5, 20, 2);   /* event timer 20 ms */
+    W(0x1800, 1, 0x00000185UL, 4);
+    start(); /* sent at t0 */
+    const co_time_us_t t0 = fx.now;
+    fx_advance(99999U); /* fx_run_until fails on a deadline that does not advance */
+    TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x185U));
+    fx_advance(1U);
+    TEST_ASSERT_EQUAL_UINT32(2U, fx_count(0x185U));
+    TEST_ASSERT_EQUAL_UINT64(t0 + 100000U, fx.port.sent_at[fx_last(0x185U)]);
+    TEST_ASSERT_TRUE(fx_process() > fx.now);
+}
+
 static void trigger_sends_unchanged_data(void)
 {
     start();
@@ -308,6 +325,7 @@ int main(void)
     RUN_TEST(change_of_state_sent_without_application_call);
     RUN_TEST(option_no_cos_sends_only_on_trigger_and_timer);
     RUN_TEST(inhibit_time_spaces_transmissions);
+    RUN_TEST(event_timer_expiring_during_inhibit_waits_for_it);
     RUN_TEST(trigger_sends_unchanged_data);
     RUN_TEST(invalid_tpdo_sends_nothing);
     RUN_TEST(rpdo_with_dummy_entry_and_real32);
