@@ -22,6 +22,7 @@
 
 #define SEC_US 1000000ULL
 #define TICK_US 100000ULL              /* measurement period: 100 ms, on a grid from power-on */
+#define CATCH_UP_TICKS 200U            /* more missed ticks than this: the earlier ones are not simulated */
 #define RELEASE_US (10ULL * SEC_US)    /* HV release timeout of 0x6200:01 */
 #define FILTER_A_Q16 11880             /* first order, tau 0.5 s: 1 - exp(-0.1 / 0.5) = 0.18127 in Q16 */
 #define SNAP_Q8 128                    /* a voltage within 0.5 V of its target takes the target */
@@ -345,6 +346,18 @@ static void tick(device_t *dev)
 static void advance(device_t *dev, co_time_us_t now)
 {
     sds_model_t *m = model(dev);
+    if (now > m->tick_next && (now - m->tick_next) / TICK_US > CATCH_UP_TICKS) {
+        /* A long gap (a late wake-up, a suspended host): the values settle within a few time constants, so
+         * only the last CATCH_UP_TICKS ticks are simulated; the time before them is counted in one step. */
+        const co_time_us_t skip_to = m->tick_next + ((now - m->tick_next) / TICK_US - CATCH_UP_TICKS) * TICK_US;
+        if (m->released && m->release_until <= skip_to) {
+            eltex_count(dev, m->release_until, m->hv_on);
+            m->released = false; /* not refreshed within 10 s */
+            hv_apply(dev);
+        }
+        eltex_count(dev, skip_to, m->hv_on);
+        m->tick_next = skip_to;
+    }
     for (;;) {
         co_time_us_t t = m->tick_next;
         if (m->released && m->release_until < t) {

@@ -773,6 +773,22 @@ static void counters_advance_and_survive_a_power_cycle(void)
     TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, cmd("set 0x2000:04 5"));
 }
 
+static void a_30_day_gap_is_caught_up_at_once(void)
+{
+    /* found by fuzzing: every missed 100 ms tick was simulated (26 million for 30 days) */
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x1017U, 0U, 0U, 2U));
+    release(); /* HV on, released for 10 s */
+    advance(2U * S_);
+    TEST_ASSERT_TRUE(hv_bit());
+    S.now += 30ULL * 24U * 3600U * S_; /* the host slept: one call covers the gap */
+    (void)device_process(&S.dev, S.now);
+    TEST_ASSERT_FALSE(hv_bit());                    /* the release timed out inside the gap */
+    TEST_ASSERT_EQUAL_INT32(30, rd(0x2000U, 2U));   /* operating days */
+    TEST_ASSERT_EQUAL_INT32(0, rd(0x2000U, 6U));    /* HV days: only the 10 s */
+    TEST_ASSERT_EQUAL_INT32(0, rd(0x2000U, 7U));
+    TEST_ASSERT_EQUAL_INT32(0, rd(0x6401U, 1U));    /* the voltage has settled at 0 */
+}
+
 static void counters_years_days_from_stored_seconds(void)
 {
     /* the device's own blob (docs: "SDSM" | 2 | flags | 0 0 | op s | HV s | CRC-32 of bytes 0..15) */
@@ -981,6 +997,7 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(release_drops_at_exactly_10_s_and_values_decay);
+    RUN_TEST(a_30_day_gap_is_caught_up_at_once);
     RUN_TEST(release_refreshed_every_9_s_stays_on_for_a_minute);
     RUN_TEST(release_zero_switches_off_at_once_other_values_refused);
     RUN_TEST(release_by_rpdo1_only_in_operational);
