@@ -112,7 +112,9 @@ co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, 
  *  and boots. */
 co_status_t device_power_cycle(device_t *dev, co_time_us_t now);
 
-void device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now);
+/** Feeds a received frame to the node. Returns co_node_rx's answer: true when the frame concerned this node
+ *  (call device_process before sleeping), false when it was ignored (the node's deadline is unchanged). */
+bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now);
 
 /** Runs the model and the core; returns the earliest deadline of both. */
 co_time_us_t device_process(device_t *dev, co_time_us_t now);

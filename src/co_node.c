@@ -179,47 +179,49 @@ static bool services_run(const co_node_t *node)
     return node->node_id != CO_NODE_ID_UNCONFIGURED && node->nmt_state != CO_NMT_INITIALISING;
 }
 
-void co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
+bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
 {
     node->now = now;
     node->stats.rx_frames++;
     if ((frame->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) != 0U || frame->len > 8U) {
-        return;
+        return false;
     }
     if (frame->id == 0x7E5U) {
         co_lss_rx(node, frame);
-        return;
+        return true;
     }
     if (!services_run(node)) {
-        return;
+        return false;
     }
     if (frame->id == 0x000U) {
-        if ((frame->flags & CO_FRAME_RTR) == 0U) {
-            co_nmt_rx(node, frame);
+        if ((frame->flags & CO_FRAME_RTR) != 0U) {
+            return false;
         }
-        return;
+        co_nmt_rx(node, frame);
+        return true;
     }
     if ((frame->flags & CO_FRAME_RTR) != 0U) {
 #if CO_CONFIG_NODE_GUARDING
         if (frame->id == 0x700U + node->node_id) {
             co_guard_rx(node, frame);
+            return true;
         }
 #endif
-        return; /* RTR for TPDOs (types 252/253) is not supported */
+        return false; /* RTR for TPDOs (types 252/253) is not supported */
     }
 #if CO_CONFIG_SYNC
     if (co_sync_rx(node, frame)) {
-        return;
+        return true;
     }
 #endif
     if (frame->id == 0x600U + node->node_id) {
         co_sdo_rx(node, frame);
-        return;
+        return true;
     }
     if (co_pdo_rx(node, frame)) {
-        return;
+        return true;
     }
-    (void)co_hbc_rx(node, frame);
+    return co_hbc_rx(node, frame);
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)

@@ -295,8 +295,14 @@ struct co_node {
  */
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now);
 
-/** Feeds one received frame (with its arrival time). Frames for other nodes/services are ignored. O(PDOs). */
-void co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
+/**
+ * Feeds one received frame (with its arrival time). Frames for other nodes/services are ignored. O(PDOs).
+ * @return true when the frame concerned this node (NMT, LSS, its SDO/RPDO/SYNC/guarding COB-IDs, a consumed
+ *         heartbeat): call co_node_process() before sleeping, as the frame may have changed the next deadline
+ *         or queued an answer. false: the frame was ignored and the last deadline still holds, so a runner
+ *         with many nodes on one bus may skip processing this node (calling it anyway is always correct).
+ */
+bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
 
 /**
  * Runs every timed service and sends what is due. Never blocks.

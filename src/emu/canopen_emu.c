@@ -46,6 +46,8 @@ typedef struct emu_node {
     uint8_t cmdline_id;
     size_t index;           /* position in emu.nodes */
     char key[64];
+    co_time_us_t deadline;  /* what device_process last returned */
+    bool dirty;             /* a frame concerned the node or a command ran on it: process before sleeping */
 } emu_node_t;
 
 /* Frames sent by local nodes, waiting to be offered to the other local nodes. */
@@ -301,7 +303,7 @@ static bool parse_spec(const char *spec, const device_class_t **cls, char *varia
 }
 
 static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint8_t id, const char *iface,
-                            const char *nvm_dir, size_t index)
+                            const char *nvm_dir, size_t index, co_time_us_t power_on)
 {
     emu_node_t *n = calloc(1U, sizeof *n);
     if (n == NULL) {
@@ -337,7 +339,7 @@ static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint
     cfg.port_ctx = n;
     cfg.print = device_print;
     cfg.on_event = device_event;
-    const co_status_t st = device_init(&n->dev, cls, n->values, n->model, &cfg, socketcan_now_us());
+    const co_status_t st = device_init(&n->dev, cls, n->values, n->model, &cfg, power_on);
     if (st != CO_OK) {
         fprintf(stderr, "canopen-emu: %s:%u: the node could not start (%d)\n", cls->name, id, (int)st);
         return NULL;
@@ -445,6 +447,7 @@ static void run_command(char *line)
         }
         argv[1] = argv[0];
         const device_cmd_result_t r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
+        n->dirty = true;
         argv[1] = argv[0];
         if (r == DEVICE_CMD_UNKNOWN) {
             printf("node %u: error: unknown command '%s' (try help %u)\n", co_node_id(&n->dev.node), argv[0],
@@ -647,8 +650,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "canopen-emu: %s\n", err);
         return 1;
     }
+    /* One power-on time for all nodes: their periodic deadlines (heartbeats, model ticks, cyclic TPDOs of
+     * equal periods) then fall on the same instants and one wake-up serves them all. */
+    const co_time_us_t power_on = socketcan_now_us();
     for (size_t i = 0U; i < n_specs; i++) {
-        emu_node_t *n = add_node(cls[i], variants[i], ids[i], iface, nvm_dir, i);
+        emu_node_t *n = add_node(cls[i], variants[i], ids[i], iface, nvm_dir, i, power_on);
         if (n == NULL) {
             return 1;
         }
@@ -676,17 +682,23 @@ int main(int argc, char **argv)
                 emu.local_head = (emu.local_head + 1U) % LOCAL_QUEUE_LEN;
                 emu.local_count--;
                 for (size_t i = 0U; i < emu.n_nodes; i++) {
-                    if (i != l.sender) {
-                        device_rx(&emu.nodes[i]->dev, &l.frame, now);
+                    if (i != l.sender && device_rx(&emu.nodes[i]->dev, &l.frame, now)) {
+                        emu.nodes[i]->dirty = true;
                     }
                 }
             }
+            /* Only nodes that are due or were concerned by a frame or a command run: with 127 nodes on one
+             * bus, processing every node at every wake-up cost O(nodes^2) per second (docs/performance.md). */
             next = CO_NEVER;
             tx_pending = false;
             for (size_t i = 0U; i < emu.n_nodes; i++) {
-                const co_time_us_t d = device_process(&emu.nodes[i]->dev, now);
-                next = d < next ? d : next;
-                tx_pending = tx_pending || emu.nodes[i]->dev.node.txq.count > 0U;
+                emu_node_t *n = emu.nodes[i];
+                if (n->dirty || now >= n->deadline) {
+                    n->dirty = false;
+                    n->deadline = device_process(&n->dev, now);
+                }
+                next = n->deadline < next ? n->deadline : next;
+                tx_pending = tx_pending || n->dev.node.txq.count > 0U;
             }
         } while (emu.local_count > 0U);
         const co_time_us_t r = socketcan_service(&emu.can, now);
@@ -730,7 +742,9 @@ int main(int argc, char **argv)
                     logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
                 }
                 for (size_t i = 0U; i < emu.n_nodes; i++) {
-                    device_rx(&emu.nodes[i]->dev, &f, now);
+                    if (device_rx(&emu.nodes[i]->dev, &f, now)) {
+                        emu.nodes[i]->dirty = true;
+                    }
                 }
             }
         }

@@ -2,6 +2,7 @@
 canopen-emu program started with the devices a test asks for, python-canopen as the master, and a raw
 capture of every frame on the bus with its time."""
 import os
+import socket
 import subprocess
 import threading
 import time
@@ -50,9 +51,26 @@ class Capture(can.Listener):
                              f"{timeout} s, saw {[(hex(m.arbitration_id), bytes(m.data).hex()) for m in got]}")
 
 
+# SO_RCVBUFFORCE (Linux, needs CAP_NET_ADMIN) may exceed net.core.rmem_max; SO_RCVBUF is capped by it.
+SO_RCVBUFFORCE = getattr(socket, "SO_RCVBUFFORCE", 33)
+
+
+def deep_receive_buffer(bus, size=4 << 20):
+    """A master's receive thread may stall for a second (python's GIL, a loaded CI machine, User-Mode Linux's
+    single CPU) while 127 emulated nodes keep sending heartbeats: with the default buffer (~200 KiB, a few
+    hundred frames) the kernel then drops frames, SDO answers among them. A real master would not lose them,
+    so the test's sockets get a deeper buffer."""
+    sock = bus.socket
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, SO_RCVBUFFORCE, size)
+    except OSError:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, size)
+
+
 @pytest.fixture
 def capture():
     bus = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
+    deep_receive_buffer(bus)
     cap = Capture()
     notifier = can.Notifier(bus, [cap], timeout=0.05)
     yield cap
@@ -135,12 +153,15 @@ def emulator(tmp_path):
 def network():
     net = canopen.Network()
     net.connect(interface="socketcan", channel=IFACE)
+    deep_receive_buffer(net.bus)
     yield net
     net.disconnect()
 
 
-def remote(network, device, node_id):
-    node = canopen.RemoteNode(node_id, str(EDS[device]))
+def remote(network, device, node_id, od=None):
+    """A python-canopen node for an emulated device; od: an already imported dictionary to share (parsing an
+    EDS costs ~0.1 s in User-Mode Linux, too much for 127 nodes)."""
+    node = canopen.RemoteNode(node_id, od if od is not None else str(EDS[device]))
     # python-canopen waits 0.3 s for an SDO answer. Inside User-Mode Linux (one virtual CPU shared by the
     # emulator, this master and a capture thread) its receive thread can lag behind a busy bus for longer
     # than that although the answer is on the wire within milliseconds; the master may wait longer.

@@ -169,10 +169,15 @@ def test_127_nodes_in_one_process_all_answer(emulator, network, capture):
     specs = [f"{['pro-ionizer', 'sds', 'buerkert'][i % 3]}:{i}" for i in range(1, 128)]
     emulator(*specs)
     capture.wait_for(0x77F, data=b"\x00", timeout=10)
+    ods = {device: canopen.import_od(str(EDS[device])) for device in EDS}
     for i in range(1, 128):
         device = ["pro-ionizer", "sds", "buerkert"][i % 3]
-        node = remote(network, device, i)
-        assert node.sdo.upload(0x1018, 1)[:1] in (b"\x4e", b"\x39"), i
+        node = remote(network, device, i, ods[device])
+        try:
+            vendor = node.sdo.upload(0x1018, 1)
+        except canopen.SdoCommunicationError as e:
+            raise AssertionError(f"node {i} ({device}) did not answer: {e}") from e
+        assert vendor[:1] in (b"\x4e", b"\x39"), i
 
 
 def test_sigint_and_sigterm_stop_cleanly(emulator, capture):

@@ -236,6 +236,45 @@ static void emcy_raised_in_stopped_is_sent_on_leaving_it(void)
     ASSERT_FRAME(0, 0x085U, 8, 0x00, 0x50, 0x01, 0, 0, 0, 0, 0);
 }
 
+/* co_node_rx tells a runner with many nodes on one bus which frames concerned the node (it then processes
+ * that node) and which it ignored (the node's last deadline still holds). */
+static bool rx_concerns(uint32_t id, uint8_t len, uint8_t flags)
+{
+    co_frame_t f = {id, len, flags, {0x01U, 0x00U, 0x10U, 0x00U, 0U, 0U, 0U, 0U}};
+    return co_node_rx(&fx.node, &f, fx.now);
+}
+
+static void rx_reports_whether_the_frame_concerned_the_node(void)
+{
+    /* Pre-operational, node 5 */
+    TEST_ASSERT_TRUE(rx_concerns(0x605U, 8U, 0U));            /* its SDO request */
+    TEST_ASSERT_FALSE(rx_concerns(0x606U, 8U, 0U));           /* another node's */
+    TEST_ASSERT_FALSE(rx_concerns(0x585U, 8U, 0U));           /* an SDO response */
+    TEST_ASSERT_TRUE(rx_concerns(0x080U, 0U, 0U));            /* SYNC */
+    TEST_ASSERT_TRUE(rx_concerns(0x7E5U, 8U, 0U));            /* LSS */
+    TEST_ASSERT_TRUE(rx_concerns(0x705U, 0U, CO_FRAME_RTR));  /* its node-guarding request */
+    TEST_ASSERT_FALSE(rx_concerns(0x706U, 0U, CO_FRAME_RTR));
+    TEST_ASSERT_FALSE(rx_concerns(0x000U, 0U, CO_FRAME_RTR)); /* an RTR on the NMT COB-ID */
+    TEST_ASSERT_FALSE(rx_concerns(0x707U, 1U, 0U));           /* a heartbeat nobody consumes */
+    TEST_ASSERT_FALSE(rx_concerns(0x605U, 8U, CO_FRAME_EFF)); /* 29-bit */
+    TEST_ASSERT_FALSE(rx_concerns(0x605U, 8U, CO_FRAME_ERR)); /* error frame */
+    TEST_ASSERT_EQUAL_UINT32(0U, fx_sdo_write_u32(0x1016, 1, 0x00070100UL, 4U)); /* consume node 7, 256 ms */
+    TEST_ASSERT_TRUE(rx_concerns(0x707U, 1U, 0U));
+    /* Operational: its RPDO1 (0x205) counts, the disabled RPDO2 (0x305) does not */
+    RX(0x000, 0x01, 0x05);
+    TEST_ASSERT_TRUE(rx_concerns(0x205U, 4U, 0U));
+    TEST_ASSERT_FALSE(rx_concerns(0x305U, 4U, 0U));
+    /* Stopped: its frames still count (the services decide to stay silent), other nodes' do not */
+    RX(0x000, 0x02, 0x05);
+    const uint32_t sent = fx.port.n_sent;
+    TEST_ASSERT_TRUE(rx_concerns(0x605U, 8U, 0U));
+    (void)fx_process();
+    TEST_ASSERT_EQUAL_UINT32(sent, fx.port.n_sent); /* ... silent in Stopped */
+    TEST_ASSERT_FALSE(rx_concerns(0x606U, 8U, 0U));
+    TEST_ASSERT_TRUE(rx_concerns(0x7E5U, 8U, 0U));
+    TEST_ASSERT_TRUE(rx_concerns(0x000U, 2U, 0U));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -252,5 +291,6 @@ int main(void)
     RUN_TEST(resets_restore_stored_values_not_defaults);
     RUN_TEST(state_service_matrix);
     RUN_TEST(emcy_raised_in_stopped_is_sent_on_leaving_it);
+    RUN_TEST(rx_reports_whether_the_frame_concerned_the_node);
     return UNITY_END();
 }
