@@ -1,0 +1,67 @@
+/*
+ * Shared helpers of the bus benchmarks (docs/performance.md): a raw CAN socket with kernel receive
+ * timestamps and drop counting, expedited SDO frames, sample statistics and a tiny JSON writer.
+ *
+ * Arrival times are the kernel's (SO_TIMESTAMPNS, CLOCK_REALTIME based): they are taken when the frame
+ * reaches the socket, so the scheduling delay of the reading process does not enter a measured period
+ * or round trip. Send times are CLOCK_REALTIME read just before write(), the same clock.
+ */
+#ifndef BENCH_CAN_H
+#define BENCH_CAN_H
+
+#include <linux/can.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+typedef struct bench_can {
+    int fd;
+    uint32_t drops; /* SO_RXQ_OVFL: frames the kernel dropped because this socket's buffer was full */
+} bench_can_t;
+
+/* Opens a raw CAN socket on ifname with a receive buffer of rcvbuf bytes (0: the default); returns 0 or -1
+ * (message on stderr). Frames are read with bench_can_recv. */
+int bench_can_open(bench_can_t *c, const char *ifname, int rcvbuf);
+void bench_can_close(bench_can_t *c);
+
+/* Sends one classic frame; waits for room when the socket's queue is full (never drops). 0 or -1. */
+int bench_can_send(bench_can_t *c, uint32_t id, uint8_t len, const uint8_t *data);
+
+/* Receives one frame, waiting until the absolute CLOCK_MONOTONIC time deadline_ns (0: do not wait).
+ * Returns 1 (frame, *t_ns = kernel arrival time, realtime ns), 0 (deadline passed) or -1 (error). */
+int bench_can_recv(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int64_t deadline_ns);
+
+int64_t bench_mono_ns(void);
+int64_t bench_real_ns(void);
+void bench_sleep_until(int64_t mono_ns);
+
+/* Parses a number (decimal or 0x-hex) into [lo, hi]; exits with status 2 and a message otherwise. */
+long long bench_num(const char *text, long long lo, long long hi, const char *what);
+/* "A" or "A-B" (numbers as bench_num) into *lo, *hi. */
+void bench_range(const char *text, long long lo, long long hi, long long *a, long long *b, const char *what);
+
+/* Samples (doubles) with percentiles by nearest rank on the sorted values. */
+typedef struct bench_samples {
+    double *v;
+    size_t n;
+    size_t cap;
+    bool sorted;
+} bench_samples_t;
+
+void samples_add(bench_samples_t *s, double x);
+double samples_pct(bench_samples_t *s, double p); /* p in [0, 100]; 0 for an empty set */
+double samples_mean(const bench_samples_t *s);
+void samples_free(bench_samples_t *s);
+
+/* Expedited SDO requests (client -> server, 8 bytes). */
+void sdo_upload_req(uint8_t out[8], uint16_t index, uint8_t sub);
+void sdo_download_req(uint8_t out[8], uint16_t index, uint8_t sub, uint8_t size, uint32_t value);
+
+/* Reads utime + stime (clock ticks) of a process from /proc/<pid>/stat; -1 when it cannot. */
+long long bench_proc_cpu_ticks(int pid, long long *utime, long long *stime);
+
+/* Minimal JSON output: the programs print one object; the driver (bench/run_bus.py) parses it. */
+void json_stats(FILE *out, const char *key, bench_samples_t *s, double scale, bool last);
+
+#endif

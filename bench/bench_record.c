@@ -1,0 +1,123 @@
+/*
+ * bench-record: period statistics of cyclic frames (docs/performance.md).
+ *
+ *   bench-record [-i IFACE] -p PERIOD_US -d SECONDS NAME=IDS [NAME=IDS ...]
+ *
+ * IDS is a COB-ID or a range (0x701-0x77F). For SECONDS it records the kernel arrival time
+ * (SO_TIMESTAMPNS) of every frame whose COB-ID is in a group; each COB-ID is its own stream and an
+ * interval is the time between two consecutive frames of one stream. Per group it prints (JSON, µs):
+ * intervals, streams seen, mean error = mean(interval) - PERIOD, and p50/p99/max of |interval - PERIOD|,
+ * plus the intervals longer than 1.5 periods (a missing frame). Kernel timestamps leave out the
+ * recorder's own wake-up latency; they do include the sender's (that is what is measured).
+ */
+#define _GNU_SOURCE
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench_can.h"
+
+#define MAX_GROUPS 8
+
+typedef struct group {
+    char name[32];
+    uint32_t lo;
+    uint32_t hi;
+    bench_samples_t dev_ns;   /* |interval - period| */
+    double sum_interval_ns;
+    unsigned long n_frames;
+    unsigned long missing;
+} group_t;
+
+int main(int argc, char **argv)
+{
+    const char *iface = "vcan0";
+    long long period_us = 0;
+    long long seconds = 0;
+    group_t groups[MAX_GROUPS];
+    size_t n_groups = 0U;
+    memset(groups, 0, sizeof groups);
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "-i") == 0 && i + 1 < argc) {
+            iface = argv[++i];
+        } else if (strcmp(argv[i], "-p") == 0 && i + 1 < argc) {
+            period_us = bench_num(argv[++i], 1, 3600000000LL, "period");
+        } else if (strcmp(argv[i], "-d") == 0 && i + 1 < argc) {
+            seconds = bench_num(argv[++i], 1, 86400, "duration");
+        } else if (strchr(argv[i], '=') != NULL && n_groups < MAX_GROUPS) {
+            group_t *g = &groups[n_groups++];
+            const char *eq = strchr(argv[i], '=');
+            (void)snprintf(g->name, sizeof g->name, "%.*s", (int)(eq - argv[i]), argv[i]);
+            long long lo;
+            long long hi;
+            bench_range(eq + 1, 0, 0x7FF, &lo, &hi, "COB-ID range");
+            g->lo = (uint32_t)lo;
+            g->hi = (uint32_t)hi;
+        } else {
+            fprintf(stderr, "usage: bench-record [-i IFACE] -p PERIOD_US -d SECONDS NAME=ID[-ID] ...\n");
+            return 2;
+        }
+    }
+    if (period_us == 0 || seconds == 0 || n_groups == 0U) {
+        fprintf(stderr, "bench-record: -p, -d and at least one NAME=IDS are needed\n");
+        return 2;
+    }
+    bench_can_t can;
+    if (bench_can_open(&can, iface, 16 * 1024 * 1024) != 0) {
+        return 1;
+    }
+    static int64_t last[2048];
+    static int8_t owner[2048];
+    memset(owner, -1, sizeof owner);
+    for (size_t g = 0U; g < n_groups; g++) {
+        for (uint32_t id = groups[g].lo; id <= groups[g].hi; id++) {
+            owner[id] = (int8_t)g;
+        }
+    }
+    const double period_ns = (double)period_us * 1000.0;
+    const int64_t end = bench_mono_ns() + seconds * 1000000000LL;
+    struct can_frame f;
+    int64_t t;
+    int r;
+    while ((r = bench_can_recv(&can, &f, &t, end)) == 1) {
+        if ((f.can_id & (CAN_EFF_FLAG | CAN_ERR_FLAG | CAN_RTR_FLAG)) != 0U) {
+            continue;
+        }
+        const uint32_t id = f.can_id & CAN_SFF_MASK;
+        if (owner[id] < 0) {
+            continue;
+        }
+        group_t *g = &groups[owner[id]];
+        g->n_frames++;
+        if (last[id] != 0) {
+            const double iv = (double)(t - last[id]);
+            g->sum_interval_ns += iv;
+            samples_add(&g->dev_ns, iv > period_ns ? iv - period_ns : period_ns - iv);
+            if (iv > 1.5 * period_ns) {
+                g->missing++;
+            }
+        }
+        last[id] = t;
+    }
+    if (r < 0) {
+        return 1;
+    }
+    printf("{\"period_us\": %lld, \"seconds\": %lld, \"rx_drops\": %lu, \"groups\": {", period_us, seconds,
+           (unsigned long)can.drops);
+    for (size_t gi = 0U; gi < n_groups; gi++) {
+        group_t *g = &groups[gi];
+        unsigned streams = 0U;
+        for (uint32_t id = g->lo; id <= g->hi; id++) {
+            streams += last[id] != 0 ? 1U : 0U;
+        }
+        const double mean_err = g->dev_ns.n > 0U ? g->sum_interval_ns / (double)g->dev_ns.n - period_ns : 0.0;
+        printf("%s\"%s\": {\"streams\": %u, \"frames\": %lu, \"intervals\": %zu, \"missing\": %lu, "
+               "\"mean_error_us\": %.3f, ",
+               gi > 0U ? ", " : "", g->name, streams, g->n_frames, g->dev_ns.n, g->missing, mean_err / 1000.0);
+        json_stats(stdout, "abs_dev_us", &g->dev_ns, 1e-3, true);
+        printf("}");
+    }
+    printf("}}\n");
+    bench_can_close(&can);
+    return 0;
+}

@@ -1,0 +1,297 @@
+#!/usr/bin/env python3
+"""The bus half of tools/bench: runs where vcan0 is up (inside one `tools/vcan-run` call) and writes one
+JSON file with every figure. Standard library only.
+
+    run_bus.py --bin DIR --emu PATH --work DIR --out FILE [--mode full|quick|smoke]
+
+Sections (docs/performance.md explains each): SDO round trip against bench-echo (the floor) and
+canopen-emu; heartbeat/TPDO periods next to the ideal generator; instructions per SDO request, heartbeat
+and TPDO of canopen-emu under callgrind (difference of runs); 127 nodes: CPU share, period error, highest
+lossless SDO rate. Any program failing (non-zero status, unparsable output) fails the whole run.
+"""
+import argparse
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+
+IFACE = "vcan0"
+NODE = 1  # the Bürkert flow controller's own default node-ID
+
+# Sizes per mode. full: the figures of docs/performance.md; quick: a fast look (not full figures);
+# smoke: the ctest, only proves every program still runs and parses.
+SIZES = {
+    "full": dict(rtt_n=5000, period_s=12, cg_n=2000, cg_hold_s=5, scale_window_s=30, rate_step_ms=2000,
+                 rates=[250, 500, 1000, 1500, 2000, 3000, 4000, 6000, 8000, 12000, 16000, 24000, 32000, 48000, 64000],
+                 callgrind=True),
+    "quick": dict(rtt_n=500, period_s=3, cg_n=200, cg_hold_s=1, scale_window_s=5, rate_step_ms=500,
+                  rates=[500, 1000, 2000, 4000, 8000, 16000, 32000], callgrind=True),
+    "smoke": dict(rtt_n=20, period_s=1, cg_n=0, cg_hold_s=0, scale_window_s=1, rate_step_ms=200,
+                  rates=[100, 200], callgrind=False),
+}
+
+
+class BenchError(Exception):
+    pass
+
+
+class Runner:
+    def __init__(self, args):
+        self.bin = args.bin
+        self.emu_path = args.emu
+        self.work = args.work
+        self.commands = []  # (section, argv) for the document
+        self.emu_runs = 0
+
+    def show(self, argv):
+        """A command as the document shows it: build paths replaced by names."""
+        out = []
+        for a in argv:
+            a = a.replace(self.bin + "/", "")
+            a = a.replace(self.emu_path, "canopen-emu")
+            a = a.replace(self.work, "$WORK")
+            out.append(a)
+        return " ".join(out)
+
+    def prog(self, name):
+        return os.path.join(self.bin, name)
+
+    def run_json(self, section, argv, timeout=600):
+        self.commands.append((section, self.show(argv)))
+        p = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=timeout)
+        if p.returncode != 0:
+            raise BenchError(f"{self.show(argv)}: exit {p.returncode}\n{p.stderr}{p.stdout}")
+        try:
+            return json.loads(p.stdout.strip().splitlines()[-1])
+        except (ValueError, IndexError) as e:
+            raise BenchError(f"{self.show(argv)}: output not JSON ({e}): {p.stdout!r}") from e
+
+    def start(self, section, argv, stdout=subprocess.PIPE):
+        self.commands.append((section, self.show(argv)))
+        return subprocess.Popen(argv, stdout=stdout, stderr=subprocess.PIPE, text=True)
+
+    def stop(self, proc, what, timeout=120):
+        """SIGTERM and wait; the program must exit 0 (canopen-emu and bench-echo do on SIGTERM)."""
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+        try:
+            out, err = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, err = proc.communicate()
+            raise BenchError(f"{what} did not stop within {timeout} s")
+        if proc.returncode != 0:
+            raise BenchError(f"{what}: exit {proc.returncode}\n{err}")
+        return out, err
+
+    def emu(self, section, specs, valgrind_out=None):
+        self.emu_runs += 1
+        nvm = os.path.join(self.work, f"nvm{self.emu_runs}")
+        os.makedirs(nvm, exist_ok=True)
+        argv = [self.emu_path, "-i", IFACE, "--nvm-dir", nvm, "-q"] + specs
+        if valgrind_out:
+            argv = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={valgrind_out}"] + argv
+        show_specs = specs if len(specs) <= 3 else [specs[0], "...", specs[-1]]
+        shown = (argv[: len(argv) - len(specs)]) + show_specs
+        self.commands.append((section, self.show(shown)))
+        return subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def loadavg():
+    with open("/proc/loadavg") as f:
+        return " ".join(f.read().split()[:3])
+
+
+def cpu_ticks(pid):
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return int(fields[11]), int(fields[12])  # utime, stime (fields 14, 15)
+
+
+def tpdo_setup(node, event_ms):
+    """TPDO1 of a Bürkert node: invalid, no inhibit time (only writable while invalid), event timer, valid."""
+    return ["w", str(node), "0x1800:1", "4", hex(0x80000180 + node), "w", str(node), "0x1800:3", "2", "0",
+            "w", str(node), "0x1800:5", "2", str(event_ms), "w", str(node), "0x1800:1", "4", hex(0x180 + node)]
+
+
+def sdo_rtt(r, sz):
+    """Round trip: the same client, the same requests, first against the echo floor, then canopen-emu."""
+    n = str(sz["rtt_n"])
+    ops = ["up", str(NODE), "0x1018:1", n, "down", str(NODE), "0x1017", "2", "0", n]
+    res = {}
+    echo = r.start("rtt", [r.prog("bench-echo"), "-i", IFACE, str(NODE)])
+    time.sleep(0.2)
+    try:
+        res["floor"] = r.run_json("rtt", [r.prog("bench-sdo"), "-i", IFACE, "--any-reply"] + ops)
+    finally:
+        r.stop(echo, "bench-echo")
+    emu = r.emu("rtt", [f"buerkert:{NODE}"])
+    try:
+        # 0x1017 = 0 first: no heartbeat between the measured frames.
+        res["emu"] = r.run_json("rtt", [r.prog("bench-sdo"), "-i", IFACE, "ready", str(NODE),
+                                        "w", str(NODE), "0x1017", "2", "0"] + ops)
+    finally:
+        r.stop(emu, "canopen-emu")
+    res["n"] = sz["rtt_n"]
+    return res
+
+
+def periods(r, sz):
+    """Heartbeat and event-timer TPDO at 10 ms, recorded next to the ideal generator at 10 ms."""
+    period_us = 10000
+    d = sz["period_s"]
+    emu = r.emu("periods", [f"buerkert:{NODE}"])
+    try:
+        r.run_json("periods", [r.prog("bench-sdo"), "-i", IFACE, "ready", str(NODE), "w", str(NODE), "0x1017", "2", "10"]
+                   + tpdo_setup(NODE, 10) + ["nmt", "1", str(NODE), "sleep", "200"])
+        rec = r.start("periods", [r.prog("bench-record"), "-i", IFACE, "-p", str(period_us), "-d", str(d),
+                                  f"heartbeat=0x{0x700 + NODE:03X}", f"tpdo=0x{0x180 + NODE:03X}", "ideal=0x7F0"])
+        gen = r.start("periods", [r.prog("bench-gen"), "-i", IFACE, "-p", str(period_us), "-d", str(d + 1), "0x7F0"])
+        rec_out, rec_err = rec.communicate(timeout=d + 60)
+        gen_out, gen_err = gen.communicate(timeout=d + 60)
+        if rec.returncode != 0 or gen.returncode != 0:
+            raise BenchError(f"bench-record/bench-gen failed: {rec_err}{gen_err}")
+    finally:
+        r.stop(emu, "canopen-emu")
+    return {"period_us": period_us, "seconds": d, "record": json.loads(rec_out), "gen": json.loads(gen_out)}
+
+
+def callgrind_total(path):
+    total = None
+    with open(path) as f:
+        for line in f:
+            m = re.match(r"(?:totals|summary):\s+(\d+)", line)
+            if m:
+                total = int(m.group(1))
+    if total is None:
+        raise BenchError(f"no totals in {path}")
+    return total
+
+
+def cg_run(r, name, client_cmds):
+    out = os.path.join(r.work, f"callgrind.{name}")
+    emu = r.emu("callgrind", [f"buerkert:{NODE}"], valgrind_out=out)
+    try:
+        # Long timeout and drain: under valgrind in UML the server starts and answers slowly.
+        # --gap-ms: one request per wake-up of the server (see bench_sdo.c), as with a master that is not
+        # sending back to back; otherwise valgrind's slowness batches requests and the count depends on speed.
+        res = r.run_json("callgrind", [r.prog("bench-sdo"), "-i", IFACE, "--timeout-ms", "20000", "--gap-ms", "3",
+                                       "ready", str(NODE),
+                                       "1000"] + client_cmds, timeout=900)
+    finally:
+        r.stop(emu, "canopen-emu under callgrind", timeout=300)
+    res["ir"] = callgrind_total(out)
+    return res
+
+
+def callgrind(r, sz):
+    """Instructions of canopen-emu per SDO request, heartbeat and TPDO: runs that differ only in the
+    number of those events (heartbeat off, node otherwise idle), Ir difference / event difference."""
+    n = str(sz["cg_n"])
+    hold = str(sz["cg_hold_s"] * 1000)
+    quiet = ["w", str(NODE), "0x1017", "2", "0"]
+    res = {"n": sz["cg_n"], "hold_ms": int(hold)}
+    a = cg_run(r, "sdo_n", quiet + ["up", str(NODE), "0x1018:1", n, "down", str(NODE), "0x1017", "2", "0", n])
+    b = cg_run(r, "sdo_0", quiet)
+    res["sdo"] = {"ir_n": a["ir"], "ir_0": b["ir"], "answers_n": a["sdo_answers"], "answers_0": b["sdo_answers"]}
+    hb = f"0x{0x700 + NODE:03X}"
+    a = cg_run(r, "hb_k", quiet + ["w", str(NODE), "0x1017", "2", "10", "sleep", hold] + quiet)
+    b = cg_run(r, "hb_0", quiet + quiet + ["sleep", hold] + quiet)
+    res["heartbeat"] = {"ir_n": a["ir"], "ir_0": b["ir"], "frames_n": a["frames"].get(hb, 0),
+                        "frames_0": b["frames"].get(hb, 0)}
+    tp = f"0x{0x180 + NODE:03X}"
+    off = ["w", str(NODE), "0x1800:5", "2", "0"]
+    a = cg_run(r, "tpdo_k", quiet + tpdo_setup(NODE, 10) + ["nmt", "1", str(NODE), "sleep", hold] + off)
+    b = cg_run(r, "tpdo_0", quiet + tpdo_setup(NODE, 0) + ["nmt", "1", str(NODE), "sleep", hold] + off)
+    res["tpdo"] = {"ir_n": a["ir"], "ir_0": b["ir"], "frames_n": a["frames"].get(tp, 0), "frames_0": b["frames"].get(tp, 0)}
+    for k in ("sdo", "heartbeat", "tpdo"):
+        d = res[k]
+        events = (d["answers_n"] - d["answers_0"]) if k == "sdo" else (d["frames_n"] - d["frames_0"])
+        d["events"] = events
+        d["ir_per_event"] = (d["ir_n"] - d["ir_0"]) / events if events > 0 else None
+    return res
+
+
+def scale(r, sz):
+    """127 Bürkert nodes in one canopen-emu: heartbeat 100 ms and TPDO1 every 100 ms each."""
+    nodes = range(1, 128)
+    emu = r.emu("scale", [f"buerkert:{n}" for n in nodes])
+    res = {"nodes": len(nodes)}
+    try:
+        cmds = ["ready", "1-127", "300"]
+        for n in nodes:
+            cmds += ["w", str(n), "0x1017", "2", "100"] + tpdo_setup(n, 100)
+        cmds += ["nmt", "1", "0", "sleep", "1000"]
+        t0 = time.monotonic()
+        r.run_json("scale", [r.prog("bench-sdo"), "-i", IFACE] + cmds)
+        res["config_s"] = time.monotonic() - t0
+        w = sz["scale_window_s"]
+        rec = r.start("scale", [r.prog("bench-record"), "-i", IFACE, "-p", "100000", "-d", str(w),
+                                "heartbeat=0x701-0x77F", "tpdo=0x181-0x1FF"])
+        u0, s0 = cpu_ticks(emu.pid)
+        t0 = time.monotonic()
+        rec_out, rec_err = rec.communicate(timeout=w + 120)
+        u1, s1 = cpu_ticks(emu.pid)
+        dt = time.monotonic() - t0
+        if rec.returncode != 0:
+            raise BenchError(f"bench-record: {rec_err}")
+        tck = os.sysconf("SC_CLK_TCK")
+        res["window_s"] = dt
+        res["cpu_user"] = (u1 - u0) / tck / dt
+        res["cpu_sys"] = (s1 - s0) / tck / dt
+        res["cpu_share"] = res["cpu_user"] + res["cpu_sys"]
+        res["loadavg_window"] = loadavg()
+        res["record"] = json.loads(rec_out)
+        res["rate"] = r.run_json("scale", [r.prog("bench-rate"), "-i", IFACE, "--pid", str(emu.pid), "--step-ms",
+                                           str(sz["rate_step_ms"]), "--nodes", "1-127"] + [str(x) for x in sz["rates"]],
+                                 timeout=1200)
+    finally:
+        _, err = r.stop(emu, "canopen-emu (127 nodes)")
+    res["emu_stderr"] = err.strip()[-2000:]
+    return res
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bin", required=True)
+    ap.add_argument("--emu", required=True)
+    ap.add_argument("--work", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--mode", choices=sorted(SIZES), default="full")
+    args = ap.parse_args()
+    args.bin = os.path.abspath(args.bin)
+    args.emu = os.path.abspath(args.emu)
+    args.work = os.path.abspath(args.work)
+    os.makedirs(args.work, exist_ok=True)
+    sz = SIZES[args.mode]
+    r = Runner(args)
+    res = {"mode": args.mode, "sizes": sz, "inside": {"kernel": os.uname().release, "cpus": os.cpu_count(),
+                                                      "loadavg_before": loadavg()}}
+    started = time.monotonic()
+    steps = [("rtt", sdo_rtt), ("periods", periods)]
+    if sz["callgrind"]:
+        steps.append(("callgrind", callgrind))
+    steps.append(("scale", scale))
+    try:
+        for name, fn in steps:
+            t0 = time.monotonic()
+            print(f"bench: {name} ...", file=sys.stderr, flush=True)
+            res[name] = fn(r, sz)
+            res[name]["elapsed_s"] = time.monotonic() - t0
+            res[name]["loadavg_after"] = loadavg()
+    except (BenchError, subprocess.TimeoutExpired, OSError) as e:
+        print(f"bench: FAILED: {e}", file=sys.stderr)
+        return 1
+    res["inside"]["loadavg_after"] = loadavg()
+    res["inside"]["elapsed_s"] = time.monotonic() - started
+    res["commands"] = r.commands
+    with open(args.out, "w") as f:
+        json.dump(res, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
