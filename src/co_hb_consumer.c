@@ -28,6 +28,22 @@ static void slot_configure(co_node_t *node, uint8_t i)
     s->remote_state = 0U;
 }
 
+/* 0x1016 often has many entries (127 in the Bürkert dictionary) and few or none in use, while rx runs for
+ * every heartbeat on the bus and process at every wake-up: both look only at what is configured (measured:
+ * docs/performance.md, "the core alone"). */
+static void update_index(co_node_t *node)
+{
+    node->hbc.used = 0U;
+    memset(node->hbc.monitored, 0, sizeof node->hbc.monitored);
+    for (uint8_t i = 0U; i < node->hbc.count; i++) {
+        const uint8_t id = node->hbc.slot[i].node_id;
+        if (id != 0U) {
+            node->hbc.used = (uint8_t)(i + 1U);
+            node->hbc.monitored[id >> 3] = (uint8_t)(node->hbc.monitored[id >> 3] | (1U << (id & 7U)));
+        }
+    }
+}
+
 void co_hbc_reset(co_node_t *node)
 {
     uint8_t n = co_od_sub_count(node->od, 0x1016U);
@@ -36,6 +52,7 @@ void co_hbc_reset(co_node_t *node)
         node->hbc.slot[i].state = 0U;
         slot_configure(node, i);
     }
+    update_index(node);
 }
 
 bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
@@ -44,8 +61,11 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
         return false;
     }
     const uint8_t id = (uint8_t)(f->id - 0x700U);
+    if ((node->hbc.monitored[id >> 3] & (1U << (id & 7U))) == 0U) {
+        return false;
+    }
     bool used = false;
-    for (uint8_t i = 0U; i < node->hbc.count; i++) {
+    for (uint8_t i = 0U; i < node->hbc.used; i++) {
         co_hb_consumer_slot_t *s = &node->hbc.slot[i];
         if (s->node_id != id || s->state == 0U) {
             continue;
@@ -73,7 +93,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
 co_time_us_t co_hbc_process(co_node_t *node)
 {
     co_time_us_t next = CO_NEVER;
-    for (uint8_t i = 0U; i < node->hbc.count; i++) {
+    for (uint8_t i = 0U; i < node->hbc.used; i++) {
         co_hb_consumer_slot_t *s = &node->hbc.slot[i];
         if (s->state != 2U) {
             continue;
@@ -116,5 +136,6 @@ void co_hbc_written(co_node_t *node, const co_od_entry_t *e)
 {
     if (e->sub >= 1U && e->sub <= node->hbc.count) {
         slot_configure(node, (uint8_t)(e->sub - 1U));
+        update_index(node);
     }
 }

@@ -153,6 +153,9 @@ typedef struct co_hb_consumer_slot {
 typedef struct co_hb_consumer {
     co_hb_consumer_slot_t slot[CO_HB_CONSUMER_MAX];
     uint8_t count;              /**< Slots in use = sub-indices of 0x1016 (capped at CO_HB_CONSUMER_MAX). */
+    uint8_t used;               /**< 1 + the last slot that monitors a node (0: none): the loops stop there. */
+    uint8_t monitored[16];      /**< Bit n: node-ID n is monitored by some slot (a heartbeat of another node
+                                     is rejected without a loop). */
 } co_hb_consumer_t;
 
 typedef struct co_emcy_error {

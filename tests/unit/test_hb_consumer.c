@@ -279,6 +279,31 @@ static void reset_communication_forgets_monitoring(void)
     TEST_ASSERT_EQUAL_UINT32(0U, fx.port.n_sent);
 }
 
+/* Only the last entry in use, for node 127 (the last bit of the monitored set); then the same entry moved to
+ * node 9: the heartbeat of 127 is then ignored and that of 9 monitored. rx/process skip unused entries. */
+static void last_entry_and_highest_node_id_are_monitored(void)
+{
+    consume(4U, 0x007F0064UL); /* entry 4: node 127, 100 ms */
+    RX(0x77F, 0x05);
+    TEST_ASSERT_TRUE(co_node_rx(&fx.node, &(co_frame_t){0x77FU, 1U, 0U, {0x05U}}, fx.now));
+    fx_advance(100U * MS);
+    TEST_ASSERT_EQUAL_UINT32(1U, hb_timeouts(127U));
+    ASSERT_FRAME(0, 0x085U, 8, 0x30, 0x81, 0x11, 0x02, 0x7F, 0x00, 0x00, 0x00);
+    RX(0x77F, 0x05); /* 127 is back: error reset */
+    fake_port_clear(&fx.port);
+    consume(4U, 0x00090064UL); /* entry 4: node 9 */
+    TEST_ASSERT_FALSE(co_node_rx(&fx.node, &(co_frame_t){0x77FU, 1U, 0U, {0x05U}}, fx.now));
+    TEST_ASSERT_TRUE(co_node_rx(&fx.node, &(co_frame_t){0x709U, 1U, 0U, {0x05U}}, fx.now));
+    fx_advance(100U * MS);
+    TEST_ASSERT_EQUAL_UINT32(1U, hb_timeouts(127U));
+    TEST_ASSERT_EQUAL_UINT32(1U, hb_timeouts(9U));
+    RX(0x709, 0x05); /* 9 is back: error reset */
+    fake_port_clear(&fx.port);
+    consume(4U, 0U); /* unused again: nothing is monitored */
+    TEST_ASSERT_FALSE(co_node_rx(&fx.node, &(co_frame_t){0x709U, 1U, 0U, {0x05U}}, fx.now));
+    TEST_ASSERT_EQUAL_UINT8(0U, fx.node.hbc.used);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -298,5 +323,6 @@ int main(void)
     RUN_TEST(rewriting_entry_restarts_waiting_for_first_heartbeat);
     RUN_TEST(disabling_timed_out_entry_clears_its_error);
     RUN_TEST(reset_communication_forgets_monitoring);
+    RUN_TEST(last_entry_and_highest_node_id_are_monitored);
     return UNITY_END();
 }
