@@ -2,20 +2,35 @@
  * @file nvm_file.h
  * @brief The port's non-volatile memory as files: one file per area of one node, replaced atomically.
  *
- * Writes go to "<file>.tmp"; commit truncates it to the blob's length, fsyncs it, renames it over the
- * file and fsyncs the directory, so after a crash at any moment the file is the whole old blob or the
- * whole new one (the core also checks a CRC on load). Files: <dir>/<key>.params, .lss, .device.
+ * Writes go to a staging copy in memory; commit writes it to "<file>.tmp" (a fresh file: a leftover of a
+ * killed process is removed first, a symbolic link there is never followed), fsyncs it, renames it over the
+ * file and fsyncs the directory. So after a crash or SIGKILL at any moment the file is the whole old blob or
+ * the whole new one (the core also checks a CRC on load), and a leftover "<file>.tmp" is never read.
+ * Reads use one descriptor per area, opened again by every read at offset 0 (every load starts there) and
+ * after every commit: a load costs one open, not one per record, and still sees a file replaced meanwhile.
+ * Files: <dir>/<key>.params, .lss, .device.
  */
 #ifndef NVM_FILE_H
 #define NVM_FILE_H
 
 #include <limits.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
 
 #include "co/co.h"
 
+typedef struct nvm_staging {
+    uint8_t *buf;  /**< the blob being written (malloc'd, kept for the next store) */
+    size_t cap;    /**< bytes allocated */
+    size_t len;    /**< highest offset + length written since the last commit */
+    bool active;   /**< a write happened since the last commit */
+} nvm_staging_t;
+
 typedef struct nvm_file {
     char path[3][PATH_MAX];
-    int staging[3]; /**< fd of <file>.tmp while a blob is being written, else -1 */
+    nvm_staging_t staging[3];
+    int read_fd[3]; /**< the committed file open for reading, or -1 */
     int dir_fd;
 } nvm_file_t;
 

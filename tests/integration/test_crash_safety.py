@@ -1,0 +1,562 @@
+"""Crash safety of the emulator's stored data (issue 7).
+
+test_sigkill_while_storing: canopen-emu is killed with SIGKILL hundreds of times at seeded random moments around
+stores (before the request, while it is outstanding, after the answer) and restarted on the same --nvm-dir. After
+every restart each stored area holds one generation completely: the last confirmed one or the one in flight,
+never a mix of two, never garbage, never the defaults once a store was confirmed. Replay a failure with the seed
+it prints: CO_CRASH_SEED=<seed> (CO_CRASH_KILLS changes the number of kills).
+
+test_damaged_file_*: each kind of NVM file (.params, .lss, .device) truncated, with flipped bytes, replaced by
+another device's file or by garbage: the emulator starts, logs the damage, the node runs on that area's
+defaults (the other areas keep their values) and a following store works and loads after a restart."""
+import os
+import random
+import re
+import shutil
+import signal
+import struct
+import time
+
+import can
+import canopen
+import pytest
+
+from conftest import EDS, IFACE, Capture, Emulator, deep_receive_buffer
+
+SAVE = struct.pack("<I", 0x65766173)  # "save" for 0x1010:01
+
+# Generous deadlines: a loaded CI machine running User-Mode Linux (one virtual CPU for the emulator, this
+# master and the capture thread) answers within milliseconds, but can stall for a second now and then.
+BOOT_TIMEOUT = 10.0
+SDO_TIMEOUT = 5.0
+
+
+# ---- a raw expedited SDO client that keeps several requests in flight --------------------------------------------
+# python-canopen waits for each answer before the next request. Expedited requests carry no server state between
+# frames, so sending a batch and collecting the answers by their multiplexer is exact and many times faster,
+# which is what makes hundreds of restarts fit into the suite's time.
+
+def upload_frame(index, sub):
+    return bytes([0x40, index & 0xFF, index >> 8, sub, 0, 0, 0, 0])
+
+
+def download_frame(index, sub, data):
+    n = len(data)
+    assert 1 <= n <= 4
+    return bytes([0x23 | ((4 - n) << 2), index & 0xFF, index >> 8, sub]) + data + bytes(4 - n)
+
+
+class Bus:
+    """The test's own view of vcan0: a sending socket and a capture of every frame in arrival order."""
+
+    def __init__(self):
+        self.tx = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
+        self.rx = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
+        deep_receive_buffer(self.rx)
+        self.cap = Capture()
+        self.notifier = can.Notifier(self.rx, [self.cap], timeout=0.05)
+        self.sentinel_id = 0x6F0  # no CANopen service of a node uses 0x680..0x6FF
+
+    def close(self):
+        self.notifier.stop()
+        self.rx.shutdown()
+        self.tx.shutdown()
+
+    def mark(self):
+        with self.cap.lock:
+            return len(self.cap.frames)
+
+    def since(self, mark, can_id=None):
+        with self.cap.lock:
+            return [m for m in self.cap.frames[mark:] if not m.is_error_frame
+                    and (can_id is None or m.arbitration_id == can_id)]
+
+    def send(self, can_id, data):
+        self.tx.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
+
+    def sync(self):
+        """Returns once every frame sent on the bus before this call is in the capture: the capture socket receives
+        in bus order, so seeing our own sentinel frame means all earlier frames have arrived."""
+        mark = self.mark()
+        data = os.urandom(8)
+        self.send(self.sentinel_id, data)
+        end = time.monotonic() + SDO_TIMEOUT
+        while time.monotonic() < end:
+            if any(bytes(m.data) == data for m in self.since(mark, self.sentinel_id)):
+                return
+            time.sleep(0.002)
+        raise AssertionError("the capture did not see the sentinel frame")
+
+    def wait_bootups(self, mark, node_ids, timeout=BOOT_TIMEOUT):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            seen = {m.arbitration_id - 0x700 for m in self.since(mark) if 0x701 <= m.arbitration_id <= 0x77F
+                    and bytes(m.data) == b"\x00"}
+            if set(node_ids) <= seen:
+                return
+            time.sleep(0.005)
+        raise AssertionError(f"no boot-up of {sorted(set(node_ids) - seen)} within {timeout} s")
+
+    def answers(self, mark, requests):
+        """requests: [(node_id, index, sub, frame)] already sent after mark; returns {(node, index, sub): data} of
+        the answers seen so far (one request per key and batch)."""
+        want = {(n, i, s) for n, i, s, _ in requests}
+        got = {}
+        for m in self.since(mark):
+            node = m.arbitration_id - 0x580
+            if not 1 <= node <= 127 or len(m.data) != 8:
+                continue
+            key = (node, m.data[1] | (m.data[2] << 8), m.data[3])
+            if key in want and key not in got:
+                got[key] = bytes(m.data)
+        return got
+
+    def transfer(self, requests, timeout=SDO_TIMEOUT):
+        """Sends all requests at once and waits for every answer; returns {(node, index, sub): answer frame}."""
+        mark = self.mark()
+        for node, _, _, frame in requests:
+            self.send(0x600 + node, frame)
+        end = time.monotonic() + timeout
+        while True:
+            got = self.answers(mark, requests)
+            if len(got) == len(requests):
+                return got
+            if time.monotonic() > end:
+                missing = [(n, hex(i), s) for n, i, s, _ in requests if (n, i, s) not in got]
+                raise AssertionError(f"no SDO answer within {timeout} s for {missing}")
+            time.sleep(0.002)
+
+    def read(self, items):
+        """items: [(node, index, sub)] -> {(node, index, sub): int}; an abort fails with its code."""
+        got = self.transfer([(n, i, s, upload_frame(i, s)) for n, i, s in items])
+        values = {}
+        for key, f in got.items():
+            assert f[0] & 0xE0 == 0x40 and f[0] & 0x03 == 0x03, \
+                f"upload of {key[0]}/0x{key[1]:04X}:{key[2]:02X}: answer {f.hex()} (abort 0x{struct.unpack('<I', f[4:])[0]:08X})"
+            n = 4 - ((f[0] >> 2) & 3)
+            values[key] = int.from_bytes(f[4:4 + n], "little")
+        return values
+
+    def write(self, items):
+        """items: [(node, index, sub, bytes)]; every write must be confirmed (0x60)."""
+        got = self.transfer([(n, i, s, download_frame(i, s, d)) for n, i, s, d in items])
+        for key, f in got.items():
+            assert f[0] == 0x60, \
+                f"download to {key[0]}/0x{key[1]:04X}:{key[2]:02X}: answer {f.hex()} (abort 0x{struct.unpack('<I', f[4:])[0]:08X})"
+
+
+@pytest.fixture
+def bus():
+    b = Bus()
+    yield b
+    b.close()
+
+
+def u8(v):
+    return struct.pack("<B", v)
+
+
+def u16(v):
+    return struct.pack("<H", v)
+
+
+def u32(v):
+    return struct.pack("<I", v)
+
+
+# ---- the configurations ---------------------------------------------------------------------------------------------
+# A group is what one store request writes and what must therefore come back whole. Each parameter of a generation k
+# (k >= 1) is derived from k, lies in the object's valid range, differs from its value in generation k - 1 (so a mix
+# of two neighbouring generations shows in every parameter) and differs from the object's default.
+
+PI, SDS, BK = 0x10, 0x11, 0x12
+NODES = {PI: "pro-ionizer", SDS: "sds", BK: "buerkert"}
+
+
+def pi_params(k):
+    # 0x2002:07 (bit timing) is left out: a 0x1010 save of an Eltex device writes it to the .lss file after the
+    # .params file (rule E2), and a kill between the two renames mixes generations; see
+    # test_eltex_save_spans_two_files.
+    return {(0x1017, 0): (100 * (11 + k % 580), 2),        # heartbeat: 100 ms steps (rule E5), default 1000
+            (0x2002, 0x01): (1000 + 10 * (k % 5000), 2),  # TPDO cycle, default 500
+            (0x2002, 0x04): (500 + k % 50000, 2),         # HV release timeout, default 0
+            (0x2002, 0x08): (1000 + k % 4000, 2),         # voltage set-point, default 5000
+            (0x2002, 0x0D): (k % 100, 1)}                 # ion balance, default 100
+
+
+def sds_params(k):
+    return {(0x1017, 0): (100 * (11 + (3 * k) % 580), 2),
+            (0x2002, 0x01): (1010 + 10 * (k % 5000), 2),
+            (0x2002, 0x02): (1 + k % 70, 1),              # polluting factor, default 75
+            (0x2002, 0x04): (35 + k % 15, 1),             # HV adjustment, default 50
+            (0x2002, 0x08): (10 + k % 5, 1)}              # working distance (write-only), default 15
+
+
+def bk_params(k):
+    return {(0x1017, 0): (1000 + k % 50000, 2),           # default 500
+            (0x100C, 0): (100 + k % 50000, 2),            # guard time, default 0
+            (0x100D, 0): (1 + k % 250, 1),                # life time factor, default 0
+            (0x1800, 5): (2000 + k % 50000, 2),           # TPDO event timers, default 1000
+            (0x1801, 5): (3000 + k % 50000, 2),
+            (0x1802, 5): (4000 + k % 50000, 2)}
+
+
+# (group, node, the values of generation k, the store request). Reading back: 0x2002:08 of the SDS is write-only
+# and reads back as 0x6000:05.
+GROUPS = [
+    ("pro-ionizer 0x1010", PI, pi_params, (0x1010, 1, SAVE)),
+    ("sds 0x1010", SDS, sds_params, (0x1010, 1, SAVE)),
+    ("buerkert 0x1010", BK, bk_params, (0x1010, 1, SAVE)),
+    # Buerkert 0x2001:01 (bit rate) is the LSS configuration, stored in the .lss file by the write itself.
+    ("buerkert .lss", BK, lambda k: {(0x2001, 1): (3 + k % 2, 1)}, None),  # 250/125 kbit/s, default 2
+    # Buerkert 0x2004:05 (maximum temperature) is kept in the .device file, stored by the write itself.
+    ("buerkert .device", BK, lambda k: {(0x2004, 5): (100 + k % 60000, 2)}, None),  # default 25 (measured)
+]
+READ_AS = {(SDS, 0x2002, 0x08): (0x6000, 0x05)}
+
+
+def read_key(node, index, sub):
+    return (node,) + READ_AS.get((node, index, sub), (index, sub))
+
+
+def store_request(group, k):
+    """The frame that stores generation k of a group (the values themselves are written before, except for the
+    groups whose write is the store)."""
+    name, node, values, req = group
+    if req is not None:
+        return node, req[0], req[1], download_frame(req[0], req[1], req[2])
+    ((index, sub), (value, size)), = values(k).items()
+    return node, index, sub, download_frame(index, sub, value.to_bytes(size, "little"))
+
+
+def check_generation(name, seen, expected_by_gen, allowed):
+    """seen: {key: value}; expected_by_gen: {gen: {key: value}}; returns the one allowed generation that matches all
+    values, else fails with every parameter and the generations it would belong to."""
+    for g in allowed:
+        if all(seen[key] == v for key, v in expected_by_gen[g].items()):
+            return g
+    lines = []
+    for key, v in seen.items():
+        which = [g for g, exp in expected_by_gen.items() if exp.get(key) == v]
+        lines.append(f"  0x{key[1]:04X}:{key[2]:02X} = {v} (generation {which or 'none: garbage'})")
+    raise AssertionError(f"{name}: stored values are not one whole generation of {sorted(allowed)}:\n" + "\n".join(lines))
+
+
+def test_sigkill_while_storing(emulator, bus, tmp_path):
+    seed = int(os.environ.get("CO_CRASH_SEED", random.SystemRandom().randrange(1 << 32)))
+    kills = int(os.environ.get("CO_CRASH_KILLS", "200"))
+    rng = random.Random(seed)
+    print(f"crash test: seed {seed} (replay with CO_CRASH_SEED={seed}), {kills} kills")
+    tag = f"[seed {seed}; replay with CO_CRASH_SEED={seed}]"
+    nvm = tmp_path / "nvm"
+    specs = [f"{dev}:{node}" for node, dev in NODES.items()]
+
+    def expected(group, k):
+        return {read_key(group[1], *key): value for key, (value, _) in group[2](k).items()}
+
+    confirmed = {g[0]: 0 for g in GROUPS}     # generation 0: the defaults, read at the first start
+    in_flight = {g[0]: None for g in GROUPS}
+    gens = {g[0]: {} for g in GROUPS}         # generation -> expected values, per group
+    stats = {"before": 0, "outstanding": 0, "after": 0, "landed_unconfirmed": 0, "tmp_left": 0}
+    latencies = []
+    phases = {"start": 0.0, "read": 0.0, "write": 0.0, "store": 0.0, "kill": 0.0}
+    t0 = time.monotonic()
+    k = 0
+    for cycle in range(kills + 1):
+        mark = bus.mark()
+        tp = time.perf_counter()
+        emu = emulator(*specs, nvm_dir=nvm, control=False)
+        bus.wait_bootups(mark, NODES)
+        phases["start"] += time.perf_counter() - tp
+        tp = time.perf_counter()
+        # ---- every group holds one whole generation: the confirmed one or the one in flight ----
+        keys = [read_key(g[1], *key) for g in GROUPS for key in g[2](1)]
+        seen = bus.read(keys)
+        for g in GROUPS:
+            name = g[0]
+            mine = {key: seen[key] for key in expected(g, 1)}
+            if cycle == 0:
+                gens[name][0] = dict(mine)  # the defaults, no file exists yet
+                for kk in range(1, 3):
+                    assert all(expected(g, kk)[key] != v for key, v in mine.items()), \
+                        f"{name}: a generation value equals a default, a lost store would go unnoticed"
+            allowed = [confirmed[name]] + ([in_flight[name]] if in_flight[name] is not None else [])
+            got = check_generation(f"{name} after kill {cycle} {tag}", mine, gens[name], allowed)
+            if got != confirmed[name]:
+                stats["landed_unconfirmed"] += 1  # stored, killed before the answer: a new whole generation
+            confirmed[name], in_flight[name] = got, None
+        phases["read"] += time.perf_counter() - tp
+        tp = time.perf_counter()
+        if cycle == kills:
+            emu.stop()
+            break
+        # ---- generation k: write the values, then the store requests, and kill at a random moment ----
+        k += 1
+        for g in GROUPS:
+            gens[g[0]][k] = expected(g, k)
+        bus.write([(g[1], index, sub, value.to_bytes(size, "little"))
+                   for g in GROUPS if g[3] is not None for (index, sub), (value, size) in g[2](k).items()])
+        phases["write"] += time.perf_counter() - tp
+        tp = time.perf_counter()
+        requests = [(g, store_request(g, k)) for g in GROUPS]
+        rng.shuffle(requests)
+        # The window is calibrated: the first cycles wait for all answers and measure how long the stores take, so
+        # kills land inside the stores on a fast machine as on a slow one.
+        phase = "after" if cycle < 5 else rng.choices(["before", "during", "after"], [1, 6, 1])[0]
+        smark = bus.mark()
+        sent = []
+        if phase != "before":
+            start = time.perf_counter()
+            for _, (node, index, sub, frame) in requests:
+                bus.send(0x600 + node, frame)
+            sent = requests
+            if phase == "during":
+                window = 1.2 * sorted(latencies)[len(latencies) // 2]
+                end = start + rng.uniform(0.0, window)
+                while time.perf_counter() < end:
+                    pass  # a busy wait: sleep() is far coarser than the window
+            else:
+                end = time.monotonic() + SDO_TIMEOUT
+                while len(bus.answers(smark, [r for _, r in requests])) < len(requests):
+                    assert time.monotonic() < end, f"stores not answered within {SDO_TIMEOUT} s"
+                    time.sleep(0.0005)
+                latencies.append(time.perf_counter() - start)
+        phases["store"] += time.perf_counter() - tp
+        tp = time.perf_counter()
+        emu.proc.send_signal(signal.SIGKILL)
+        emu.stop(timeout=BOOT_TIMEOUT)
+        phases["kill"] += time.perf_counter() - tp
+        # A kill never damages a file: no area was reported damaged or foreign at the start that preceded it.
+        bad = [line for line in emu.err_lines + emu.out_lines
+               if "damaged" in line or "another device" in line or "could not be stored" in line]
+        assert not bad, f"after kill {cycle - 1}: {bad} {tag}"
+        bus.sync()  # every answer sent before the process died is now in the capture
+        answered = bus.answers(smark, [r for _, r in sent])
+        outstanding = False
+        for g, (node, index, sub, _) in sent:
+            a = answered.get((node, index, sub))
+            if a is None:
+                in_flight[g[0]] = k
+                outstanding = True
+            else:
+                assert a[0] == 0x60, f"{g[0]}: store answered {a.hex()} {tag}"
+                confirmed[g[0]] = k
+        stats["outstanding" if outstanding else ("before" if phase == "before" else "after")] += 1
+        stats["tmp_left"] += len(list(nvm.glob("*.tmp")))
+    elapsed = time.monotonic() - t0
+    print(f"crash test: {kills} kills in {elapsed:.1f} s; {stats}; store latency median "
+          f"{1000 * sorted(latencies)[len(latencies) // 2]:.1f} ms; time in "
+          + ", ".join(f"{p} {t:.1f} s" for p, t in phases.items()))
+    # The test must have hit the stores themselves, not only the quiet moments around them: a third of the kills
+    # aims at the window; fewer than a tenth outstanding means the calibration failed and the test proved little.
+    assert stats["outstanding"] >= kills // 10, f"only {stats['outstanding']} kills with a store outstanding {tag}"
+    assert stats["before"] > 0 and stats["after"] > 0, stats
+
+
+# ---- damaged files -------------------------------------------------------------------------------------------------
+
+DAMAGE = ["truncated-0", "truncated-1", "header-only", "one-byte-short", "flip-header", "flip-payload", "flip-crc",
+          "foreign", "garbage"]
+# Where header and CRC are: .params "COS1" | signature | length | CRC, records; .lss "COL1" | id | bit timing | 0 0 |
+# CRC; .device (Eltex 20 bytes, Buerkert 36 bytes): magic | version ... | CRC in the last 4 bytes.
+HEADER = {"params": 16, "lss": 8, "device": 8}
+CRC_AT = {"params": (12, 16), "lss": (8, 12), "device": (-4, None)}
+
+
+def damage(kind, data, donor, rng, area):
+    b = bytearray(data)
+    h = HEADER[area]
+    if kind == "truncated-0":
+        return b""
+    if kind == "truncated-1":
+        return bytes(b[:1])
+    if kind == "header-only":
+        return bytes(b[:h])
+    if kind == "one-byte-short":
+        return bytes(b[:-1])
+    if kind == "flip-header":
+        b[rng.randrange(0, 4 if area == "device" else h)] ^= 1 << rng.randrange(8)
+    elif kind == "flip-payload":
+        # .lss has no payload apart from its header fields: flip the node-ID or the bit timing there.
+        lo, hi = {"params": (h, len(b)), "lss": (4, 6), "device": (8, len(b) - 4)}[area]
+        b[rng.randrange(lo, hi)] ^= 1 << rng.randrange(8)
+    elif kind == "flip-crc":
+        lo, hi = CRC_AT[area]
+        b[rng.randrange(lo % len(b), (hi or len(b)))] ^= 1 << rng.randrange(8)
+    elif kind == "foreign":
+        return donor  # another device's file (or, for .lss, a file of another kind)
+    elif kind == "garbage":
+        return bytes(rng.randrange(256) for _ in range(len(b)))
+    return bytes(b)
+
+
+def pi_config(k):
+    v = {key: val for key, (val, _) in pi_params(k).items()}
+    return v, {(0x2002, 0x07): 2 + k % 2}, {}   # params, lss (bit timing, stored by the save), device
+
+
+def bk_config(k):
+    return ({key: val for key, (val, _) in bk_params(k).items()}, {(0x2001, 1): 3 + k % 2},
+            {(0x2004, 5): 100 + k})
+
+
+def defaults(device, keys):
+    od = canopen.import_od(str(EDS[device]))
+    out = {}
+    for index, sub in keys:
+        obj = od[index]
+        out[(index, sub)] = (obj[sub] if sub or not isinstance(obj, canopen.objectdictionary.Variable) else obj).default
+    return out
+
+
+DAMAGE_RESULTS = {}  # area -> (problems in behaviour, nodes whose damage was not reported); shared by two tests
+
+
+def damage_scenario(area, emulator, bus, tmp_path):
+    """One PRO IONIZER and one Buerkert node per kind of damage, all in one emulator; an SDS gives the foreign
+    file. Stores generation 1 everywhere, damages each node's file of the area in its own way, restarts, reads
+    every area back (the damaged one must be at its defaults, the others at generation 1), reads the log, then
+    stores generation 2 and reads it back after another restart."""
+    if area in DAMAGE_RESULTS:
+        return DAMAGE_RESULTS[area]
+    rng = random.Random(f"{area}-damage")
+    nvm = tmp_path / "nvm"
+    nodes = {}
+    for i, kind in enumerate(DAMAGE):
+        nodes[0x20 + i] = ("pro-ionizer", kind)
+        nodes[0x40 + i] = ("buerkert", kind)
+    donor = 0x7E
+    specs = [f"{dev}:{n}" for n, (dev, _) in nodes.items()] + [f"sds:{donor}"]
+    config = {"pro-ionizer": pi_config, "buerkert": bk_config}
+
+    def store(k):
+        writes, saves = [], []
+        for n, (dev, _) in nodes.items():
+            params, lss, device = config[dev](k)
+            for (i, s), v in params.items():
+                size = 1 if (i, s) in ((0x2002, 0x0D), (0x100D, 0)) else 2
+                writes.append((n, i, s, v.to_bytes(size, "little")))
+            if dev == "pro-ionizer":
+                writes += [(n, i, s, u8(v)) for (i, s), v in lss.items()]   # stored by the 0x1010 save
+            saves.append((n, 0x1010, 1, SAVE))
+            if dev == "buerkert":                                          # these writes are the stores
+                saves += [(n, i, s, u8(v)) for (i, s), v in lss.items()]
+                saves += [(n, i, s, u16(v)) for (i, s), v in device.items()]
+        bus.write(writes)
+        bus.write([(donor, 0x1017, 0, u16(1200))])
+        bus.write(saves + [(donor, 0x1010, 1, SAVE)])
+
+    def start():
+        mark = bus.mark()
+        emu = emulator(*specs, nvm_dir=nvm, control=False)
+        bus.wait_bootups(mark, list(nodes) + [donor])
+        return emu
+
+    def read(k_by_area):
+        """Reads every node; returns {node: [problems]} against the expected generation per area (0 = defaults)."""
+        keys, expect = [], {}
+        for n, (dev, _) in nodes.items():
+            parts = dict(zip(("params", "lss", "device"), config[dev](1)))
+            for a, values in parts.items():
+                k = k_by_area(n, a)
+                exp = dict(zip(("params", "lss", "device"), config[dev](k)))[a] if k else \
+                    {key: v for key, v in defaults(dev, values).items()}
+                if dev == "buerkert" and a == "device" and not k:
+                    exp = {(0x2004, 5): 25}  # no stored maximum: the measured 25 degC (EDS default 25)
+                for key, v in exp.items():
+                    keys.append((n,) + key)
+                    expect[(n,) + key] = (a, v)
+        seen = bus.read(keys)
+        problems = {}
+        for key, (a, v) in expect.items():
+            if seen[key] != v:
+                problems.setdefault(key[0], []).append(f"{a} 0x{key[1]:04X}:{key[2]:02X} = {seen[key]}, expected {v}")
+        return problems
+
+    emu = start()
+    store(1)
+    assert emu.stop() == 0
+    files = {n: nvm / f"{dev}-{n}.{area}" for n, (dev, _) in nodes.items()}
+    donor_file = {"params": f"sds-{donor}.params", "lss": f"sds-{donor}.params", "device": f"sds-{donor}.device"}[area]
+    for n, (dev, kind) in nodes.items():
+        if not files[n].exists():
+            continue  # an Eltex device area written by nothing the test does: nothing to damage
+        files[n].write_bytes(damage(kind, files[n].read_bytes(), (nvm / donor_file).read_bytes(), rng, area))
+
+    emu = start()
+    problems = read(lambda n, a: 0 if a == area else 1)
+    assert emu.stop() == 0
+    # The report must name the node: the line says "node N" (N the node-ID) and that the data is damaged or
+    # another device's. The directory is cut out of the lines first: it contains this test's name.
+    log = [line.replace(str(nvm), "DIR") for line in emu.err_lines + emu.out_lines]
+    unreported = sorted(f"{nodes[n][0]} {kind}" for n, (dev, kind) in nodes.items()
+                        if not any(re.search(rf"\bnode {n}\b.*(damaged|another device)", line) for line in log))
+    # A following store works and loads after a restart, the damaged file replaced.
+    emu = start()
+    store(2)
+    assert emu.stop() == 0
+    emu = start()
+    after = read(lambda n, a: 2)
+    assert emu.stop() == 0
+    for n, p in after.items():
+        problems.setdefault(n, []).extend(f"after a new store: {x}" for x in p)
+    report = [f"node 0x{n:02X} {nodes[n][0]} {area} {nodes[n][1]}: {p}" for n, p in sorted(problems.items())]
+    DAMAGE_RESULTS[area] = (report, unreported)
+    return DAMAGE_RESULTS[area]
+
+
+@pytest.mark.parametrize("area", ["params", "lss", "device"])
+def test_damaged_file_gives_defaults_and_a_new_store_works(area, emulator, bus, tmp_path):
+    report, _ = damage_scenario(area, emulator, bus, tmp_path)
+    assert not report, "\n".join(report)
+
+
+# Known gaps (see the report of issue 7; the fixes are outside this file): the core treats an empty .params file
+# as "nothing stored" and reports nothing about a damaged .lss file; the Eltex devices report a damaged .device file
+# as "node 0" (before the node-ID is known) and not at all when it is short; the Buerkert device never reports it.
+KNOWN_UNREPORTED = {"params": {"truncated-0"}, "lss": set(DAMAGE), "device": set(DAMAGE)}
+
+
+@pytest.mark.parametrize("area", ["params", "lss", "device"])
+def test_damaged_file_is_reported(area, emulator, bus, tmp_path):
+    _, unreported = damage_scenario(area, emulator, bus, tmp_path)
+    new = [u for u in unreported if u.split()[1] not in KNOWN_UNREPORTED[area]]
+    assert not new, f"damaged {area} file not reported in the log: {new}"
+
+
+# strict: this fails as soon as a fix lands, so the known gap and this marker go with it.
+@pytest.mark.xfail(strict=True, reason="empty .params, any damaged .lss and .device files are not reported")
+@pytest.mark.parametrize("area", ["params", "lss", "device"])
+def test_damaged_file_known_gaps_are_reported(area, emulator, bus, tmp_path):
+    _, unreported = damage_scenario(area, emulator, bus, tmp_path)
+    assert not unreported, f"damaged {area} file not reported in the log: {unreported}"
+
+
+@pytest.mark.xfail(strict=True, reason="an Eltex 0x1010 save renames .params, then .device, then .lss: a crash "
+                                       "between them mixes two generations")
+def test_eltex_save_spans_two_files(emulator, bus, tmp_path):
+    """The state a SIGKILL between the .params and the .lss rename of one 0x1010 save leaves (test_sigkill_while_storing
+    found it in 20 kills): made here by putting back the .lss file of the previous save. Expected: the node runs one
+    whole generation. Seen: the bit timing (0x2002:07, from .lss) of generation 1, everything else of generation 2."""
+    nvm = tmp_path / "nvm"
+    lss = nvm / f"pro-ionizer-{PI}.lss"
+    saved = {}
+    for k in (1, 2):
+        mark = bus.mark()
+        emu = emulator(f"pro-ionizer:{PI}", nvm_dir=nvm, control=False)
+        bus.wait_bootups(mark, [PI])
+        values, bit_timing, _ = pi_config(k)
+        bus.write([(PI, i, s, v.to_bytes(1 if (i, s) == (0x2002, 0x0D) else 2, "little")) for (i, s), v in values.items()]
+                  + [(PI, i, s, u8(v)) for (i, s), v in bit_timing.items()])
+        bus.write([(PI, 0x1010, 1, SAVE)])
+        assert emu.stop() == 0
+        saved[k] = lss.read_bytes()
+    assert saved[1] != saved[2]
+    lss.write_bytes(saved[1])  # the kill came after the .params rename of save 2, before its .lss rename
+    mark = bus.mark()
+    emu = emulator(f"pro-ionizer:{PI}", nvm_dir=nvm, control=False)
+    bus.wait_bootups(mark, [PI])
+    keys = list(pi_config(1)[0]) + list(pi_config(1)[1])
+    seen = bus.read([(PI,) + key for key in keys])
+    gens = {k: {(PI,) + key: v for key, v in {**pi_config(k)[0], **pi_config(k)[1]}.items()} for k in (1, 2)}
+    check_generation("pro-ionizer after an interrupted save", seen, gens, [1, 2])
