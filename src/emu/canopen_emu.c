@@ -111,7 +111,9 @@ static void can_log(void *ctx, const char *line)
 static void device_print(void *ctx, const device_t *dev, const char *line)
 {
     (void)ctx;
-    printf("node %u: %s\n", co_node_id(&dev->node), line);
+    /* Before co_node_init (a model loading its own NVM at power-on) the node has no ID yet: the configured one. */
+    const unsigned id = co_node_id(&dev->node) != 0U ? co_node_id(&dev->node) : dev->cfg.node_id;
+    printf("node %u: %s\n", id, line);
     fflush(stdout);
 }
 
@@ -143,7 +145,12 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         }
         break;
     case CO_EV_NVM_LOADED:
-        if (ev->value == CO_NVM_CORRUPT || ev->value == CO_NVM_FOREIGN) {
+        if (ev->index == 0x7E5U) {
+            if (ev->value == CO_NVM_CORRUPT) {
+                logline(LOG_QUIET, "node %u (%s): stored LSS configuration is damaged; using the command-line "
+                        "node-ID and the default bit timing", id, name);
+            }
+        } else if (ev->value == CO_NVM_CORRUPT || ev->value == CO_NVM_FOREIGN) {
             logline(LOG_QUIET, "node %u (%s): stored parameters %s; starting from defaults", id, name,
                     ev->value == CO_NVM_CORRUPT ? "are damaged (bad header, length or CRC)" : "belong to another device");
         } else {
@@ -179,6 +186,11 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
 static co_status_t port_send(void *ctx, const co_frame_t *f)
 {
     emu_node_t *n = (emu_node_t *)ctx;
+    /* Nothing the node says may reveal a store that is not durable yet (a save is confirmed by its SDO answer). */
+    if (nvm_file_flush(&n->nvm) != 0) {
+        logline(LOG_QUIET, "node %u (%s): stored data could not be written (NVM error)", co_node_id(&n->dev.node),
+                n->dev.cls->name);
+    }
     const co_status_t st = socketcan_send(&emu.can, f);
     if (st == CO_OK && emu.n_nodes > 1U) {
         if (emu.local_count == LOCAL_QUEUE_LEN) {
@@ -696,6 +708,7 @@ int main(int argc, char **argv)
                 if (n->dirty || now >= n->deadline) {
                     n->dirty = false;
                     n->deadline = device_process(&n->dev, now);
+                    (void)nvm_file_flush(&n->nvm); /* stores of this call that sent nothing (error: next time) */
                 }
                 next = n->deadline < next ? n->deadline : next;
                 tx_pending = tx_pending || n->dev.node.txq.count > 0U;

@@ -54,6 +54,8 @@ int nvm_file_check_dir(const char *dir, char *err, size_t errlen)
     return e;
 }
 
+static void recover(nvm_file_t *n);
+
 /* Largest blob an area takes: the core's parameter blob is at most 16 + 64 KiB. */
 #define NVM_FILE_MAX (1UL << 20)
 
@@ -75,7 +77,12 @@ int nvm_file_open(nvm_file_t *n, const char *dir, const char *key, char *err, si
             return ENAMETOOLONG;
         }
     }
+    if (snprintf(n->journal, sizeof n->journal, "%s/%s.journal", dir, key) >= (int)sizeof n->journal) {
+        (void)snprintf(err, errlen, "NVM path too long in %s", dir);
+        return ENAMETOOLONG;
+    }
     n->dir_fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    recover(n);
     return 0;
 }
 
@@ -89,6 +96,7 @@ static void close_reader(nvm_file_t *n, int a)
 
 void nvm_file_close(nvm_file_t *n)
 {
+    (void)nvm_file_flush(n);
     for (int a = 0; a < 3; a++) {
         free(n->staging[a].buf); /* an unfinished write is never committed: it only ever lived in memory */
         memset(&n->staging[a], 0, sizeof n->staging[a]);
@@ -154,6 +162,14 @@ static bool write_all(int fd, const uint8_t *p, size_t len)
     return true;
 }
 
+static void tmp_path(const nvm_file_t *n, int area, char *tmp, size_t len)
+{
+    (void)snprintf(tmp, len, "%s.tmp", n->path[area]);
+}
+
+/* The committed blob goes to "<file>.tmp" at once (write + fsync, so an I/O error still reaches the core,
+ * which answers the store with an abort); the rename that makes it the file waits for nvm_file_flush(), which
+ * renames everything committed since the last flush as one transaction. */
 co_status_t nvm_file_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
 {
     nvm_file_t *n = (nvm_file_t *)ctx;
@@ -163,24 +179,123 @@ co_status_t nvm_file_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
     nvm_staging_t *s = &n->staging[area];
     s->active = false;
     char tmp[PATH_MAX + 8];
-    (void)snprintf(tmp, sizeof tmp, "%s.tmp", n->path[area]);
+    tmp_path(n, (int)area, tmp, sizeof tmp);
     /* A leftover of a killed store (or anything else by that name) goes first: O_EXCL then guarantees a
      * fresh file, and O_NOFOLLOW that a symbolic link planted there never redirects the write. */
     (void)unlink(tmp);
+    n->pending[area] = false;
     const int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
     if (fd < 0) {
         return CO_ERR_IO;
     }
     const bool ok = write_all(fd, s->buf, total_len) && fsync(fd) == 0;
-    if (close(fd) != 0 || !ok || rename(tmp, n->path[area]) != 0) {
+    if (close(fd) != 0 || !ok) {
         (void)unlink(tmp);
         return CO_ERR_IO;
     }
-    close_reader(n, (int)area); /* it still reads the replaced file */
-    if (n->dir_fd >= 0) {
-        (void)fsync(n->dir_fd); /* the rename itself is durable */
-    }
+    n->pending[area] = true;
     return CO_OK;
+}
+
+/* Journal "<key>.journal": "CONVJ1" | one byte per area (1 = its .tmp belongs to the transaction) | '\n'.
+ * Written to "<key>.journal.tmp", fsynced and renamed: it exists whole or not at all. */
+#define JOURNAL_LEN 10U
+
+static bool rename_pending(nvm_file_t *n, int area)
+{
+    char tmp[PATH_MAX + 8];
+    tmp_path(n, area, tmp, sizeof tmp);
+    if (rename(tmp, n->path[area]) != 0) {
+        return false;
+    }
+    n->pending[area] = false;
+    close_reader(n, area); /* it still reads the replaced file */
+    return true;
+}
+
+static void sync_dir(const nvm_file_t *n)
+{
+    if (n->dir_fd >= 0) {
+        (void)fsync(n->dir_fd); /* the renames themselves are durable */
+    }
+}
+
+int nvm_file_flush(nvm_file_t *n)
+{
+    int count = 0;
+    for (int a = 0; a < 3; a++) {
+        count += n->pending[a] ? 1 : 0;
+    }
+    if (count == 0) {
+        return 0;
+    }
+    if (count == 1) {
+        for (int a = 0; a < 3; a++) {
+            if (n->pending[a] && !rename_pending(n, a)) {
+                return -1;
+            }
+        }
+        sync_dir(n);
+        return 0;
+    }
+    /* Several areas (an Eltex 0x1010 save writes parameters, LSS configuration and device data): a crash
+     * between two renames would load a mix. The journal names the temporary files first; once it exists the
+     * transaction is decided, and nvm_file_open() finishes the renames a crash interrupted. */
+    char jtmp[PATH_MAX + 16];
+    (void)snprintf(jtmp, sizeof jtmp, "%s.tmp", n->journal);
+    (void)unlink(jtmp);
+    const int fd = open(jtmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        return -1;
+    }
+    const uint8_t j[JOURNAL_LEN] = {'C', 'O', 'N', 'V', 'J', '1', (uint8_t)n->pending[0], (uint8_t)n->pending[1],
+                                    (uint8_t)n->pending[2], '\n'};
+    const bool ok = write_all(fd, j, sizeof j) && fsync(fd) == 0;
+    if (close(fd) != 0 || !ok || rename(jtmp, n->journal) != 0) {
+        (void)unlink(jtmp);
+        return -1;
+    }
+    sync_dir(n);
+    for (int a = 0; a < 3; a++) {
+        if (n->pending[a] && !rename_pending(n, a)) {
+            return -1; /* the journal stays: the next open completes the transaction */
+        }
+    }
+    sync_dir(n);
+    (void)unlink(n->journal);
+    sync_dir(n);
+    return 0;
+}
+
+/* At open: a journal means a transaction was decided but maybe not carried out: rename the temporary files it
+ * names that are still there (those already renamed are gone). Without a journal, temporary files are
+ * leftovers of an undecided store: removed, never loaded. */
+static void recover(nvm_file_t *n)
+{
+    uint8_t j[JOURNAL_LEN];
+    bool listed[3] = {false, false, false};
+    const int fd = open(n->journal, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (fd >= 0) {
+        const ssize_t r = read(fd, j, sizeof j);
+        (void)close(fd);
+        if (r == (ssize_t)JOURNAL_LEN && memcmp(j, "CONVJ1", 6U) == 0 && j[9] == '\n') {
+            for (int a = 0; a < 3; a++) {
+                listed[a] = j[6 + a] == 1U;
+            }
+        }
+    }
+    for (int a = 0; a < 3; a++) {
+        char tmp[PATH_MAX + 8];
+        tmp_path(n, a, tmp, sizeof tmp);
+        if (listed[a]) {
+            (void)rename(tmp, n->path[a]); /* ENOENT: renamed before the crash */
+        } else {
+            (void)unlink(tmp);
+        }
+    }
+    sync_dir(n);
+    (void)unlink(n->journal);
+    sync_dir(n);
 }
 
 co_status_t nvm_file_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *data, size_t len)
@@ -190,6 +305,7 @@ co_status_t nvm_file_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *
         return CO_ERR_ARG;
     }
     if (offset == 0U) {
+        (void)nvm_file_flush(n); /* a load sees every store committed before it */
         close_reader(n, (int)area); /* a new load: see the file as it is now, even if replaced by hand */
     }
     if (n->read_fd[area] < 0) {
@@ -199,5 +315,6 @@ co_status_t nvm_file_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *
         }
     }
     const ssize_t r = pread(n->read_fd[area], data, len, (off_t)offset);
-    return r == (ssize_t)len ? CO_OK : CO_ERR_NO_DATA;
+    /* The file is there but too short (even empty): a damaged blob, not "nothing stored" (co_port.h). */
+    return r == (ssize_t)len ? CO_OK : CO_ERR_IO;
 }

@@ -3,9 +3,14 @@
  * @brief The port's non-volatile memory as files: one file per area of one node, replaced atomically.
  *
  * Writes go to a staging copy in memory; commit writes it to "<file>.tmp" (a fresh file: a leftover of a
- * killed process is removed first, a symbolic link there is never followed), fsyncs it, renames it over the
- * file and fsyncs the directory. So after a crash or SIGKILL at any moment the file is the whole old blob or
- * the whole new one (the core also checks a CRC on load), and a leftover "<file>.tmp" is never read.
+ * killed process is removed first, a symbolic link there is never followed) and fsyncs it. nvm_file_flush()
+ * then renames what was committed since the last flush over the files and fsyncs the directory, as one
+ * transaction: one area is one rename; several (an Eltex 0x1010 save writes parameters, LSS configuration and
+ * device data in one SDO request) are first named in "<key>.journal", which nvm_file_open() uses to finish
+ * renames a crash interrupted. So after a crash or SIGKILL at any moment every area is its old blob or its new
+ * one, and the areas of one transaction are all old or all new; a "<file>.tmp" outside a journal is removed.
+ * The runner calls nvm_file_flush() before any frame of the node goes out (a store is confirmed only once it
+ * is durable) and after each call into the node; reads and close flush first.
  * Reads use one descriptor per area, opened again by every read at offset 0 (every load starts there) and
  * after every commit: a load costs one open, not one per record, and still sees a file replaced meanwhile.
  * Files: <dir>/<key>.params, .lss, .device.
@@ -29,7 +34,9 @@ typedef struct nvm_staging {
 
 typedef struct nvm_file {
     char path[3][PATH_MAX];
+    char journal[PATH_MAX];  /**< <dir>/<key>.journal: the areas of a multi-area transaction */
     nvm_staging_t staging[3];
+    bool pending[3];         /**< committed to <file>.tmp, not yet renamed (nvm_file_flush) */
     int read_fd[3]; /**< the committed file open for reading, or -1 */
     int dir_fd;
 } nvm_file_t;
@@ -38,6 +45,9 @@ typedef struct nvm_file {
  *  Returns 0 or an errno value with a message for the user in err. */
 int nvm_file_open(nvm_file_t *n, const char *dir, const char *key, char *err, size_t errlen);
 void nvm_file_close(nvm_file_t *n);
+/** Makes the areas committed since the last flush the files, all or none (see above). 0, or -1 on an I/O
+ *  error (then the next open completes or drops the transaction). */
+int nvm_file_flush(nvm_file_t *n);
 
 /** Checks that dir exists or can be created and that files can be written there. */
 int nvm_file_check_dir(const char *dir, char *err, size_t errlen);

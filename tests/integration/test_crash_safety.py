@@ -8,7 +8,10 @@ it prints: CO_CRASH_SEED=<seed> (CO_CRASH_KILLS changes the number of kills).
 
 test_damaged_file_*: each kind of NVM file (.params, .lss, .device) truncated, with flipped bytes, replaced by
 another device's file or by garbage: the emulator starts, logs the damage, the node runs on that area's
-defaults (the other areas keep their values) and a following store works and loads after a restart."""
+defaults (the other areas keep their values) and a following store works and loads after a restart.
+
+test_eltex_save_interrupted_between_its_files: an Eltex 0x1010 save writes three files as one transaction (a
+journal); both states a kill can leave between them load one whole generation."""
 import os
 import random
 import re
@@ -174,10 +177,10 @@ NODES = {PI: "pro-ionizer", SDS: "sds", BK: "buerkert"}
 
 
 def pi_params(k):
-    # 0x2002:07 (bit timing) is left out: a 0x1010 save of an Eltex device writes it to the .lss file after the
-    # .params file (rule E2), and a kill between the two renames mixes generations; see
-    # test_eltex_save_spans_two_files.
+    # 0x2002:07 (bit timing): a 0x1010 save of an Eltex device writes it to the .lss file besides the .params and
+    # .device files (rule E2): one transaction of three files (src/linux/nvm_file.c, the journal).
     return {(0x1017, 0): (100 * (11 + k % 580), 2),        # heartbeat: 100 ms steps (rule E5), default 1000
+            (0x2002, 0x07): (2 + k % 2, 1),               # bit timing 50/20 kbit/s, default 4 (125 kbit/s)
             (0x2002, 0x01): (1000 + 10 * (k % 5000), 2),  # TPDO cycle, default 500
             (0x2002, 0x04): (500 + k % 50000, 2),         # HV release timeout, default 0
             (0x2002, 0x08): (1000 + k % 4000, 2),         # voltage set-point, default 5000
@@ -189,6 +192,7 @@ def sds_params(k):
             (0x2002, 0x01): (1010 + 10 * (k % 5000), 2),
             (0x2002, 0x02): (1 + k % 70, 1),              # polluting factor, default 75
             (0x2002, 0x04): (35 + k % 15, 1),             # HV adjustment, default 50
+            (0x2002, 0x07): (3 - k % 2, 1),               # bit timing (.lss, as above), default 4
             (0x2002, 0x08): (10 + k % 5, 1)}              # working distance (write-only), default 15
 
 
@@ -391,8 +395,9 @@ def damage(kind, data, donor, rng, area):
 
 
 def pi_config(k):
-    v = {key: val for key, (val, _) in pi_params(k).items()}
-    return v, {(0x2002, 0x07): 2 + k % 2}, {}   # params, lss (bit timing, stored by the save), device
+    """params, lss (the bit timing, stored by the save in the .lss file), device."""
+    bt = (0x2002, 0x07)
+    return {key: val for key, (val, _) in pi_params(k).items() if key != bt}, {bt: pi_params(k)[bt][0]}, {}
 
 
 def bk_config(k):
@@ -511,35 +516,23 @@ def test_damaged_file_gives_defaults_and_a_new_store_works(area, emulator, bus, 
     assert not report, "\n".join(report)
 
 
-# Known gaps (see the report of issue 7; the fixes are outside this file): the core treats an empty .params file
-# as "nothing stored" and reports nothing about a damaged .lss file; the Eltex devices report a damaged .device file
-# as "node 0" (before the node-ID is known) and not at all when it is short; the Buerkert device never reports it.
-KNOWN_UNREPORTED = {"params": {"truncated-0"}, "lss": set(DAMAGE), "device": set(DAMAGE)}
-
-
 @pytest.mark.parametrize("area", ["params", "lss", "device"])
 def test_damaged_file_is_reported(area, emulator, bus, tmp_path):
-    _, unreported = damage_scenario(area, emulator, bus, tmp_path)
-    new = [u for u in unreported if u.split()[1] not in KNOWN_UNREPORTED[area]]
-    assert not new, f"damaged {area} file not reported in the log: {new}"
-
-
-# strict: this fails as soon as a fix lands, so the known gap and this marker go with it.
-@pytest.mark.xfail(strict=True, reason="empty .params, any damaged .lss and .device files are not reported")
-@pytest.mark.parametrize("area", ["params", "lss", "device"])
-def test_damaged_file_known_gaps_are_reported(area, emulator, bus, tmp_path):
+    """Every kind of damage of every area, an empty file included, is reported with the node's ID."""
     _, unreported = damage_scenario(area, emulator, bus, tmp_path)
     assert not unreported, f"damaged {area} file not reported in the log: {unreported}"
 
 
-@pytest.mark.xfail(strict=True, reason="an Eltex 0x1010 save renames .params, then .device, then .lss: a crash "
-                                       "between them mixes two generations")
-def test_eltex_save_spans_two_files(emulator, bus, tmp_path):
-    """The state a SIGKILL between the .params and the .lss rename of one 0x1010 save leaves (test_sigkill_while_storing
-    found it in 20 kills): made here by putting back the .lss file of the previous save. Expected: the node runs one
-    whole generation. Seen: the bit timing (0x2002:07, from .lss) of generation 1, everything else of generation 2."""
+def test_eltex_save_interrupted_between_its_files(emulator, bus, tmp_path):
+    """An Eltex 0x1010 save writes three files (.params, .device flags, .lss node-ID/bit timing, rule E2). They are
+    one transaction: every <file>.tmp is written and fsynced, then <key>.journal names them, then the renames
+    follow. The two states a SIGKILL can leave are made here from the files of two real saves: after the journal
+    and the first rename (the restart must finish the transaction: generation 2 whole), and before the journal
+    (the restart must drop the temporary files: generation 1 whole). Neither may load a mix."""
     nvm = tmp_path / "nvm"
-    lss = nvm / f"pro-ionizer-{PI}.lss"
+    areas = ("params", "lss", "device")
+    path = {a: nvm / f"pro-ionizer-{PI}.{a}" for a in areas}
+    journal = nvm / f"pro-ionizer-{PI}.journal"
     saved = {}
     for k in (1, 2):
         mark = bus.mark()
@@ -550,13 +543,35 @@ def test_eltex_save_spans_two_files(emulator, bus, tmp_path):
                   + [(PI, i, s, u8(v)) for (i, s), v in bit_timing.items()])
         bus.write([(PI, 0x1010, 1, SAVE)])
         assert emu.stop() == 0
-        saved[k] = lss.read_bytes()
-    assert saved[1] != saved[2]
-    lss.write_bytes(saved[1])  # the kill came after the .params rename of save 2, before its .lss rename
-    mark = bus.mark()
-    emu = emulator(f"pro-ionizer:{PI}", nvm_dir=nvm, control=False)
-    bus.wait_bootups(mark, [PI])
+        saved[k] = {a: path[a].read_bytes() for a in areas}
+        assert not journal.exists() and not any(p.with_name(p.name + ".tmp").exists() for p in path.values())
+    assert all(saved[1][a] != saved[2][a] for a in ("params", "lss"))
     keys = list(pi_config(1)[0]) + list(pi_config(1)[1])
-    seen = bus.read([(PI,) + key for key in keys])
     gens = {k: {(PI,) + key: v for key, v in {**pi_config(k)[0], **pi_config(k)[1]}.items()} for k in (1, 2)}
-    check_generation("pro-ionizer after an interrupted save", seen, gens, [1, 2])
+
+    def crash_state(renamed, with_journal):
+        for a in areas:
+            tmp = path[a].with_name(path[a].name + ".tmp")
+            if a in renamed:
+                path[a].write_bytes(saved[2][a])
+                tmp.unlink(missing_ok=True)
+            else:
+                path[a].write_bytes(saved[1][a])
+                tmp.write_bytes(saved[2][a])
+        if with_journal:
+            journal.write_bytes(b"CONVJ1\x01\x01\x01\n")
+        else:
+            journal.unlink(missing_ok=True)
+
+    for renamed, with_journal, expected in ((("params",), True, 2), ((), True, 2), (("params", "device"), True, 2),
+                                             ((), False, 1)):
+        crash_state(renamed, with_journal)
+        mark = bus.mark()
+        emu = emulator(f"pro-ionizer:{PI}", nvm_dir=nvm, control=False)
+        bus.wait_bootups(mark, [PI])
+        seen = bus.read([(PI,) + key for key in keys])
+        got = check_generation(f"pro-ionizer after a save interrupted ({renamed} renamed, journal {with_journal})",
+                               seen, gens, [expected])
+        assert got == expected
+        assert emu.stop() == 0
+        assert not journal.exists() and not any(p.with_name(p.name + ".tmp").exists() for p in path.values())
