@@ -123,7 +123,7 @@ void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
     if (what == CO_RESET_APPLICATION) {
         node->nmt_state = CO_NMT_INITIALISING;
         co_od_reset_area(node, 0x2000U, 0x9FFFU);
-        co_node_event(node, CO_EV_NVM_LOADED, 0U, 0U, (uint32_t)node->nvm_status, 0U);
+        co_node_event(node, CO_EV_NVM_LOADED, 0x1010U, 0U, (uint32_t)node->nvm_status, 0U);
         if (node->hooks != NULL && node->hooks->on_reset != NULL) {
             node->hooks->on_reset(node->hooks_ctx, node, CO_RESET_APPLICATION);
         }
@@ -159,7 +159,8 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
     memcpy(node->values, node->od->defaults, node->od->values_size);
     uint8_t node_id = cfg->node_id;
     uint8_t bit_timing = cfg->bit_timing;
-    if (co_store_lss_load(node, &node_id, &bit_timing)) {
+    const co_nvm_status_t lss = co_store_lss_load(node, &node_id, &bit_timing);
+    if (lss == CO_NVM_LOADED) {
         if (node->port->set_bit_rate != NULL && node->bit_rates_kbit[bit_timing] != 0U) {
             (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[bit_timing]);
         }
@@ -169,6 +170,7 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
     }
     node->node_id = node_id;
     node->lss.active_bit_timing = bit_timing;
+    co_node_event(node, CO_EV_NVM_LOADED, 0x7E5U, 0U, (uint32_t)lss, 0U); /* the LSS area, once at power-on */
     co_lss_init(node);
     co_node_reset(node, CO_RESET_APPLICATION, now);
     return CO_OK;

@@ -38,6 +38,18 @@ static bool have_write(const co_node_t *node)
     return node->port->nvm_write != NULL && node->port->nvm_commit != NULL;
 }
 
+/* A read of a blob's header failed with st: nothing is stored (CO_ERR_NO_DATA and not even one byte there), or
+ * a blob shorter than its header is (a port that can tell answers other than CO_ERR_NO_DATA, e.g. for an
+ * empty file; one that cannot is asked for a single byte). */
+static co_nvm_status_t short_blob(co_node_t *node, co_nvm_area_t area, co_status_t st)
+{
+    uint8_t b;
+    if (st != CO_ERR_NO_DATA || node->port->nvm_read(node->port_ctx, area, 0U, &b, 1U) == CO_OK) {
+        return CO_NVM_CORRUPT;
+    }
+    return CO_NVM_NONE;
+}
+
 /* Validates the stored parameter blob; returns its payload length through *len. */
 static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
 {
@@ -46,10 +58,9 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
     if (!have_read(node)) {
         return CO_NVM_NONE;
     }
-    if (node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) != CO_OK) {
-        /* Shorter than a header: damaged if anything is there at all, otherwise nothing is stored. */
-        return node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, 1U) == CO_OK ? CO_NVM_CORRUPT
-                                                                                      : CO_NVM_NONE;
+    const co_status_t st = node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN);
+    if (st != CO_OK) {
+        return short_blob(node, CO_NVM_PARAMS, st);
     }
     const uint32_t payload = co_get_u32(&h[8]);
     if (memcmp(h, "COS1", 4U) != 0 || payload > PAYLOAD_MAX) {
@@ -261,17 +272,23 @@ co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timi
     return CO_OK;
 }
 
-bool co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing)
+co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing)
 {
     uint8_t b[12];
-    if (!have_read(node) || node->port->nvm_read(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) != CO_OK ||
-        memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
-        return false;
+    if (!have_read(node)) {
+        return CO_NVM_NONE;
+    }
+    const co_status_t st = node->port->nvm_read(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b);
+    if (st != CO_OK) {
+        return short_blob(node, CO_NVM_LSS, st);
+    }
+    if (memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
+        return CO_NVM_CORRUPT;
     }
     if (((b[4] < 1U || b[4] > 127U) && b[4] != CO_NODE_ID_UNCONFIGURED) || b[5] >= CO_LSS_BIT_TIMING_COUNT) {
-        return false; /* a valid CRC over values we never write: not ours */
+        return CO_NVM_CORRUPT; /* a valid CRC over values we never write: not ours */
     }
     *node_id = b[4];
     *bit_timing = b[5];
-    return true;
+    return CO_NVM_LOADED;
 }

@@ -208,8 +208,16 @@ static bool nvm_load(device_t *dev)
     bk_model_t *m = model_of(dev);
     const co_port_t *p = dev->cfg.port;
     uint8_t b[BLOB_LEN];
-    if (p == NULL || p->nvm_read == NULL || p->nvm_read(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b) != CO_OK ||
-        memcmp(b, "BKF1", 4U) != 0 || b[4] != 2U || get_u32(&b[32]) != co_crc32(0U, b, 32U)) {
+    if (p == NULL || p->nvm_read == NULL) {
+        return false;
+    }
+    const co_status_t st = p->nvm_read(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b);
+    if (st == CO_ERR_NO_DATA) {
+        return false; /* nothing stored yet */
+    }
+    if (st != CO_OK || memcmp(b, "BKF1", 4U) != 0 || b[4] != 2U || get_u32(&b[32]) != co_crc32(0U, b, 32U)) {
+        device_printf(dev, "buerkert: device memory damaged; counters, drag indicators and the maximum temperature "
+                           "start afresh");
         return false;
     }
     m->op_us = (uint64_t)get_u32(&b[8]) * 1000000U;

@@ -127,10 +127,15 @@ static void nvm_load(device_t *dev)
     eltex_t *x = eltex_of(dev);
     const co_port_t *p = dev->cfg.port;
     uint8_t b[NVM_LEN];
-    if (p == NULL || p->nvm_read == NULL || p->nvm_read(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, NVM_LEN) != CO_OK) {
+    if (p == NULL || p->nvm_read == NULL) {
+        return;
+    }
+    const co_status_t st = p->nvm_read(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, NVM_LEN);
+    if (st == CO_ERR_NO_DATA) {
         return; /* nothing stored: counters start at 0 */
     }
-    if (memcmp(b, x->cls->nvm_magic, 4U) != 0 || b[4] != NVM_VERSION || get_u32(&b[16]) != co_crc32(0U, b, 16U)) {
+    if (st != CO_OK || memcmp(b, x->cls->nvm_magic, 4U) != 0 || b[4] != NVM_VERSION ||
+        get_u32(&b[16]) != co_crc32(0U, b, 16U)) {
         device_printf(dev, "%s: counter memory damaged; counters start at 0", dev->cls->name);
         return;
     }

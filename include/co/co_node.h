@@ -43,7 +43,8 @@ typedef enum co_event_kind {
     CO_EV_EMCY,               /**< value = error code, code = error register; sent (or queued while Stopped). */
     CO_EV_STORE,              /**< 0x1010 sub or LSS store; code = 0 or abort code. */
     CO_EV_RESTORE,            /**< 0x1011 sub; code = 0 or abort code. */
-    CO_EV_NVM_LOADED,         /**< value = co_nvm_status_t of the parameter area after a reset. */
+    CO_EV_NVM_LOADED,         /**< value = co_nvm_status_t; index 0x1010: the parameter area, after every
+                                   reset application; index 0x7E5: the LSS area, once at power-on. */
     CO_EV_LSS_NODE_ID,        /**< value = new pending node-ID. */
     CO_EV_LSS_BIT_TIMING,     /**< value = new pending bit-timing index. */
     CO_EV_LSS_ACTIVATE,       /**< value = kbit/s switched to. */

@@ -54,8 +54,10 @@ typedef struct co_port {
 
     /**
      * Reads len bytes at offset from the committed blob of an area. CO_ERR_NO_DATA when nothing is
-     * stored or the blob is shorter than offset + len. The core checks its own header and CRC, so a
-     * damaged blob is detected by the core (co_node_t.nvm_status). NULL: nothing is ever stored.
+     * stored or the blob is shorter than offset + len; a port that can tell the two apart should answer
+     * CO_ERR_IO for a blob that is there but too short (e.g. an empty file), so that it counts as damaged.
+     * The core checks its own header and CRC, so a damaged blob is detected by the core
+     * (co_node_t.nvm_status, CO_EV_NVM_LOADED). NULL: nothing is ever stored.
      */
     co_status_t (*nvm_read)(void *ctx, co_nvm_area_t area, uint32_t offset, void *data, size_t len);
 

@@ -118,7 +118,7 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
 /* Loads stored values of the rows first..last into the values block. Sets node->nvm_status. */
 void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last);
 co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timing);
-bool co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing);
+co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing);
 
 /* ---- LSS slave (co_lss_slave.c) ---- */
 void co_lss_init(co_node_t *node);

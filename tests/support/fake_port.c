@@ -46,7 +46,8 @@ static co_status_t fake_nvm_read(void *ctx, co_nvm_area_t area, uint32_t offset,
 {
     fake_port_t *fp = (fake_port_t *)ctx;
     if (offset + len > fp->nvm[area].stored_len) {
-        return CO_ERR_NO_DATA;
+        /* a port that can tell "nothing stored" from "a blob too short" (co_port.h) */
+        return fp->nvm[area].stored_len > 0U || fp->nvm[area].empty_blob ? CO_ERR_IO : CO_ERR_NO_DATA;
     }
     memcpy(data, &fp->nvm[area].stored[offset], len);
     return CO_OK;

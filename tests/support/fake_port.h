@@ -17,7 +17,8 @@
 
 typedef struct fake_nvm_area {
     uint8_t stored[FAKE_NVM_SIZE];
-    uint32_t stored_len;    /* 0 = nothing stored */
+    uint32_t stored_len;    /* 0 = nothing stored (unless empty_blob) */
+    bool empty_blob;        /* with stored_len 0: a blob of 0 bytes is there (an empty file), not nothing */
     uint8_t staging[FAKE_NVM_SIZE];
     uint32_t commits;
 } fake_nvm_area_t;

@@ -39,6 +39,26 @@ static void power_cycle(void)
     fx_power_cycle();
 }
 
+static int find_event_of(co_event_kind_t kind, uint16_t index)
+{
+    for (uint32_t i = fx.n_events; i > 0U; i--) {
+        if (fx.events[i - 1U].kind == kind && fx.events[i - 1U].index == index) {
+            return (int)(i - 1U);
+        }
+    }
+    return -1;
+}
+
+/* The NVM status reported by the last CO_EV_NVM_LOADED event of an area (0x1010 parameters, 0x7E5 LSS). */
+static uint32_t nvm_loaded_event_of(uint16_t index)
+{
+    const int e = find_event_of(CO_EV_NVM_LOADED, index);
+    TEST_ASSERT_TRUE_MESSAGE(e >= 0, "no CO_EV_NVM_LOADED event");
+    return fx.events[e].value;
+}
+
+static uint32_t nvm_loaded_event(void) { return nvm_loaded_event_of(0x1010U); }
+
 static int find_event(co_event_kind_t kind)
 {
     for (uint32_t i = fx.n_events; i > 0U; i--) {
@@ -47,14 +67,6 @@ static int find_event(co_event_kind_t kind)
         }
     }
     return -1;
-}
-
-/* The NVM status reported by the CO_EV_NVM_LOADED event of the last power cycle / reset. */
-static uint32_t nvm_loaded_event(void)
-{
-    const int e = find_event(CO_EV_NVM_LOADED);
-    TEST_ASSERT_TRUE_MESSAGE(e >= 0, "no CO_EV_NVM_LOADED event");
-    return fx.events[e].value;
 }
 
 static fake_nvm_area_t *params(void) { return &fx.port.nvm[CO_NVM_PARAMS]; }
@@ -731,6 +743,63 @@ static void lss_blob_format(void)
     TEST_ASSERT_EQUAL_UINT32(0U, params()->stored_len);
 }
 
+/* The LSS area is checked like the parameters: a damaged blob is reported once at power-on (CO_EV_NVM_LOADED,
+ * index 0x7E5) and the configured node-ID and bit timing are used. */
+static void damaged_lss_blob_is_reported_and_ignored(void)
+{
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_NONE, nvm_loaded_event_of(0x7E5U));
+    RX(0x7E5, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x11, 0x0A, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x17, 0x00, 0, 0, 0, 0, 0, 0);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_LOADED, nvm_loaded_event_of(0x7E5U));
+    TEST_ASSERT_EQUAL_HEX8(0x0A, co_node_id(&fx.node));
+    fake_nvm_area_t *a = &fx.port.nvm[CO_NVM_LSS];
+    uint8_t good[12];
+    memcpy(good, a->stored, sizeof good);
+    static const struct {
+        uint32_t len;  /* stored length after the damage */
+        int flip;      /* byte to flip, -1 none */
+    } damage[] = {{12U, 4}, {12U, 9}, {12U, 0}, {11U, -1}, {4U, -1}, {0U, -1}};
+    for (size_t i = 0U; i < sizeof damage / sizeof damage[0]; i++) {
+        memcpy(a->stored, good, sizeof good);
+        a->stored_len = damage[i].len;
+        a->empty_blob = damage[i].len == 0U;
+        if (damage[i].flip >= 0) {
+            a->stored[damage[i].flip] ^= 0x01U;
+        }
+        power_cycle();
+        TEST_ASSERT_EQUAL_UINT32_MESSAGE(CO_NVM_CORRUPT, nvm_loaded_event_of(0x7E5U), "damage not reported");
+        TEST_ASSERT_EQUAL_HEX8(0x05, co_node_id(&fx.node)); /* the configured node-ID */
+        ASSERT_FRAME(0, 0x705U, 1, 0x00);
+    }
+    /* A valid CRC over a node-ID the core never writes (0): damaged too. */
+    uint8_t forged[12] = {'C', 'O', 'L', '1', 0x00, 0x00, 0x00, 0x00};
+    const uint32_t crc = crc32_ieee(forged, 8U);
+    forged[8] = (uint8_t)crc;
+    forged[9] = (uint8_t)(crc >> 8);
+    forged[10] = (uint8_t)(crc >> 16);
+    forged[11] = (uint8_t)(crc >> 24);
+    memcpy(a->stored, forged, sizeof forged);
+    a->stored_len = 12U;
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_CORRUPT, nvm_loaded_event_of(0x7E5U));
+}
+
+/* An empty parameter blob (an empty file) is a damaged one, not "nothing stored". */
+static void empty_parameter_blob_is_damaged(void)
+{
+    params()->stored_len = 0U;
+    params()->empty_blob = true;
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_CORRUPT, nvm_loaded_event());
+    TEST_ASSERT_EQUAL_INT(CO_NVM_CORRUPT, fx.node.nvm_status);
+    params()->empty_blob = false;
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_NONE, nvm_loaded_event());
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -771,5 +840,7 @@ int main(void)
     RUN_TEST(save_over_damaged_blob_recovers);
     RUN_TEST(blob_format);
     RUN_TEST(lss_blob_format);
+    RUN_TEST(damaged_lss_blob_is_reported_and_ignored);
+    RUN_TEST(empty_parameter_blob_is_damaged);
     return UNITY_END();
 }
