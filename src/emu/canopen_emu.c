@@ -769,6 +769,17 @@ int main(int argc, char **argv)
     if (emu.local_lost > 0U) {
         logline(LOG_QUIET, "%lu frame(s) between local nodes were lost (queue full)", emu.local_lost);
     }
+    unsigned long sent = 0UL, dropped = 0UL;
+    for (size_t i = 0U; i < emu.n_nodes; i++) {
+        const co_node_stats_t *st = &emu.nodes[i]->dev.node.stats;
+        sent += st->tx_frames;
+        dropped += st->tx_dropped;
+        if (st->tx_dropped > 0U) {
+            logline(LOG_QUIET, "node %u (%s): %lu frame(s) could not be sent", co_node_id(&emu.nodes[i]->dev.node),
+                    emu.nodes[i]->dev.cls->name, (unsigned long)st->tx_dropped);
+        }
+    }
+    logline(LOG_NORMAL, "%lu frame(s) sent, %lu dropped", sent, dropped);
     socketcan_close(&emu.can);
     for (size_t i = 0U; i < emu.n_nodes; i++) {
         nvm_file_close(&emu.nodes[i]->nvm);

@@ -187,6 +187,10 @@ def test_sigint_and_sigterm_stop_cleanly(emulator, capture):
         start = time.monotonic()
         assert emu.stop(sig) == 0
         assert time.monotonic() - start < 1.0
+        # The closing summary counts what the node sent (at least its boot-up) and what it could not send.
+        summary = [line for line in emu.err_lines if "frame(s) sent" in line]
+        assert len(summary) == 1 and summary[0].endswith(", 0 dropped"), emu.err_lines
+        assert int(summary[0].split("]")[1].split()[0]) >= 1, summary
         capture.clear()
 
 
