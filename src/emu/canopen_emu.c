@@ -721,7 +721,7 @@ int main(int argc, char **argv)
         }
         nfds_t nfds = 0U;
         pfd[nfds].fd = emu.can.fd; /* -1 while the interface is gone: poll ignores it */
-        pfd[nfds].events = (short)(POLLIN | (tx_pending ? POLLOUT : 0));
+        pfd[nfds].events = socketcan_poll_events(&emu.can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
         pfd[nfds].revents = 0;
         nfds++;
         if (emu.stdin_open) {
@@ -758,6 +758,15 @@ int main(int argc, char **argv)
                     if (device_rx(&emu.nodes[i]->dev, &f, now)) {
                         emu.nodes[i]->dirty = true;
                     }
+                }
+            }
+        }
+        if ((pfd[0].revents & POLLOUT) != 0) {
+            /* Room in the socket's buffer: nodes with queued frames retry now. Without this the loop would poll
+             * again, get POLLOUT at once, and spin until their retry deadline. */
+            for (size_t i = 0U; i < emu.n_nodes; i++) {
+                if (emu.nodes[i]->dev.node.txq.count > 0U) {
+                    emu.nodes[i]->dirty = true;
                 }
             }
         }

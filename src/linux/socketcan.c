@@ -6,6 +6,7 @@
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
+#include <poll.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/ioctl.h>
@@ -106,6 +107,39 @@ void socketcan_close(socketcan_t *c)
     }
 }
 
+/* IFF_UP of the interface (true when it cannot be asked: the send or read that follows tells). */
+static bool iface_up(const socketcan_t *c)
+{
+    struct ifreq ifr;
+    memset(&ifr, 0, sizeof ifr);
+    (void)snprintf(ifr.ifr_name, sizeof ifr.ifr_name, "%s", c->ifname);
+    if (c->fd < 0 || ioctl(c->fd, SIOCGIFFLAGS, &ifr) < 0) {
+        return true;
+    }
+    return (ifr.ifr_flags & IFF_UP) != 0;
+}
+
+static void set_down(socketcan_t *c, const char *what)
+{
+    if (!c->down) {
+        c->down = true;
+        logf_(c, "%s: interface is down%s", what);
+    }
+}
+
+static void set_up(socketcan_t *c)
+{
+    if (c->down) {
+        c->down = false;
+        logf_(c, "%s: interface is up again%s", "");
+    }
+}
+
+short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
+{
+    return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0));
+}
+
 static void went_away(socketcan_t *c, int e)
 {
     if (!c->gone) {
@@ -131,23 +165,39 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
     }
     cf.can_dlc = frame->len;
     memcpy(cf.data, frame->data, frame->len);
-    const ssize_t n = write(c->fd, &cf, sizeof cf);
+    if (c->tx_full_hold) {
+        /* The queue was full earlier in this pass of the main loop: with many nodes on one socket, each
+         * retrying its frame every CO_TX_RETRY_US, asking again would cost one failing system call per node. */
+        return CO_ERR_BUSY;
+    }
+    ssize_t n = write(c->fd, &cf, sizeof cf);
+    if (n < 0 && errno == ENETDOWN && iface_up(c)) {
+        /* A socket error is delivered once, to the next read or write, whenever that comes: this ENETDOWN can
+         * report an outage that is already over (down and up while the loop did not look). The outage is
+         * reported, and the frame is not lost for it. */
+        set_down(c, "; frames are lost until it is up again");
+        n = write(c->fd, &cf, sizeof cf);
+    }
     if (n == (ssize_t)sizeof cf) {
-        if (c->down) {
-            c->down = false;
-            logf_(c, "%s: interface is up again%s", "");
-        }
+        c->tx_full = false;
+        set_up(c);
         return CO_OK;
     }
     const int e = errno;
-    if (e == ENOBUFS || e == EAGAIN || e == EINTR) {
-        return CO_ERR_BUSY; /* kept by the core and sent when the queue drains */
+    if (e == ENOBUFS) {
+        /* The interface's queue is full (a real controller that cannot send: bus busy, no acknowledgement).
+         * The core keeps the frame and retries CO_TX_RETRY_US later; POLLOUT would not wait for this, as the
+         * socket itself stays writable (socketcan_poll_events). */
+        c->tx_full = true;
+        c->tx_full_hold = true;
+        return CO_ERR_BUSY;
+    }
+    if (e == EAGAIN || e == EINTR) {
+        c->tx_full = false;
+        return CO_ERR_BUSY; /* the socket's buffer is full: kept by the core, sent when POLLOUT says so */
     }
     if (e == ENETDOWN) {
-        if (!c->down) {
-            c->down = true;
-            logf_(c, "%s: interface is down; frames are lost until it is up again%s", "");
-        }
+        set_down(c, "; frames are lost until it is up again");
         c->lost_while_down++;
         return CO_ERR_IO;
     }
@@ -173,10 +223,7 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
                 return 0;
             }
             if (e == ENETDOWN) {
-                if (!c->down) {
-                    c->down = true;
-                    logf_(c, "%s: interface is down%s", "");
-                }
+                set_down(c, "");
                 return 0;
             }
             went_away(c, e);
@@ -185,9 +232,9 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
         if (n != (ssize_t)sizeof cf) {
             continue; /* not a classic CAN frame */
         }
-        if (c->down) {
-            c->down = false;
-            logf_(c, "%s: interface is up again%s", "");
+        if (c->down && iface_up(c)) {
+            /* Not on any frame: frames received before the interface went down may still be queued. */
+            set_up(c);
         }
         if ((cf.can_id & CAN_ERR_FLAG) != 0U) {
             char detail[96];
@@ -209,6 +256,7 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
 
 co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
 {
+    c->tx_full_hold = false; /* a new pass of the main loop: the next send asks the kernel again */
     if (!c->gone) {
         return CO_NEVER;
     }
@@ -216,6 +264,7 @@ co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
         if (open_socket(c, NULL, 0U) == 0) {
             c->gone = false;
             c->down = false;
+            c->tx_full = false;
             logf_(c, "%s: interface is back%s", "");
             return CO_NEVER;
         }

@@ -4,8 +4,13 @@
  *
  * send never blocks: a full transmit queue (ENOBUFS/EAGAIN) answers CO_ERR_BUSY, so the core keeps the
  * frame and retries; an interface that is down answers CO_ERR_IO (the frame is lost, as on a real bus
- * that is off) and is reported once. A vanished interface is reopened by socketcan_service() until it is
- * back. Classic CAN only; error frames are reported through the log callback.
+ * that is off) and is reported once, and its return once. A vanished interface is reopened by
+ * socketcan_service() until it is back. Classic CAN only; error frames are reported through the log callback.
+ *
+ * The main loop polls the socket for socketcan_poll_events(): POLLOUT only helps when the socket's own buffer
+ * was full (EAGAIN). ENOBUFS means the interface's queue is full, which poll does not report: the socket stays
+ * writable, so polling for POLLOUT then returns at once and the loop spins; the core's retry deadline
+ * (CO_TX_RETRY_US after the refusal) wakes the loop instead.
  */
 #ifndef SOCKETCAN_H
 #define SOCKETCAN_H
@@ -22,6 +27,8 @@ typedef struct socketcan {
     int fd;                   /**< -1 while the interface is gone. */
     bool down;                /**< Sends fail because the interface is down (reported once). */
     bool gone;                /**< The interface disappeared; reopened by socketcan_service(). */
+    bool tx_full;             /**< The last send met a full interface queue (ENOBUFS). */
+    bool tx_full_hold;        /**< ... in this pass of the main loop: further sends are refused at once. */
     co_time_us_t next_reopen;
     unsigned long lost_while_down;
     unsigned long error_frames;
@@ -36,10 +43,15 @@ void socketcan_close(socketcan_t *c);
 /** co_port_t.send for this channel (ctx = socketcan_t *). */
 co_status_t socketcan_send(void *ctx, const co_frame_t *frame);
 
+/** The events to poll the socket for: POLLIN, and POLLOUT when frames wait (tx_pending) for room in the
+ * socket's buffer; not after ENOBUFS (see above). */
+short socketcan_poll_events(const socketcan_t *c, bool tx_pending);
+
 /** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later). */
 int socketcan_read(socketcan_t *c, co_frame_t *frame);
 
-/** Reopens a vanished interface when due; returns the next time it wants to run, or CO_NEVER. */
+/** Call once per pass of the main loop. Reopens a vanished interface when due; returns the next time it wants
+ * to run, or CO_NEVER. After ENOBUFS, sends are refused (CO_ERR_BUSY) without a system call until this call. */
 co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now);
 
 /** CLOCK_MONOTONIC in µs. */
