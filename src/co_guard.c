@@ -28,6 +28,9 @@ void co_guard_reset(co_node_t *node)
 void co_guard_rx(co_node_t *node, const co_frame_t *f)
 {
     (void)f;
+    if (co_od_find(node->od, 0x100CU, 0U) == NULL || co_od_find(node->od, 0x100DU, 0U) == NULL) {
+        return; /* the device has no node guarding (heartbeat only): a guard request is not its business */
+    }
     if (co_od_u32_or(node, 0x1017U, 0U, 0U) != 0U) {
         return; /* heartbeat producer active: node guarding disabled */
     }

@@ -158,6 +158,24 @@ static void many_nodes_of_one_type(void)
     TEST_ASSERT_EQUAL_HEX32(0x580U + TEST_MULTI_NODE_SDO_ID, bus.sent[TEST_MULTI_NODE_COUNT].id);
 }
 
+/* A device without 0x100C/0x100D (heartbeat only, like the Eltex devices) does not answer a guard request even
+ * with its heartbeat off; a device with them does. */
+static void guard_request_answered_only_by_a_device_with_node_guarding(void)
+{
+    values_c.heartbeat = 0U; /* mini: no 0x100C/0x100D */
+    bus.n_sent = 0U;
+    const co_frame_t rtr7 = {0x707U, 0U, CO_FRAME_RTR, {0U}};
+    co_node_rx(&node[2], &rtr7, now);
+    (void)co_node_process(&node[2], now);
+    TEST_ASSERT_EQUAL_UINT32(0U, bus.n_sent);
+    const co_frame_t rtr5 = {0x705U, 0U, CO_FRAME_RTR, {0U}};
+    co_node_rx(&node[0], &rtr5, now); /* the test OD has them, heartbeat off by default */
+    (void)co_node_process(&node[0], now);
+    TEST_ASSERT_EQUAL_UINT32(1U, bus.n_sent);
+    TEST_ASSERT_EQUAL_HEX32(0x705U, bus.sent[0].id);
+    TEST_ASSERT_EQUAL_HEX8(0x7F, bus.sent[0].data[0]);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -167,5 +185,6 @@ int main(void)
     RUN_TEST(timers_are_per_node);
     RUN_TEST(emcy_of_one_node_stays_there);
     RUN_TEST(many_nodes_of_one_type);
+    RUN_TEST(guard_request_answered_only_by_a_device_with_node_guarding);
     return UNITY_END();
 }
