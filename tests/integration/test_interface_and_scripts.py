@@ -87,8 +87,10 @@ def test_script_runs_commands_at_their_times(tmp_path, capture):
     assert r.returncode == 0, r.stderr
     frames = capture.wait_for(0x0E2, count=2, timeout=1)
     boot = capture.wait_for(0x762, data=b"\x00", timeout=1)[0].timestamp
-    assert 0.7 < frames[0].timestamp - boot < 1.0, frames[0].timestamp - boot
-    assert 0.4 < frames[1].timestamp - frames[0].timestamp < 0.65
+    # Never early (the script's times count from the start, the boot-up comes a little after it); the upper bounds
+    # leave room for a loaded CI machine running User-Mode Linux, where a process can stall for a few 100 ms.
+    assert 0.7 < frames[0].timestamp - boot < 1.5, frames[0].timestamp - boot
+    assert 0.45 < frames[1].timestamp - frames[0].timestamp < 1.2, frames[1].timestamp - frames[0].timestamp
     assert bytes(frames[0].data)[:3] == b"\x00\x50\x01" and bytes(frames[1].data)[:3] == b"\x00\x00\x00"
     assert "emcy 0x5000: done" in r.stdout
 
