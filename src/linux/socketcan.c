@@ -69,6 +69,17 @@ static int open_socket(socketcan_t *c, char *err, size_t errlen)
     }
     const can_err_mask_t errors = CAN_ERR_MASK;
     (void)setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors);
+    /* One socket carries every emulated node: 127 nodes whose heartbeats and TPDOs fall due together send a burst of
+     * 254 frames, and a master's burst of requests arrives likewise. The default buffers (~200 KiB, a few hundred
+     * frames at the kernel's per-frame cost) make such bursts wait (EAGAIN) or drop on receive. SO_*BUFFORCE
+     * (CAP_NET_ADMIN) may exceed net.core.[rw]mem_max; without it SO_*BUF is capped there. */
+    const int bufsize = 4 << 20;
+    if (setsockopt(fd, SOL_SOCKET, SO_SNDBUFFORCE, &bufsize, sizeof bufsize) != 0) {
+        (void)setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &bufsize, sizeof bufsize);
+    }
+    if (setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bufsize, sizeof bufsize) != 0) {
+        (void)setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bufsize, sizeof bufsize);
+    }
     struct sockaddr_can addr;
     memset(&addr, 0, sizeof addr);
     addr.can_family = AF_CAN;
