@@ -69,16 +69,15 @@ static int open_socket(socketcan_t *c, char *err, size_t errlen)
     }
     const can_err_mask_t errors = CAN_ERR_MASK;
     (void)setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors);
-    /* One socket carries every emulated node: 127 nodes whose heartbeats and TPDOs fall due together send a burst of
-     * 254 frames, and a master's burst of requests arrives likewise. The default buffers (~200 KiB, a few hundred
-     * frames at the kernel's per-frame cost) make such bursts wait (EAGAIN) or drop on receive. SO_*BUFFORCE
-     * (CAP_NET_ADMIN) may exceed net.core.[rw]mem_max; without it SO_*BUF is capped there. */
-    const int bufsize = 4 << 20;
-    if (setsockopt(fd, SOL_SOCKET, SO_SNDBUFFORCE, &bufsize, sizeof bufsize) != 0) {
-        (void)setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &bufsize, sizeof bufsize);
-    }
-    if (setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bufsize, sizeof bufsize) != 0) {
-        (void)setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bufsize, sizeof bufsize);
+    /* One socket sends for every emulated node: 127 nodes whose heartbeats and TPDOs fall due together send a burst
+     * of 254 frames, more than the default send buffer (~200 KiB, a few hundred frames at the kernel's per-frame
+     * cost) holds while the receivers have not taken them yet; the rest waited for room (EAGAIN) and went out late.
+     * SO_SNDBUFFORCE (CAP_NET_ADMIN) may exceed net.core.wmem_max; without it SO_SNDBUF is capped there. The
+     * receive buffer stays at its default: a flood beyond what the nodes can answer is better dropped (the master
+     * sees a timeout) than queued for seconds on a virtual bus that, unlike a real one, has no bit rate. */
+    const int sndbuf = 4 << 20;
+    if (setsockopt(fd, SOL_SOCKET, SO_SNDBUFFORCE, &sndbuf, sizeof sndbuf) != 0) {
+        (void)setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf);
     }
     struct sockaddr_can addr;
     memset(&addr, 0, sizeof addr);
