@@ -120,6 +120,10 @@ int main(int argc, char **argv)
             if (end >= 0 && (long long)good + (long long)wrong >= total) {
                 break; /* everything answered: no need to sit out the grace time */
             }
+            if (end >= 0 && bench_mono_ns() >= end) {
+                break; /* checked here too: with 127 nodes' heartbeats and TPDOs a frame is always waiting, so the
+                        * receive below may never time out */
+            }
             const int64_t deadline = end >= 0 ? end : start + (int64_t)((double)sent * gap_ns);
             struct can_frame f;
             int64_t t;
