@@ -170,25 +170,23 @@ def test_127_nodes_in_one_process_all_answer(emulator, network, capture):
     emulator(*specs)
     capture.wait_for(0x77F, data=b"\x00", timeout=10)
     ods = {device: canopen.import_od(str(EDS[device])) for device in EDS}
-    # The first answer may take longer than python-canopen's timeout: right after 127 boot-ups a loaded CI machine
-    # running User-Mode Linux can stall the emulator or this master for seconds (seen once: node 1 unanswered in
-    # 2 s). Wait until the process answers at all (10 s), then every node must answer within the normal timeout.
-    first = remote(network, "sds", 1, ods["sds"])
-    end = time.monotonic() + 10
-    while True:
-        try:
-            first.sdo.upload(0x1018, 1)
-            break
-        except canopen.SdoCommunicationError:
-            assert time.monotonic() < end, "canopen-emu with 127 nodes did not answer node 1 within 10 s"
-    network.nodes.pop(1, None)
+    # Every node must answer: a lost answer fails however long we wait. How fast it answers is the benchmarks'
+    # business (docs/performance.md), not this test's: on a loaded CI machine User-Mode Linux (one virtual CPU for
+    # the emulator, this master and its threads) stalled for more than python-canopen's 2 s twice in a row right
+    # after 127 boot-ups, so each request here waits up to 10 s, and a failure says whether the answer reached the
+    # bus (the master's receive thread lagged) or not (the emulator lost it).
     for i in range(1, 128):
         device = ["pro-ionizer", "sds", "buerkert"][i % 3]
         node = remote(network, device, i, ods[device])
+        node.sdo.RESPONSE_TIMEOUT = 10.0
+        asked = time.time()
         try:
             vendor = node.sdo.upload(0x1018, 1)
         except canopen.SdoCommunicationError as e:
-            raise AssertionError(f"node {i} ({device}) did not answer: {e}") from e
+            seen = [m for m in capture.matching(0x580 + i, since=asked)]
+            where = (f"the answer reached the bus {seen[0].timestamp - asked:.3f} s after the request"
+                     if seen else "no answer on the bus")
+            raise AssertionError(f"node {i} ({device}) did not answer within 10 s ({e}): {where}") from e
         assert vendor[:1] in (b"\x4e", b"\x39"), i
 
 
