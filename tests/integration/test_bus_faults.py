@@ -542,6 +542,25 @@ def heartbeat_gaps(frames, node_id, since, until):
     return times, [b - a for a, b in zip(times, times[1:])]
 
 
+def starved_heartbeats(frames, node_id, since, until):
+    """The windows in which node_id's heartbeat was overdue (no heartbeat for HB_MAX_GAP_S) while the emulator
+    kept sending other frames for longer than one period: the heartbeat starved by other work.
+
+    A plain bound on the gap would also fail when the whole machine stalls (a loaded CI host running User-Mode
+    Linux stopped everything for 230 ms here, and for seconds in CI): then the emulator sends nothing at all
+    during the gap, and after it the heartbeat leaves in the same burst as the answers that waited. The frames'
+    kernel time stamps (vcan delivers at once) say when the emulator sent them, whatever this test's lag."""
+    times, _ = heartbeat_gaps(frames, node_id, since, until)
+    others = sorted(ts for ts, can_id, data in frames if can_id != 0x700 + node_id and since <= ts <= until)
+    starved = []
+    for a, b in zip([since] + times, times + [until]):
+        inside = [ts for ts in others if a + HB_MAX_GAP_S < ts < b]
+        if inside and inside[-1] - inside[0] > HB_MS / 1000:
+            starved.append(f"no heartbeat for {(b - a) * 1000:.0f} ms after {a - since:.3f} s while {len(inside)} "
+                           f"other frames went out over {(inside[-1] - inside[0]) * 1000:.0f} ms")
+    return starved
+
+
 def test_sdo_flood_from_two_clients(emulator):
     # Two clients on ONE node's default SDO server would not be meaningful: CiA 301 makes an SDO channel a
     # peer-to-peer link between one client and one server, with no transaction identifier in the frames, so
@@ -581,9 +600,9 @@ def test_sdo_flood_from_two_clients(emulator):
         assert extra[c.node_id] == [], f"node {c.node_id}: answers to no request: {extra[c.node_id][:5]}"
         times, gaps = heartbeat_gaps(frames, c.node_id, start, until)
         assert all(f[2] == b"\x7f" for f in frames if f[1] == 0x700 + c.node_id), "heartbeat state not Pre-operational"
-        # every period has its heartbeat: none lost, none a consumer would miss
-        assert len(times) >= (until - start) / (HB_MS / 1000) - 2, (len(times), until - start)
-        assert max(gaps) <= HB_MAX_GAP_S, f"node {c.node_id}: heartbeat gap {max(gaps) * 1000:.0f} ms"
+        # the flood never holds the heartbeat back (a machine that stalls everything is not the emulator's fault)
+        assert times, f"node {c.node_id}: no heartbeat during the flood"
+        assert not starved_heartbeats(frames, c.node_id, start, until), starved_heartbeats(frames, c.node_id, start, until)
 
 
 # ---- open-loop burst ------------------------------------------------------------------------------------------
@@ -709,8 +728,8 @@ def test_full_transmit_queue_loses_no_frame(emulator):
     assert answered > 10
     for n in CONGESTED:
         times, gaps = heartbeat_gaps(frames, n, start, until)
-        assert len(times) >= (until - start) / (HB_MS / 1000) - 2, f"node {n}: {len(times)} heartbeats"
-        assert max(gaps) <= HB_MAX_GAP_S, f"node {n}: heartbeat gap {max(gaps) * 1000:.0f} ms"
+        assert times, f"node {n}: no heartbeat while the queue was full"
+        assert not starved_heartbeats(frames, n, start, until), (n, starved_heartbeats(frames, n, start, until))
     assert used < MAX_CPU_SHARE_TX_FULL * wall, f"the emulator used {used:.2f} s of CPU in {wall:.2f} s: a busy loop"
 
 
@@ -736,3 +755,20 @@ def test_error_frames_are_logged_and_ignored(emulator):
     assert [f for f in bus.drain(wait=0.3) if f[1] == 0x580 + node] == []
     assert log_count(emu, "CAN error frame") == 1
     assert emu.proc.poll() is None
+
+
+def test_starvation_check_tells_a_stall_from_a_starved_heartbeat():
+    """The check above must fail on the bug it is there for and pass on a machine that stalls (no bus needed)."""
+    period = HB_MS / 1000
+    steady = [(k * period, 0x700 + 5, b"\x7f") for k in range(1, 50)]
+    answers = [(k * 0.002, 0x585, b"\x43") for k in range(1, 2500)]
+    assert starved_heartbeats(steady + answers, 5, 0.0, 5.0) == []
+    # the whole machine stops for 1.5 s: nothing goes out, then the heartbeat and the waiting answers together
+    stalled = [f for f in steady + answers if not 2.0 < f[0] < 3.5] + [(3.5001, 0x585, b"\x43"), (3.5002, 0x705, b"\x7f")]
+    assert starved_heartbeats(stalled, 5, 0.0, 5.0) == []
+    # the heartbeat stops after 2 s while the answers keep going: starved
+    starved = [f for f in steady if f[0] < 2.0] + answers
+    assert len(starved_heartbeats(starved, 5, 0.0, 5.0)) == 1
+    # a heartbeat that comes back but one window was starved for 0.5 s
+    late = [f for f in steady if not 2.0 < f[0] < 2.65] + answers
+    assert len(starved_heartbeats(late, 5, 0.0, 5.0)) == 1

@@ -54,10 +54,12 @@ def test_nmt_cycle_in_heartbeat_and_write_read_back(device, emulator, network, c
         since = time.time()
         frames = capture.wait_for(0x700 + node_id, count=2, since=since, timeout=1.0)
         assert bytes(frames[-1].data) == bytes([state])
-    # the heartbeat period on the wire is 100 ms
-    frames = capture.wait_for(0x700 + node_id, count=6, since=time.time(), timeout=1.5)
-    gaps = [b.timestamp - a.timestamp for a, b in zip(frames, frames[1:])]
-    assert all(0.08 < g < 0.12 for g in gaps), gaps
+    # the heartbeat period on the wire is 100 ms: the median of 10 gaps, which a stall of the whole machine (one
+    # long gap, then the core's absolute deadlines bring the phase back) does not move; how exact the period is
+    # over thousands of periods is measured by tools/bench (docs/performance.md)
+    frames = capture.wait_for(0x700 + node_id, count=11, since=time.time(), timeout=5)
+    gaps = sorted(b.timestamp - a.timestamp for a, b in zip(frames, frames[1:]))
+    assert 0.09 < gaps[len(gaps) // 2] < 0.11, gaps
 
 
 @pytest.mark.parametrize("device", sorted(EDS))
