@@ -788,7 +788,9 @@ int main(int argc, char **argv)
                     emu.nodes[i]->dev.cls->name, (unsigned long)st->tx_dropped);
         }
     }
-    logline(LOG_NORMAL, "%lu frame(s) sent, %lu dropped", sent, dropped);
+    socketcan_flush_log(&emu.can);
+    logline(LOG_NORMAL, "%lu frame(s) sent, %lu dropped; %lu received frame(s) lost (receive buffer full)", sent,
+            dropped, emu.can.rx_dropped);
     socketcan_close(&emu.can);
     for (size_t i = 0U; i < emu.n_nodes; i++) {
         nvm_file_close(&emu.nodes[i]->nvm);

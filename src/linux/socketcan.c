@@ -6,6 +6,7 @@
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
+#include <linux/sock_diag.h>
 #include <poll.h>
 #include <stdio.h>
 #include <string.h>
@@ -75,6 +76,9 @@ static int open_socket(socketcan_t *c, char *err, size_t errlen)
      * SO_SNDBUFFORCE (CAP_NET_ADMIN) may exceed net.core.wmem_max; without it SO_SNDBUF is capped there. The
      * receive buffer stays at its default: a flood beyond what the nodes can answer is better dropped (the master
      * sees a timeout) than queued for seconds on a virtual bus that, unlike a real one, has no bit rate. */
+    const int one = 1;
+    (void)setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one); /* drops are counted and reported */
+    c->rx_drops_socket = 0U; /* a new socket counts from 0 */
     const int sndbuf = 4 << 20;
     if (setsockopt(fd, SOL_SOCKET, SO_SNDBUFFORCE, &sndbuf, sizeof sndbuf) != 0) {
         (void)setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf);
@@ -150,11 +154,14 @@ short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
     return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0));
 }
 
+static void query_rx_drops(socketcan_t *c);
+
 static void went_away(socketcan_t *c, int e)
 {
     if (!c->gone) {
         logf_(c, "%s: interface gone (%s); waiting for it to come back", strerror(e));
     }
+    query_rx_drops(c); /* the socket's count goes with it */
     socketcan_close(c);
     c->gone = true;
     c->next_reopen = 0U;
@@ -219,6 +226,59 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
     return CO_ERR_IO;
 }
 
+/* The kernel's drop count of the current socket (cumulative since it was opened) moved to `drops`: add the
+ * difference to the total and report it, at most once a second (a stalled emulator under a flood would
+ * otherwise write a line per frame). What is not reported yet goes into the next report or socketcan_flush_log(). */
+static void log_rx_drops(socketcan_t *c);
+
+static void note_rx_drops(socketcan_t *c, uint32_t drops)
+{
+    if (drops <= c->rx_drops_socket) {
+        return; /* a frame queued before the latest drops carries an older count */
+    }
+    c->rx_dropped += (uint32_t)(drops - c->rx_drops_socket);
+    c->rx_drops_socket = drops;
+    const co_time_us_t now = socketcan_now_us();
+    if (now >= c->rx_drops_next_report) {
+        log_rx_drops(c);
+        c->rx_drops_next_report = now + 1000000U;
+    }
+}
+
+/* The socket's drop count asked directly (SO_MEMINFO). The count a received frame carries (SO_RXQ_OVFL) is the
+ * one from when it was queued: the frames that filled the buffer carry none of the drops that followed them, so
+ * after a stall that ended the burst, only asking tells. */
+static void query_rx_drops(socketcan_t *c)
+{
+#ifdef SO_MEMINFO
+    uint32_t meminfo[SK_MEMINFO_VARS];
+    socklen_t len = sizeof meminfo;
+    if (c->fd >= 0 && getsockopt(c->fd, SOL_SOCKET, SO_MEMINFO, meminfo, &len) == 0 &&
+        len > (socklen_t)(SK_MEMINFO_DROPS * sizeof meminfo[0])) {
+        note_rx_drops(c, meminfo[SK_MEMINFO_DROPS]);
+    }
+#else
+    (void)c; /* headers older than Linux 4.6: the counts frames carry (SO_RXQ_OVFL) only */
+#endif
+}
+
+void socketcan_flush_log(socketcan_t *c)
+{
+    query_rx_drops(c);
+    log_rx_drops(c);
+}
+
+static void log_rx_drops(socketcan_t *c)
+{
+    if (c->rx_dropped > c->rx_dropped_reported) {
+        char detail[160];
+        (void)snprintf(detail, sizeof detail, " %lu received frame(s) lost (%lu in all): the receive buffer was full, "
+                       "the emulator fell behind", c->rx_dropped - c->rx_dropped_reported, c->rx_dropped);
+        c->rx_dropped_reported = c->rx_dropped;
+        logf_(c, "%s:%s", detail);
+    }
+}
+
 int socketcan_read(socketcan_t *c, co_frame_t *frame)
 {
     for (;;) {
@@ -226,10 +286,32 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             return 0;
         }
         struct can_frame cf;
-        const ssize_t n = read(c->fd, &cf, sizeof cf);
+        /* recvmsg, not read: SO_RXQ_OVFL puts the socket's count of frames the kernel dropped for a full receive
+         * buffer into each message, and a frame the emulator never saw must not go unreported. */
+        union {
+            char buf[CMSG_SPACE(sizeof(uint32_t))];
+            struct cmsghdr align;
+        } control;
+        struct iovec iov = {.iov_base = &cf, .iov_len = sizeof cf};
+        struct msghdr msg;
+        memset(&msg, 0, sizeof msg);
+        msg.msg_iov = &iov;
+        msg.msg_iovlen = 1;
+        msg.msg_control = control.buf;
+        msg.msg_controllen = sizeof control.buf;
+        const ssize_t n = recvmsg(c->fd, &msg, 0);
         if (n < 0) {
             const int e = errno;
             if (e == EAGAIN || e == EINTR) {
+                /* Drained: ask for drops after frames were read, at most once a second (a system call). */
+                if (c->rx_since_query) {
+                    const co_time_us_t now = socketcan_now_us();
+                    if (now >= c->rx_next_query) {
+                        c->rx_since_query = false;
+                        c->rx_next_query = now + 1000000U;
+                        query_rx_drops(c);
+                    }
+                }
                 return 0;
             }
             if (e == ENETDOWN) {
@@ -239,6 +321,13 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             went_away(c, e);
             return -1;
         }
+        for (struct cmsghdr *cm = CMSG_FIRSTHDR(&msg); cm != NULL; cm = CMSG_NXTHDR(&msg, cm)) {
+            if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_RXQ_OVFL) {
+                uint32_t drops;
+                memcpy(&drops, CMSG_DATA(cm), sizeof drops);
+                note_rx_drops(c, drops);
+            }
+        }
         if (n != (ssize_t)sizeof cf) {
             continue; /* not a classic CAN frame */
         }
@@ -246,6 +335,7 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             /* Not on any frame: frames received before the interface went down may still be queued. */
             set_up(c);
         }
+        c->rx_since_query = true;
         if ((cf.can_id & CAN_ERR_FLAG) != 0U) {
             char detail[96];
             c->error_frames++;

@@ -5,7 +5,8 @@
  * send never blocks: a full transmit queue (ENOBUFS/EAGAIN) answers CO_ERR_BUSY, so the core keeps the
  * frame and retries; an interface that is down answers CO_ERR_IO (the frame is lost, as on a real bus
  * that is off) and is reported once, and its return once. A vanished interface is reopened by
- * socketcan_service() until it is back. Classic CAN only; error frames are reported through the log callback.
+ * socketcan_service() until it is back. Classic CAN only; error frames and received frames the kernel dropped
+ * (receive buffer full) are reported through the log callback.
  *
  * The main loop polls the socket for socketcan_poll_events(): POLLOUT only helps when the socket's own buffer
  * was full (EAGAIN). ENOBUFS means the interface's queue is full, which poll does not report: the socket stays
@@ -32,6 +33,12 @@ typedef struct socketcan {
     co_time_us_t next_reopen;
     unsigned long lost_while_down;
     unsigned long error_frames;
+    unsigned long rx_dropped;          /**< Received frames the kernel dropped (receive buffer full), all sockets. */
+    unsigned long rx_dropped_reported; /**< ... of them already logged. */
+    uint32_t rx_drops_socket;          /**< The current socket's own count (SO_RXQ_OVFL), from 0 at open. */
+    co_time_us_t rx_drops_next_report;
+    bool rx_since_query;               /**< Frames were read since the count was last asked for (SO_MEMINFO). */
+    co_time_us_t rx_next_query;
     socketcan_log_fn log;
     void *log_ctx;
 } socketcan_t;
@@ -47,8 +54,13 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame);
  * socket's buffer; not after ENOBUFS (see above). */
 short socketcan_poll_events(const socketcan_t *c, bool tx_pending);
 
-/** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later). */
+/** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later).
+ * Frames the kernel dropped because the receive buffer was full are counted (rx_dropped) and logged, at most
+ * once a second. */
 int socketcan_read(socketcan_t *c, co_frame_t *frame);
+
+/** Asks the kernel for the drop count and logs received frames lost and not reported yet (call before exit). */
+void socketcan_flush_log(socketcan_t *c);
 
 /** Call once per pass of the main loop. Reopens a vanished interface when due; returns the next time it wants
  * to run, or CO_NEVER. After ENOBUFS, sends are refused (CO_ERR_BUSY) without a system call until this call. */

@@ -11,6 +11,7 @@ import errno
 import os
 import re
 import select
+import signal
 import socket
 import struct
 import subprocess
@@ -755,6 +756,42 @@ def test_error_frames_are_logged_and_ignored(emulator):
     assert [f for f in bus.drain(wait=0.3) if f[1] == 0x580 + node] == []
     assert log_count(emu, "CAN error frame") == 1
     assert emu.proc.poll() is None
+
+
+# ---- receive buffer overflow ----------------------------------------------------------------------------------
+
+OVERFLOW_REQUESTS = 3000  # far more than a default receive buffer holds (a few hundred frames)
+
+
+def test_frames_lost_in_a_full_receive_buffer_are_counted_and_reported(emulator):
+    # An emulator that falls behind (here: stopped with SIGSTOP, as a scheduler or a debugger may stop it) while a
+    # master keeps sending loses frames in the kernel, which drops what no longer fits into the socket's receive
+    # buffer. It must not lose them silently: it counts the kernel's drops (SO_RXQ_OVFL) and logs them. Exact:
+    # every request is either answered or counted lost, none both, none neither.
+    node = 0x56
+    bus = RawCan((0x580 + node, 0x700 + node))
+    emu = emulator(f"sds:{node}")
+    wait_bootups(bus, [node])
+    bus.transact(node, download(0x1017, 0, 0, 2), download_answer(0x1017, 0))  # no heartbeat: only answers follow
+    request, answer = upload(0x1018, 1), upload_answer(0x1018, 1, odv("sds", 0x1018, 1), 4)
+    emu.proc.send_signal(signal.SIGSTOP)
+    try:
+        for _ in range(OVERFLOW_REQUESTS):
+            bus.send(0x600 + node, request)
+    finally:
+        emu.proc.send_signal(signal.SIGCONT)
+    answers = [f for f in bus.drain(wait=2.0) if f[1] == 0x580 + node]
+    assert all(f[2] == answer for f in answers), {f[2].hex() for f in answers}
+    assert emu.log_contains("received frame(s) lost"), emu.err_lines[-5:]
+    assert emu.stop() == 0
+    summary = [line for line in emu.err_lines if "frame(s) sent" in line]
+    assert len(summary) == 1, emu.err_lines
+    lost = int(summary[0].split("; ")[1].split()[0])
+    print(f"\n{OVERFLOW_REQUESTS} requests to a stopped emulator: {len(answers)} answered, {lost} lost in the kernel")
+    assert 0 < lost < OVERFLOW_REQUESTS and len(answers) + lost == OVERFLOW_REQUESTS, (len(answers), lost)
+    reported = sum(int(line.split(" received frame(s) lost (")[0].split()[-1]) for line in emu.err_lines
+                   if " in all): the receive buffer was full" in line)
+    assert reported == lost, (reported, emu.err_lines)
 
 
 def test_starvation_check_tells_a_stall_from_a_starved_heartbeat():

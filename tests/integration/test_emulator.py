@@ -198,10 +198,12 @@ def test_sigint_and_sigterm_stop_cleanly(emulator, capture):
         capture.wait_for(0x750, data=b"\x00", timeout=3)
         start = time.monotonic()
         assert emu.stop(sig) == 0
-        assert time.monotonic() - start < 1.0
-        # The closing summary counts what the node sent (at least its boot-up) and what it could not send.
+        assert time.monotonic() - start < 3.0  # at once: the margin is for a loaded machine
+        # The closing summary counts what the node sent (at least its boot-up), what it could not send and what
+        # the kernel dropped before the emulator could read it.
         summary = [line for line in emu.err_lines if "frame(s) sent" in line]
-        assert len(summary) == 1 and summary[0].endswith(", 0 dropped"), emu.err_lines
+        assert len(summary) == 1 and summary[0].endswith(", 0 dropped; 0 received frame(s) lost (receive buffer full)"), \
+            emu.err_lines
         assert int(summary[0].split("]")[1].split()[0]) >= 1, summary
         capture.clear()
 
