@@ -760,6 +760,7 @@ int main(int argc, char **argv)
                     }
                 }
             }
+            socketcan_check_drops(&emu.can, now);
         }
         if ((pfd[0].revents & POLLOUT) != 0) {
             /* Room in the socket's buffer: nodes with queued frames retry now. Without this the loop would poll
@@ -789,8 +790,10 @@ int main(int argc, char **argv)
         }
     }
     socketcan_flush_log(&emu.can);
-    logline(LOG_NORMAL, "%lu frame(s) sent, %lu dropped; %lu received frame(s) lost (receive buffer full)", sent,
-            dropped, emu.can.rx_dropped);
+    /* Shown also with -q when frames were lost either way: a quiet run must not hide a loss. */
+    logline(dropped > 0UL || emu.can.rx_dropped > 0UL ? LOG_QUIET : LOG_NORMAL,
+            "%lu frame(s) sent, %lu dropped; %lu received frame(s) lost (receive buffer full)", sent, dropped,
+            emu.can.rx_dropped);
     socketcan_close(&emu.can);
     for (size_t i = 0U; i < emu.n_nodes; i++) {
         nvm_file_close(&emu.nodes[i]->nvm);

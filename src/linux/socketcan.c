@@ -262,6 +262,15 @@ static void query_rx_drops(socketcan_t *c)
 #endif
 }
 
+void socketcan_check_drops(socketcan_t *c, co_time_us_t now)
+{
+    if (c->rx_since_query && now >= c->rx_next_query) {
+        c->rx_since_query = false;
+        c->rx_next_query = now + 1000000U;
+        query_rx_drops(c);
+    }
+}
+
 void socketcan_flush_log(socketcan_t *c)
 {
     query_rx_drops(c);
@@ -303,15 +312,6 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
         if (n < 0) {
             const int e = errno;
             if (e == EAGAIN || e == EINTR) {
-                /* Drained: ask for drops after frames were read, at most once a second (a system call). */
-                if (c->rx_since_query) {
-                    const co_time_us_t now = socketcan_now_us();
-                    if (now >= c->rx_next_query) {
-                        c->rx_since_query = false;
-                        c->rx_next_query = now + 1000000U;
-                        query_rx_drops(c);
-                    }
-                }
                 return 0;
             }
             if (e == ENETDOWN) {

@@ -59,6 +59,12 @@ short socketcan_poll_events(const socketcan_t *c, bool tx_pending);
  * once a second. */
 int socketcan_read(socketcan_t *c, co_frame_t *frame);
 
+/** Call after a batch of reads, with the time of the batch: asks the kernel for the socket's drop count
+ * (SO_MEMINFO; one system call, at most once a second and only when frames were read since). The count that
+ * comes with each frame (SO_RXQ_OVFL) misses the drops after the last frame queued, e.g. a burst that ended
+ * while the reader was stalled. */
+void socketcan_check_drops(socketcan_t *c, co_time_us_t now);
+
 /** Asks the kernel for the drop count and logs received frames lost and not reported yet (call before exit). */
 void socketcan_flush_log(socketcan_t *c);
 
