@@ -165,6 +165,58 @@ int bench_can_recv(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int64_t d
     }
 }
 
+#define RECV_MANY_MAX 64
+
+int bench_can_recv_many(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int max)
+{
+    struct mmsghdr mm[RECV_MANY_MAX];
+    struct iovec iov[RECV_MANY_MAX];
+    char ctrl[RECV_MANY_MAX][CMSG_SPACE(sizeof(struct timespec)) + CMSG_SPACE(sizeof(uint32_t))];
+    if (max > RECV_MANY_MAX) {
+        max = RECV_MANY_MAX;
+    }
+    memset(mm, 0, sizeof mm);
+    for (int i = 0; i < max; i++) {
+        iov[i].iov_base = &f[i];
+        iov[i].iov_len = sizeof f[i];
+        mm[i].msg_hdr.msg_iov = &iov[i];
+        mm[i].msg_hdr.msg_iovlen = 1;
+        mm[i].msg_hdr.msg_control = ctrl[i];
+        mm[i].msg_hdr.msg_controllen = sizeof ctrl[i];
+    }
+    int n;
+    do {
+        n = recvmmsg(c->fd, mm, (unsigned)max, MSG_DONTWAIT, NULL);
+    } while (n < 0 && errno == EINTR);
+    if (n < 0) {
+        if (errno == EAGAIN || errno == EWOULDBLOCK) {
+            return 0;
+        }
+        fprintf(stderr, "bench: recvmmsg: %s\n", strerror(errno));
+        return -1;
+    }
+    int kept = 0;
+    for (int i = 0; i < n; i++) {
+        if (mm[i].msg_len != sizeof f[i]) {
+            continue; /* not a classic frame (CAN FD): ignored */
+        }
+        int64_t t = 0;
+        for (struct cmsghdr *cm = CMSG_FIRSTHDR(&mm[i].msg_hdr); cm != NULL; cm = CMSG_NXTHDR(&mm[i].msg_hdr, cm)) {
+            if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_TIMESTAMPNS) {
+                struct timespec ts;
+                memcpy(&ts, CMSG_DATA(cm), sizeof ts);
+                t = ts_ns(&ts);
+            } else if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_RXQ_OVFL) {
+                memcpy(&c->drops, CMSG_DATA(cm), sizeof c->drops);
+            }
+        }
+        f[kept] = f[i];
+        t_ns[kept] = t != 0 ? t : bench_real_ns();
+        kept++;
+    }
+    return kept;
+}
+
 long long bench_num(const char *text, long long lo, long long hi, const char *what)
 {
     char *end = NULL;

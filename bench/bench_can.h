@@ -32,6 +32,10 @@ int bench_can_send(bench_can_t *c, uint32_t id, uint8_t len, const uint8_t *data
  * Returns 1 (frame, *t_ns = kernel arrival time, realtime ns), 0 (deadline passed) or -1 (error). */
 int bench_can_recv(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int64_t deadline_ns);
 
+/* Receives up to max frames that are already pending, in one system call (recvmmsg), without waiting.
+ * Returns how many (f[i], t_ns[i] as bench_can_recv), 0 when none is pending, -1 on error. */
+int bench_can_recv_many(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int max);
+
 int64_t bench_mono_ns(void);
 int64_t bench_real_ns(void);
 void bench_sleep_until(int64_t mono_ns);
