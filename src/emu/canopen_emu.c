@@ -760,7 +760,6 @@ int main(int argc, char **argv)
                     }
                 }
             }
-            socketcan_check_drops(&emu.can, now);
         }
         if ((pfd[0].revents & POLLOUT) != 0) {
             /* Room in the socket's buffer: nodes with queued frames retry now. Without this the loop would poll

@@ -262,15 +262,6 @@ static void query_rx_drops(socketcan_t *c)
 #endif
 }
 
-void socketcan_check_drops(socketcan_t *c, co_time_us_t now)
-{
-    if (c->rx_since_query && now >= c->rx_next_query) {
-        c->rx_since_query = false;
-        c->rx_next_query = now + 1000000U;
-        query_rx_drops(c);
-    }
-}
-
 void socketcan_flush_log(socketcan_t *c)
 {
     query_rx_drops(c);
@@ -357,8 +348,30 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
 co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
 {
     c->tx_full_hold = false; /* a new pass of the main loop: the next send asks the kernel again */
+    co_time_us_t next = CO_NEVER;
+    if (c->rx_since_query) {
+        /* Frames were read: ask for the socket's drop count (SO_MEMINFO, one system call) at once, then at most
+         * once a second while frames keep coming, and once more a second after the last of them. The count a
+         * frame carries (SO_RXQ_OVFL) misses drops after the last frame queued (a burst into a stalled reader,
+         * and silence after it); the kernel may also deliver a burst in parts, after the first ask. */
+        if (now >= c->rx_next_query) {
+            c->rx_since_query = false;
+            c->rx_next_query = now + 1000000U;
+            query_rx_drops(c);
+            c->rx_query_again = true;
+        } else {
+            next = c->rx_next_query;
+        }
+    } else if (c->rx_query_again) {
+        if (now >= c->rx_next_query) {
+            c->rx_query_again = false;
+            query_rx_drops(c);
+        } else {
+            next = c->rx_next_query;
+        }
+    }
     if (!c->gone) {
-        return CO_NEVER;
+        return next;
     }
     if (now >= c->next_reopen) {
         if (open_socket(c, NULL, 0U) == 0) {
@@ -366,9 +379,9 @@ co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
             c->down = false;
             c->tx_full = false;
             logf_(c, "%s: interface is back%s", "");
-            return CO_NEVER;
+            return next;
         }
         c->next_reopen = now + REOPEN_INTERVAL_US;
     }
-    return c->next_reopen;
+    return c->next_reopen < next ? c->next_reopen : next;
 }

@@ -38,6 +38,7 @@ typedef struct socketcan {
     uint32_t rx_drops_socket;          /**< The current socket's own count (SO_RXQ_OVFL), from 0 at open. */
     co_time_us_t rx_drops_next_report;
     bool rx_since_query;               /**< Frames were read since the count was last asked for (SO_MEMINFO). */
+    bool rx_query_again;               /**< Ask once more a second after the last ask (drops after the last frame). */
     co_time_us_t rx_next_query;
     socketcan_log_fn log;
     void *log_ctx;
@@ -56,20 +57,16 @@ short socketcan_poll_events(const socketcan_t *c, bool tx_pending);
 
 /** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later).
  * Frames the kernel dropped because the receive buffer was full are counted (rx_dropped) and logged, at most
- * once a second. */
+ * once a second (see socketcan_service). */
 int socketcan_read(socketcan_t *c, co_frame_t *frame);
-
-/** Call after a batch of reads, with the time of the batch: asks the kernel for the socket's drop count
- * (SO_MEMINFO; one system call, at most once a second and only when frames were read since). The count that
- * comes with each frame (SO_RXQ_OVFL) misses the drops after the last frame queued, e.g. a burst that ended
- * while the reader was stalled. */
-void socketcan_check_drops(socketcan_t *c, co_time_us_t now);
 
 /** Asks the kernel for the drop count and logs received frames lost and not reported yet (call before exit). */
 void socketcan_flush_log(socketcan_t *c);
 
-/** Call once per pass of the main loop. Reopens a vanished interface when due; returns the next time it wants
- * to run, or CO_NEVER. After ENOBUFS, sends are refused (CO_ERR_BUSY) without a system call until this call. */
+/** Call once per pass of the main loop. Reopens a vanished interface when due, asks for the receive drop count
+ * after frames were read (at once, then at most once a second, and once more a second after the last ask);
+ * returns the next time it wants to run, or CO_NEVER. After ENOBUFS, sends are refused (CO_ERR_BUSY) without a
+ * system call until this call. */
 co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now);
 
 /** CLOCK_MONOTONIC in µs. */
