@@ -112,6 +112,23 @@ int bench_can_send(bench_can_t *c, uint32_t id, uint8_t len, const uint8_t *data
     }
 }
 
+/* A received frame's kernel arrival time (SO_TIMESTAMPNS; now when there is none) and the socket's drop count
+ * (SO_RXQ_OVFL) from the message's control data. */
+static int64_t frame_time(bench_can_t *c, struct msghdr *msg)
+{
+    int64_t t = 0;
+    for (struct cmsghdr *cm = CMSG_FIRSTHDR(msg); cm != NULL; cm = CMSG_NXTHDR(msg, cm)) {
+        if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_TIMESTAMPNS) {
+            struct timespec ts;
+            memcpy(&ts, CMSG_DATA(cm), sizeof ts);
+            t = ts_ns(&ts);
+        } else if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_RXQ_OVFL) {
+            memcpy(&c->drops, CMSG_DATA(cm), sizeof c->drops);
+        }
+    }
+    return t != 0 ? t : bench_real_ns(); /* no kernel timestamp: the next best thing */
+}
+
 int bench_can_recv(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int64_t deadline_ns)
 {
     for (;;) {
@@ -125,19 +142,7 @@ int bench_can_recv(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int64_t d
         msg.msg_controllen = sizeof ctrl;
         const ssize_t r = recvmsg(c->fd, &msg, MSG_DONTWAIT);
         if (r == (ssize_t)sizeof *f) {
-            *t_ns = 0;
-            for (struct cmsghdr *cm = CMSG_FIRSTHDR(&msg); cm != NULL; cm = CMSG_NXTHDR(&msg, cm)) {
-                if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_TIMESTAMPNS) {
-                    struct timespec ts;
-                    memcpy(&ts, CMSG_DATA(cm), sizeof ts);
-                    *t_ns = ts_ns(&ts);
-                } else if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_RXQ_OVFL) {
-                    memcpy(&c->drops, CMSG_DATA(cm), sizeof c->drops);
-                }
-            }
-            if (*t_ns == 0) {
-                *t_ns = bench_real_ns(); /* no kernel timestamp: the next best thing */
-            }
+            *t_ns = frame_time(c, &msg);
             return 1;
         }
         if (r >= 0) {
@@ -200,18 +205,8 @@ int bench_can_recv_many(bench_can_t *c, struct can_frame *f, int64_t *t_ns, int 
         if (mm[i].msg_len != sizeof f[i]) {
             continue; /* not a classic frame (CAN FD): ignored */
         }
-        int64_t t = 0;
-        for (struct cmsghdr *cm = CMSG_FIRSTHDR(&mm[i].msg_hdr); cm != NULL; cm = CMSG_NXTHDR(&mm[i].msg_hdr, cm)) {
-            if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_TIMESTAMPNS) {
-                struct timespec ts;
-                memcpy(&ts, CMSG_DATA(cm), sizeof ts);
-                t = ts_ns(&ts);
-            } else if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_RXQ_OVFL) {
-                memcpy(&c->drops, CMSG_DATA(cm), sizeof c->drops);
-            }
-        }
         f[kept] = f[i];
-        t_ns[kept] = t != 0 ? t : bench_real_ns();
+        t_ns[kept] = frame_time(c, &mm[i].msg_hdr);
         kept++;
     }
     return kept;

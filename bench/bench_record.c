@@ -3,7 +3,7 @@
  *
  *   bench-record [-i IFACE] [-b BATCH_MS] -p PERIOD_US -d SECONDS NAME=IDS [NAME=IDS ...]
  *
- * -b: read in batches, sleeping BATCH_MS whenever nothing is pending (default 0: wake for every frame). 127
+ * -b: it reads in batches, sleeping BATCH_MS (default 20) whenever nothing is pending, never woken per frame. 127
  * nodes send 254 frames at once every 100 ms; a recorder woken for each of them took the single CPU of
  * User-Mode Linux away from the sender in the middle of its burst (a context switch there costs tens of µs)
  * and made the sender late: the measurement disturbed what it measured. Kernel time stamps and a deep
@@ -44,7 +44,7 @@ int main(int argc, char **argv)
     const char *iface = "vcan0";
     long long period_us = 0;
     long long seconds = 0;
-    long long batch_ms = 0;
+    long long batch_ms = 20;
     group_t groups[MAX_GROUPS];
     size_t n_groups = 0U;
     memset(groups, 0, sizeof groups);
@@ -56,7 +56,7 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "-d") == 0 && i + 1 < argc) {
             seconds = bench_num(argv[++i], 1, 86400, "duration");
         } else if (strcmp(argv[i], "-b") == 0 && i + 1 < argc) {
-            batch_ms = bench_num(argv[++i], 0, 1000, "batch");
+            batch_ms = bench_num(argv[++i], 1, 1000, "batch");
         } else if (strchr(argv[i], '=') != NULL && n_groups < MAX_GROUPS) {
             group_t *g = &groups[n_groups++];
             const char *eq = strchr(argv[i], '=');
@@ -91,31 +91,14 @@ int main(int argc, char **argv)
     const int64_t end = bench_mono_ns() + seconds * 1000000000LL;
     struct can_frame fs[64];
     int64_t ts[64];
-    int r = 0;
-    bool over = false;
-    while (!over) {
-        int n;
-        if (batch_ms > 0) {
-            /* Batches: everything pending in as few system calls as possible, then a nap while the next burst
-             * piles up (kernel time stamps keep each frame's arrival exact). */
-            n = bench_can_recv_many(&can, fs, ts, 64);
-            if (n == 0) {
-                if (t_end_passed(end)) {
-                    break;
-                }
-                const struct timespec nap = {.tv_sec = 0, .tv_nsec = (long)batch_ms * 1000000L};
-                (void)nanosleep(&nap, NULL);
-                continue;
-            }
-        } else {
-            n = bench_can_recv(&can, &fs[0], &ts[0], end);
-        }
-        if (n < 0) {
-            r = -1;
-            break;
-        }
-        if (n == 0 || t_end_passed(end)) {
-            over = true; /* the window is over, also while frames keep coming */
+    const struct timespec nap = {.tv_sec = 0, .tv_nsec = (long)batch_ms * 1000000L};
+    int n;
+    /* Everything pending in as few system calls as possible, then a nap while the next burst piles up (kernel time
+     * stamps keep each frame's arrival exact); the window ends also while frames keep coming. */
+    while ((n = bench_can_recv_many(&can, fs, ts, 64)) >= 0 && !t_end_passed(end)) {
+        if (n == 0) {
+            (void)nanosleep(&nap, NULL);
+            continue;
         }
         for (int k = 0; k < n; k++) {
             const struct can_frame *f = &fs[k];
@@ -140,7 +123,7 @@ int main(int argc, char **argv)
             last[id] = t;
         }
     }
-    if (r < 0) {
+    if (n < 0) {
         return 1;
     }
     printf("{\"period_us\": %lld, \"seconds\": %lld, \"rx_drops\": %lu, \"groups\": {", period_us, seconds,

@@ -76,9 +76,7 @@ static int open_socket(socketcan_t *c, char *err, size_t errlen)
      * SO_SNDBUFFORCE (CAP_NET_ADMIN) may exceed net.core.wmem_max; without it SO_SNDBUF is capped there. The
      * receive buffer stays at its default: a flood beyond what the nodes can answer is better dropped (the master
      * sees a timeout) than queued for seconds on a virtual bus that, unlike a real one, has no bit rate. */
-    const int one = 1;
-    (void)setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one); /* drops are counted and reported */
-    c->rx_drops_socket = 0U; /* a new socket counts from 0 */
+    c->rx_drops_socket = 0U; /* a new socket counts its drops from 0 */
     const int sndbuf = 4 << 20;
     if (setsockopt(fd, SOL_SOCKET, SO_SNDBUFFORCE, &sndbuf, sizeof sndbuf) != 0) {
         (void)setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf);
@@ -154,7 +152,41 @@ short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
     return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0));
 }
 
-static void query_rx_drops(socketcan_t *c);
+/* Received frames the kernel dropped because the socket's receive buffer was full: the socket's own count
+ * (SO_MEMINFO, cumulative since it was opened), asked for by socketcan_service() after frames were read and
+ * before the socket is closed. New drops are added to the total and logged; the asking is rate-limited, so
+ * are the lines. */
+static void log_rx_drops(socketcan_t *c)
+{
+    if (c->rx_dropped > c->rx_dropped_reported) {
+        char detail[160];
+        (void)snprintf(detail, sizeof detail, " %lu received frame(s) lost (%lu in all): the receive buffer was full, "
+                       "the emulator fell behind", c->rx_dropped - c->rx_dropped_reported, c->rx_dropped);
+        c->rx_dropped_reported = c->rx_dropped;
+        logf_(c, "%s:%s", detail);
+    }
+}
+
+static void query_rx_drops(socketcan_t *c)
+{
+#ifdef SO_MEMINFO
+    uint32_t meminfo[SK_MEMINFO_VARS];
+    socklen_t len = sizeof meminfo;
+    if (c->fd >= 0 && getsockopt(c->fd, SOL_SOCKET, SO_MEMINFO, meminfo, &len) == 0 &&
+        len > (socklen_t)(SK_MEMINFO_DROPS * sizeof meminfo[0]) && meminfo[SK_MEMINFO_DROPS] > c->rx_drops_socket) {
+        c->rx_dropped += (uint32_t)(meminfo[SK_MEMINFO_DROPS] - c->rx_drops_socket);
+        c->rx_drops_socket = meminfo[SK_MEMINFO_DROPS];
+        log_rx_drops(c);
+    }
+#else
+    (void)c; /* headers older than Linux 4.6: drops are not counted */
+#endif
+}
+
+void socketcan_flush_log(socketcan_t *c)
+{
+    query_rx_drops(c);
+}
 
 static void went_away(socketcan_t *c, int e)
 {
@@ -226,59 +258,6 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
     return CO_ERR_IO;
 }
 
-/* The kernel's drop count of the current socket (cumulative since it was opened) moved to `drops`: add the
- * difference to the total and report it, at most once a second (a stalled emulator under a flood would
- * otherwise write a line per frame). What is not reported yet goes into the next report or socketcan_flush_log(). */
-static void log_rx_drops(socketcan_t *c);
-
-static void note_rx_drops(socketcan_t *c, uint32_t drops)
-{
-    if (drops <= c->rx_drops_socket) {
-        return; /* a frame queued before the latest drops carries an older count */
-    }
-    c->rx_dropped += (uint32_t)(drops - c->rx_drops_socket);
-    c->rx_drops_socket = drops;
-    const co_time_us_t now = socketcan_now_us();
-    if (now >= c->rx_drops_next_report) {
-        log_rx_drops(c);
-        c->rx_drops_next_report = now + 1000000U;
-    }
-}
-
-/* The socket's drop count asked directly (SO_MEMINFO). The count a received frame carries (SO_RXQ_OVFL) is the
- * one from when it was queued: the frames that filled the buffer carry none of the drops that followed them, so
- * after a stall that ended the burst, only asking tells. */
-static void query_rx_drops(socketcan_t *c)
-{
-#ifdef SO_MEMINFO
-    uint32_t meminfo[SK_MEMINFO_VARS];
-    socklen_t len = sizeof meminfo;
-    if (c->fd >= 0 && getsockopt(c->fd, SOL_SOCKET, SO_MEMINFO, meminfo, &len) == 0 &&
-        len > (socklen_t)(SK_MEMINFO_DROPS * sizeof meminfo[0])) {
-        note_rx_drops(c, meminfo[SK_MEMINFO_DROPS]);
-    }
-#else
-    (void)c; /* headers older than Linux 4.6: the counts frames carry (SO_RXQ_OVFL) only */
-#endif
-}
-
-void socketcan_flush_log(socketcan_t *c)
-{
-    query_rx_drops(c);
-    log_rx_drops(c);
-}
-
-static void log_rx_drops(socketcan_t *c)
-{
-    if (c->rx_dropped > c->rx_dropped_reported) {
-        char detail[160];
-        (void)snprintf(detail, sizeof detail, " %lu received frame(s) lost (%lu in all): the receive buffer was full, "
-                       "the emulator fell behind", c->rx_dropped - c->rx_dropped_reported, c->rx_dropped);
-        c->rx_dropped_reported = c->rx_dropped;
-        logf_(c, "%s:%s", detail);
-    }
-}
-
 int socketcan_read(socketcan_t *c, co_frame_t *frame)
 {
     for (;;) {
@@ -286,20 +265,7 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             return 0;
         }
         struct can_frame cf;
-        /* recvmsg, not read: SO_RXQ_OVFL puts the socket's count of frames the kernel dropped for a full receive
-         * buffer into each message, and a frame the emulator never saw must not go unreported. */
-        union {
-            char buf[CMSG_SPACE(sizeof(uint32_t))];
-            struct cmsghdr align;
-        } control;
-        struct iovec iov = {.iov_base = &cf, .iov_len = sizeof cf};
-        struct msghdr msg;
-        memset(&msg, 0, sizeof msg);
-        msg.msg_iov = &iov;
-        msg.msg_iovlen = 1;
-        msg.msg_control = control.buf;
-        msg.msg_controllen = sizeof control.buf;
-        const ssize_t n = recvmsg(c->fd, &msg, 0);
+        const ssize_t n = read(c->fd, &cf, sizeof cf);
         if (n < 0) {
             const int e = errno;
             if (e == EAGAIN || e == EINTR) {
@@ -311,13 +277,6 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             }
             went_away(c, e);
             return -1;
-        }
-        for (struct cmsghdr *cm = CMSG_FIRSTHDR(&msg); cm != NULL; cm = CMSG_NXTHDR(&msg, cm)) {
-            if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_RXQ_OVFL) {
-                uint32_t drops;
-                memcpy(&drops, CMSG_DATA(cm), sizeof drops);
-                note_rx_drops(c, drops);
-            }
         }
         if (n != (ssize_t)sizeof cf) {
             continue; /* not a classic CAN frame */
@@ -349,22 +308,14 @@ co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
 {
     c->tx_full_hold = false; /* a new pass of the main loop: the next send asks the kernel again */
     co_time_us_t next = CO_NEVER;
-    if (c->rx_since_query) {
-        /* Frames were read: ask for the socket's drop count (SO_MEMINFO, one system call) at once, then at most
-         * once a second while frames keep coming, and once more a second after the last of them. The count a
-         * frame carries (SO_RXQ_OVFL) misses drops after the last frame queued (a burst into a stalled reader,
-         * and silence after it); the kernel may also deliver a burst in parts, after the first ask. */
+    if (c->rx_since_query || c->rx_query_again) {
+        /* Frames were read: ask for the socket's drop count (one system call) at once, then at most once a second
+         * while frames keep coming, and once more a second after the last ask: drops after the last frame queued
+         * (a burst into a stalled reader, and silence after it) or a burst the kernel delivers in parts. */
         if (now >= c->rx_next_query) {
+            c->rx_query_again = c->rx_since_query;
             c->rx_since_query = false;
             c->rx_next_query = now + 1000000U;
-            query_rx_drops(c);
-            c->rx_query_again = true;
-        } else {
-            next = c->rx_next_query;
-        }
-    } else if (c->rx_query_again) {
-        if (now >= c->rx_next_query) {
-            c->rx_query_again = false;
             query_rx_drops(c);
         } else {
             next = c->rx_next_query;

@@ -35,9 +35,8 @@ typedef struct socketcan {
     unsigned long error_frames;
     unsigned long rx_dropped;          /**< Received frames the kernel dropped (receive buffer full), all sockets. */
     unsigned long rx_dropped_reported; /**< ... of them already logged. */
-    uint32_t rx_drops_socket;          /**< The current socket's own count (SO_RXQ_OVFL), from 0 at open. */
-    co_time_us_t rx_drops_next_report;
-    bool rx_since_query;               /**< Frames were read since the count was last asked for (SO_MEMINFO). */
+    uint32_t rx_drops_socket;          /**< The current socket's own count (SO_MEMINFO), from 0 at open. */
+    bool rx_since_query;               /**< Frames were read since the count was last asked for. */
     bool rx_query_again;               /**< Ask once more a second after the last ask (drops after the last frame). */
     co_time_us_t rx_next_query;
     socketcan_log_fn log;

@@ -39,14 +39,17 @@ class Capture(can.Listener):
             return [m for m in self.frames if m.arbitration_id == can_id and not m.is_error_frame
                     and m.timestamp >= since]
 
-    def wait_for(self, can_id, count=1, timeout=2.0, since=0.0, data=None):
+    def wait_for(self, can_id, count=1, timeout=2.0, since=0.0, data=None, prefix=None):
+        """At least count frames can_id since `since` (with exactly `data`, or starting with `prefix`)."""
+        def fits(m):
+            return (data is None or bytes(m.data) == data) and (prefix is None or bytes(m.data).startswith(prefix))
         end = time.monotonic() + timeout
         while time.monotonic() < end:
-            got = [m for m in self.matching(can_id, since) if data is None or bytes(m.data) == data]
+            got = [m for m in self.matching(can_id, since) if fits(m)]
             if len(got) >= count:
                 return got
             time.sleep(0.01)
-        got = [m for m in self.matching(can_id, since) if data is None or bytes(m.data) == data]
+        got = [m for m in self.matching(can_id, since) if fits(m)]
         raise AssertionError(f"expected {count} frame(s) 0x{can_id:03X}{' ' + data.hex() if data else ''} within "
                              f"{timeout} s, saw {[(hex(m.arbitration_id), bytes(m.data).hex()) for m in got]}")
 

@@ -69,14 +69,8 @@ def test_sds_release_times_out_after_10_s_and_pollution_warning(emulator, networ
         time.sleep(0.1)
     t_release = capture.wait_for(0x200 + node_id, since=since)[0].timestamp
     # The capture's thread may lag behind the master's on a loaded machine: wait until it has every answer.
-    status = bytes([0x4F, 0x00, 0x60, 0x01])
-    end = time.monotonic() + 10
-    while True:
-        answers = [(m.timestamp - t_release, m.data[4] & 0x01) for m in capture.matching(0x580 + node_id, since=since)
-                   if bytes(m.data[:4]) == status]
-        if len(answers) >= asked or time.monotonic() > end:
-            break
-        time.sleep(0.05)
+    answers = [(m.timestamp - t_release, m.data[4] & 0x01)
+               for m in capture.wait_for(0x580 + node_id, count=asked, since=since, timeout=10, prefix=b"\x4f\x00\x60\x01")]
     assert len(answers) == asked, (asked, answers)
     assert all(age >= 10.0 for age, hv in answers if not hv), ("HV off before 10 s", answers)
     assert any(age >= 9.0 for age, hv in answers if hv), ("HV not on 9 s after the release", answers)

@@ -168,7 +168,8 @@ def test_three_devices_in_one_process(emulator, network, capture):
 
 
 def test_127_nodes_in_one_process_all_answer(emulator, network, capture):
-    specs = [f"{['pro-ionizer', 'sds', 'buerkert'][i % 3]}:{i}" for i in range(1, 128)]
+    device = {i: ["pro-ionizer", "sds", "buerkert"][i % 3] for i in range(1, 128)}
+    specs = [f"{device[i]}:{i}" for i in range(1, 128)]
     emu = emulator(*specs)
     capture.wait_for(0x77F, data=b"\x00", timeout=10)
     ods = {device: canopen.import_od(str(EDS[device])) for device in EDS}
@@ -193,15 +194,13 @@ def test_127_nodes_in_one_process_all_answer(emulator, network, capture):
     answers = {i: [bytes(m.data) for m in capture.matching(0x580 + i, since=since)] for i in range(1, 128)}
     log = [line for line in emu.err_lines if "lost" in line or "dropped" in line]
     assert not missing, f"nodes {missing} did not answer within 20 s; emulator log: {log}"
+    vendor = {d: ods[d][0x1018][1].default.to_bytes(4, "little") for d in ods}
     for i in range(1, 128):
-        device = ["pro-ionizer", "sds", "buerkert"][i % 3]
-        vendor = ods[device][0x1018][1].default
-        assert answers[i] == [bytes([0x43, 0x18, 0x10, 0x01]) + vendor.to_bytes(4, "little")], (i, device, answers[i])
+        assert answers[i] == [bytes([0x43, 0x18, 0x10, 0x01]) + vendor[device[i]]], (i, device[i], answers[i])
     # and the master's own SDO client reads an object of the last node of each kind
     for i in (125, 126, 127):
-        device = ["pro-ionizer", "sds", "buerkert"][i % 3]
-        node = remote(network, device, i, ods[device])
-        assert node.sdo.upload(0x1018, 1) == ods[device][0x1018][1].default.to_bytes(4, "little")
+        node = remote(network, device[i], i, ods[device[i]])
+        assert node.sdo.upload(0x1018, 1) == vendor[device[i]]
 
 
 def test_sigint_and_sigterm_stop_cleanly(emulator, capture):
