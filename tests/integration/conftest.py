@@ -121,6 +121,15 @@ class Emulator:
             time.sleep(0.01)
         return False
 
+    def describe(self, lines=60):
+        """For a failure report: whether the process runs, and the end of its log (the lines carry its clock)."""
+        rc = self.proc.poll()
+        state = "running" if rc is None else f"exited with status {rc}"
+        tail = self.err_lines[-lines:]
+        skipped = len(self.err_lines) - len(tail)
+        return "\n".join([f"{' '.join(self.args)}", f"{state}; stderr{f' (last {lines} lines)' if skipped else ''}:"]
+                         + tail)
+
     def stop(self, sig=None, timeout=5.0):
         if self.proc.poll() is None:
             if sig is None:
@@ -137,10 +146,23 @@ class Emulator:
         return rc
 
 
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """A failed test's report shows each emulator it started, its state and its log: a CI run is seen only
+    through its output, and a frame that never came is explained by what the emulator did meanwhile."""
+    outcome = yield
+    report = outcome.get_result()
+    if report.when == "call" and report.failed:
+        started = getattr(item, "emulators", [])
+        for i, emu in list(enumerate(started, 1))[-3:]:  # the last ones: a test may restart hundreds of times
+            report.sections.append((f"canopen-emu #{i} of {len(started)}", emu.describe()))
+
+
 @pytest.fixture
-def emulator(tmp_path):
+def emulator(request, tmp_path):
     """emulator(args..., nvm_dir=None) starts canopen-emu; all instances are stopped at the end."""
     started = []
+    request.node.emulators = started
 
     def start(*args, nvm_dir=None, control=True):
         emu = Emulator(args, nvm_dir or tmp_path / "nvm", control)
