@@ -388,6 +388,11 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
     return DEVICE_CMD_UNKNOWN;
 }
 
+co_time_us_t device_save_phase_us(const device_t *dev)
+{
+    return (co_time_us_t)(dev->cfg.node_id % 60U) * 1000000U;
+}
+
 uint32_t device_default_serial(const device_class_t *cls)
 {
     const co_od_entry_t *e = co_od_find(cls->od, 0x1018, 4);

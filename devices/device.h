@@ -139,6 +139,14 @@ void device_printf(const device_t *dev, const char *fmt, ...)
 /** Parses an unsigned/signed number (decimal or 0x-hex). Returns false if it is not one or out of [lo, hi]. */
 bool device_parse_int(const char *text, long long lo, long long hi, long long *out);
 
+/**
+ * When a node's periodic NVM writes fall within each minute: (configured node-ID mod 60) seconds past it.
+ * Nodes powered on together (an emulator's 127) would otherwise all write, and wait for the disk, in the same
+ * instant of every minute and hold up every other node's frames meanwhile. Models saving "every minute" save
+ * when their clock passes this phase (docs/devices/eltex.md E13, docs/devices/buerkert-behaviour.md).
+ */
+co_time_us_t device_save_phase_us(const device_t *dev);
+
 /** The OD default of 0x1018:04 (serial number) of a class, 0 if it has none. */
 uint32_t device_default_serial(const device_class_t *cls);
 

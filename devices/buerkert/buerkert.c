@@ -422,7 +422,8 @@ static void bk_power_on(device_t *dev, co_time_us_t now)
     m->vmax = m->vmin = m->env.supply_v;
     m->mode = MODE_AUTO;
     m->last_now = now;
-    m->next_save = now + SAVE_PERIOD_US;
+    /* the first save at the node's phase in the first minute (at its end for phase 0), then every minute */
+    m->next_save = now + (device_save_phase_us(dev) != 0U ? device_save_phase_us(dev) : SAVE_PERIOD_US);
     m->booting = true;
     (void)nvm_load(dev);
 }

@@ -145,12 +145,19 @@ static void nvm_load(device_t *dev)
     x->hv_us = (uint64_t)get_u32(&b[12]) * SEC_US;
 }
 
+/* Which minute of operating time, counted from the node's save phase (device_save_phase_us), op_us lies in: the
+ * counters are written when it changes. */
+static uint64_t save_minute(const device_t *dev, uint64_t op_us)
+{
+    return (op_us + MINUTE_US - device_save_phase_us(dev)) / MINUTE_US;
+}
+
 static void nvm_save(device_t *dev)
 {
     eltex_t *x = eltex_of(dev);
     const co_port_t *p = dev->cfg.port;
     uint8_t b[NVM_LEN];
-    x->saved_minute = x->op_us / MINUTE_US;
+    x->saved_minute = save_minute(dev, x->op_us);
     if (p == NULL || p->nvm_write == NULL || p->nvm_commit == NULL) {
         return;
     }
@@ -199,14 +206,14 @@ void eltex_count(device_t *dev, co_time_us_t t, bool hv_on)
         x->last = t;
     }
     eltex_counters_publish(dev);
-    if (x->op_us / MINUTE_US != x->saved_minute) {
-        nvm_save(dev); /* at least once per emulated minute of operating time */
+    if (save_minute(dev, x->op_us) != x->saved_minute) {
+        nvm_save(dev); /* at least once per emulated minute of operating time, at the node's phase */
     }
 }
 
 co_time_us_t eltex_count_deadline(const device_t *dev, co_time_us_t now)
 {
-    return now + (MINUTE_US - eltex_const(dev)->op_us % MINUTE_US);
+    return now + (MINUTE_US - (eltex_const(dev)->op_us + MINUTE_US - device_save_phase_us(dev)) % MINUTE_US);
 }
 
 /* ---- Cyclic TPDOs (E12) ----------------------------------------------------------------------------------------- */
@@ -396,7 +403,7 @@ void eltex_power_on(device_t *dev, const eltex_class_t *cls, co_time_us_t now)
     x->tpdo_next = CO_NEVER;
     x->booting = true;
     nvm_load(dev);
-    x->saved_minute = x->op_us / MINUTE_US;
+    x->saved_minute = save_minute(dev, x->op_us);
 }
 
 /* E2: which 0x2002:07 values the device accepts. */

@@ -72,7 +72,7 @@ typedef struct eltex {
     co_time_us_t last;              /* time the counters were integrated to */
     uint64_t op_us;                 /* operating time including the stored part */
     uint64_t hv_us;                 /* HV-on time including the stored part */
-    uint64_t saved_minute;          /* operating minute last written to NVM */
+    uint64_t saved_minute;          /* operating minute, counted from the save phase, last written to NVM */
     bool nvm_error_logged;
     /* cyclic TPDOs (E12) */
     co_time_us_t tpdo_next;         /* next grid point, CO_NEVER outside Operational */

@@ -883,14 +883,18 @@ static void operating_time_counts_and_is_saved_every_minute(void)
     clear();
     SDO(0x40, 0x04, 0x20, 0x04, 0, 0, 0, 0);
     EXPECT_SDO(0x43, 0x04, 0x20, 0x04, 61, 0x00, 0x00, 0x00);
+    /* saved every minute at the node's phase, node-ID 1: 1 s past the minute (device_save_phase_us) */
     const uint32_t commits = port.nvm[CO_NVM_DEVICE].commits;
-    TEST_ASSERT_TRUE(commits >= 1U); /* saved at 60 s */
-    run_until(119000000U);
-    TEST_ASSERT_EQUAL_UINT32(commits, port.nvm[CO_NVM_DEVICE].commits); /* nothing new to save before 120 s */
-    power_cycle(); /* the last 59 s were not saved yet */
-    TEST_ASSERT_EQUAL_UINT32(60U, sdo_read(0x2004U, 4U));
+    TEST_ASSERT_TRUE(commits >= 2U); /* saved at 1 s and 61 s */
+    run_until(121000000U - 1U);
+    TEST_ASSERT_EQUAL_UINT32(commits, port.nvm[CO_NVM_DEVICE].commits); /* nothing new to save before 121 s */
+    run_until(121000000U);
+    TEST_ASSERT_EQUAL_UINT32(commits + 1U, port.nvm[CO_NVM_DEVICE].commits);
+    run_until(180000000U);
+    power_cycle(); /* the 59 s since 121 s were not saved */
+    TEST_ASSERT_EQUAL_UINT32(121U, sdo_read(0x2004U, 4U));
     advance(5000000U);
-    TEST_ASSERT_EQUAL_UINT32(65U, sdo_read(0x2004U, 4U));
+    TEST_ASSERT_EQUAL_UINT32(126U, sdo_read(0x2004U, 4U));
     TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2004U, 4U, 1000U, 4U)); /* a write sets the counter and saves it */
     TEST_ASSERT_EQUAL_UINT32(1000U, sdo_read(0x2004U, 4U));
     power_cycle();
