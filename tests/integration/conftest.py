@@ -19,6 +19,47 @@ EDS = {"pro-ionizer": SRC / "od/pro-ionizer.eds", "sds": SRC / "od/sds.eds",
        "buerkert": SRC / "od/buerkert-flow-controller.eds"}
 
 
+class Deadline:
+    """A timeout for waiting on the emulator that does not count time in which this process could not run.
+
+    A loaded CI host now and then stalls the whole User-Mode Linux guest (more than 2 s was seen); time.monotonic()
+    runs on meanwhile, and a plain deadline then expires although nobody, the emulator included, got to run. A
+    check that comes more than STALL_S after the previous one adds that gap to the deadline, up to MAX_EXTENSION_S
+    in all, so that a wait for something that never comes still ends. Waits using it block at most POLL_S at a
+    time. It only lengthens waits for things that must happen: timing is judged by frame time stamps."""
+
+    STALL_S = 0.25
+    MAX_EXTENSION_S = 30.0
+    POLL_S = 0.05
+
+    def __init__(self, seconds):
+        self.seconds = seconds
+        self.last = time.monotonic()
+        self.end = self.last + seconds
+        self.extended = 0.0
+
+    def left(self):
+        """Seconds left (0 when expired)."""
+        now = time.monotonic()
+        gap = now - self.last
+        if gap > self.STALL_S and self.extended < self.MAX_EXTENSION_S:
+            add = min(gap, self.MAX_EXTENSION_S - self.extended)
+            self.end += add
+            self.extended += add
+        self.last = now
+        return max(0.0, self.end - now)
+
+    def expired(self):
+        return self.left() <= 0.0
+
+    def slice(self):
+        """How long the next blocking step may take."""
+        return min(self.left(), self.POLL_S)
+
+    def __str__(self):
+        return f"{self.seconds} s" + (f" (+{self.extended:.1f} s of stalls)" if self.extended else "")
+
+
 class Capture(can.Listener):
     """Every frame seen on the bus, with the receive time."""
 
@@ -43,15 +84,17 @@ class Capture(can.Listener):
         """At least count frames can_id since `since` (with exactly `data`, or starting with `prefix`)."""
         def fits(m):
             return (data is None or bytes(m.data) == data) and (prefix is None or bytes(m.data).startswith(prefix))
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
+        deadline = Deadline(timeout)
+        while not deadline.expired():
             got = [m for m in self.matching(can_id, since) if fits(m)]
             if len(got) >= count:
                 return got
             time.sleep(0.01)
         got = [m for m in self.matching(can_id, since) if fits(m)]
+        if len(got) >= count:
+            return got
         raise AssertionError(f"expected {count} frame(s) 0x{can_id:03X}{' ' + data.hex() if data else ''} within "
-                             f"{timeout} s, saw {[(hex(m.arbitration_id), bytes(m.data).hex()) for m in got]}")
+                             f"{deadline}, saw {[(hex(m.arbitration_id), bytes(m.data).hex()) for m in got]}")
 
 
 # SO_RCVBUFFORCE (Linux, needs CAP_NET_ADMIN) may exceed net.core.rmem_max; SO_RCVBUF is capped by it.
@@ -105,21 +148,25 @@ class Emulator:
         self.proc.stdin.flush()
         if expect is None:
             return None
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
+        deadline = Deadline(timeout)
+        while True:
             for text in self.out_lines[start:]:
                 if expect in text:
                     return text
+            if deadline.expired():
+                break
             time.sleep(0.01)
-        raise AssertionError(f"no output containing {expect!r} after {line!r}; got {self.out_lines[start:]}")
+        raise AssertionError(f"no output containing {expect!r} after {line!r} within {deadline}; "
+                             f"got {self.out_lines[start:]}")
 
     def log_contains(self, text, timeout=2.0):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
+        deadline = Deadline(timeout)
+        while True:
             if any(text in line for line in self.err_lines):
                 return True
+            if deadline.expired():
+                return False
             time.sleep(0.01)
-        return False
 
     def describe(self, lines=60):
         """For a failure report: whether the process runs, and the end of its log (the lines carry its clock)."""

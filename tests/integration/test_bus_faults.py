@@ -21,7 +21,7 @@ import time
 import canopen
 import pytest
 
-from conftest import EDS, IFACE
+from conftest import EDS, IFACE, Deadline
 
 CAN_FMT = "=IB3x8s"
 SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)
@@ -119,13 +119,13 @@ class RawCan:
     def send(self, can_id, data, timeout=REQUEST_TIMEOUT_S):
         """Sends one frame; a full queue (ENOBUFS) is retried, as the emulator must do too."""
         frame = struct.pack(CAN_FMT, can_id, len(data), bytes(data).ljust(8, b"\0"))
-        end = time.monotonic() + timeout
+        deadline = Deadline(timeout)
         while True:
             try:
                 self.sock.send(frame)
                 return
             except OSError as e:
-                if e.errno not in (errno.ENOBUFS, errno.EAGAIN) or time.monotonic() > end:
+                if e.errno not in (errno.ENOBUFS, errno.EAGAIN) or deadline.expired():
                     raise
                 self.enobufs += 1
                 time.sleep(0.001)
@@ -157,23 +157,23 @@ class RawCan:
 
     def transact(self, node_id, request, expected, timeout=REQUEST_TIMEOUT_S):
         self.send(0x600 + node_id, request)
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            f = self.recv(end - time.monotonic())
+        deadline = Deadline(timeout)
+        while not deadline.expired():
+            f = self.recv(deadline.slice())
             if f is not None and f[1] == 0x580 + node_id:
                 assert f[2] == expected, f"node {node_id}: {request.hex()} answered {f[2].hex()}, not {expected.hex()}"
                 return
-        raise AssertionError(f"node {node_id}: no answer to {request.hex()} within {timeout} s")
+        raise AssertionError(f"node {node_id}: no answer to {request.hex()} within {deadline}")
 
 
 def wait_bootups(bus, node_ids, timeout=5.0):
     seen = set()
-    end = time.monotonic() + timeout
-    while seen != set(node_ids) and time.monotonic() < end:
-        f = bus.recv(end - time.monotonic())
+    deadline = Deadline(timeout)
+    while seen != set(node_ids) and not deadline.expired():
+        f = bus.recv(deadline.slice())
         if f is not None and f[1] - 0x700 in node_ids and f[2] == b"\x00":
             seen.add(f[1] - 0x700)
-    assert seen == set(node_ids), f"boot-ups seen from {sorted(seen)} of {sorted(node_ids)}"
+    assert seen == set(node_ids), f"boot-ups seen from {sorted(seen)} of {sorted(node_ids)} within {deadline}"
 
 
 def set_heartbeats(bus, node_ids, ms=HB_MS):
@@ -182,9 +182,9 @@ def set_heartbeats(bus, node_ids, ms=HB_MS):
     for n in node_ids:
         bus.send(0x600 + n, download(0x1017, 0, ms, 2))
     answered = set()
-    end = time.monotonic() + REQUEST_TIMEOUT_S
-    while answered != set(node_ids) and time.monotonic() < end:
-        f = bus.recv(end - time.monotonic())
+    deadline = Deadline(REQUEST_TIMEOUT_S)
+    while answered != set(node_ids) and not deadline.expired():
+        f = bus.recv(deadline.slice())
         if f is not None and 0x580 < f[1] <= 0x5FF:
             assert f[2] == download_answer(0x1017, 0), f[2].hex()
             answered.add(f[1] - 0x580)
@@ -224,8 +224,8 @@ def iface_log(emu):
 
 
 def wait_log_count(emu, text, count, timeout=RECOVERY_S):
-    end = time.monotonic() + timeout
-    while log_count(emu, text) < count and time.monotonic() < end:
+    deadline = Deadline(timeout)
+    while log_count(emu, text) < count and not deadline.expired():
         time.sleep(0.01)
     return log_count(emu, text)
 
@@ -632,9 +632,9 @@ def test_open_loop_burst_answered_in_order(emulator):
             device, index, sub = FLOODED[n]
             hb.send(0x600 + n, flood_requests(device, index, sub, k)[0])
         got = {n: [] for n in targets}
-        end = time.monotonic() + 10 * REQUEST_TIMEOUT_S
-        while sum(map(len, got.values())) < len(order) and time.monotonic() < end:
-            f = hb.recv(end - time.monotonic())
+        deadline = Deadline(10 * REQUEST_TIMEOUT_S)
+        while sum(map(len, got.values())) < len(order) and not deadline.expired():
+            f = hb.recv(deadline.slice())
             if f is not None and f[1] - 0x580 in got:
                 got[f[1] - 0x580].append(f[2])
         for f in hb.drain(wait=0.5):

@@ -24,7 +24,7 @@ import can
 import canopen
 import pytest
 
-from conftest import EDS, IFACE, Capture, Emulator, deep_receive_buffer
+from conftest import EDS, IFACE, Capture, Deadline, Emulator, deep_receive_buffer
 
 SAVE = struct.pack("<I", 0x65766173)  # "save" for 0x1010:01
 
@@ -83,22 +83,24 @@ class Bus:
         mark = self.mark()
         data = os.urandom(8)
         self.send(self.sentinel_id, data)
-        end = time.monotonic() + SDO_TIMEOUT
-        while time.monotonic() < end:
+        deadline = Deadline(SDO_TIMEOUT)
+        while True:
             if any(bytes(m.data) == data for m in self.since(mark, self.sentinel_id)):
                 return
+            if deadline.expired():
+                raise AssertionError(f"the capture did not see the sentinel frame within {deadline}")
             time.sleep(0.002)
-        raise AssertionError("the capture did not see the sentinel frame")
 
     def wait_bootups(self, mark, node_ids, timeout=BOOT_TIMEOUT):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
+        deadline = Deadline(timeout)
+        while True:
             seen = {m.arbitration_id - 0x700 for m in self.since(mark) if 0x701 <= m.arbitration_id <= 0x77F
                     and bytes(m.data) == b"\x00"}
             if set(node_ids) <= seen:
                 return
+            if deadline.expired():
+                raise AssertionError(f"no boot-up of {sorted(set(node_ids) - seen)} within {deadline}")
             time.sleep(0.005)
-        raise AssertionError(f"no boot-up of {sorted(set(node_ids) - seen)} within {timeout} s")
 
     def answers(self, mark, requests):
         """requests: [(node_id, index, sub, frame)] already sent after mark; returns {(node, index, sub): data} of
@@ -119,14 +121,14 @@ class Bus:
         mark = self.mark()
         for node, _, _, frame in requests:
             self.send(0x600 + node, frame)
-        end = time.monotonic() + timeout
+        deadline = Deadline(timeout)
         while True:
             got = self.answers(mark, requests)
             if len(got) == len(requests):
                 return got
-            if time.monotonic() > end:
+            if deadline.expired():
                 missing = [(n, hex(i), s) for n, i, s, _ in requests if (n, i, s) not in got]
-                raise AssertionError(f"no SDO answer within {timeout} s for {missing}")
+                raise AssertionError(f"no SDO answer within {deadline} for {missing}")
             time.sleep(0.002)
 
     def read(self, items):
@@ -320,9 +322,9 @@ def test_sigkill_while_storing(emulator, bus, tmp_path):
                 while time.perf_counter() < end:
                     pass  # a busy wait: sleep() is far coarser than the window
             else:
-                end = time.monotonic() + SDO_TIMEOUT
+                deadline = Deadline(SDO_TIMEOUT)
                 while len(bus.answers(smark, [r for _, r in requests])) < len(requests):
-                    assert time.monotonic() < end, f"stores not answered within {SDO_TIMEOUT} s"
+                    assert not deadline.expired(), f"stores not answered within {deadline}"
                     time.sleep(0.0005)
                 latencies.append(time.perf_counter() - start)
         phases["store"] += time.perf_counter() - tp

@@ -66,7 +66,7 @@ from pathlib import Path
 import canopen
 import pytest
 
-from conftest import EDS, IFACE
+from conftest import EDS, IFACE, Deadline
 
 PREOP, OP, STOPPED = "PRE-OPERATIONAL", "OPERATIONAL", "STOPPED"
 NMT_CMD = {OP: 0x01, STOPPED: 0x02, PREOP: 0x80}
@@ -211,15 +211,15 @@ class Rig:
         return out
 
     def wait(self, mark, pred, what, timeout=5.0):
-        end = time.monotonic() + timeout
+        deadline = Deadline(timeout)
         while True:
             for m in self.frames_since(mark):
                 if m.is_error_frame or m.is_extended_id or m.is_remote_frame:
                     continue
                 if pred(m.arbitration_id, bytes(m.data)):
                     return m
-            if time.monotonic() > end:
-                raise AssertionError(f"no {what} within {timeout} s; emulator alive: {self.emu.proc.poll() is None}; "
+            if deadline.expired():
+                raise AssertionError(f"no {what} within {deadline}; emulator alive: {self.emu.proc.poll() is None}; "
                                      f"seen: {[frame_text(c, d) for c, d in self.outputs(mark)][-12:]}")
             time.sleep(0.001)
 
@@ -272,8 +272,8 @@ class Rig:
         """The case's outcome is exactly expected: a list of (cob, data), or (cob, int length) where the content is
         a live value (TPDO). Expected frames are waited for first (an EMCY leaves in the emulator's process step,
         which may run only after a burst of frames has been read), then the barrier shows nothing else came."""
-        end = time.monotonic() + 5.0
-        while self.compare(self.outputs(mark), expected)[0] and time.monotonic() < end:
+        deadline = Deadline(5.0)
+        while self.compare(self.outputs(mark), expected)[0] and not deadline.expired():
             time.sleep(0.001)
         got = self.outcome(mark, via_guard)
         missing, rest = self.compare(got, expected)
@@ -806,10 +806,10 @@ def test_random_garbage_in_operational(rig):
         assert after[(n.id, 0x1018, 4)] == struct.pack("<I", serial)
         assert after[(n.id, 0x1000, 0)] == struct.pack("<I", n.device_type)
     # Heartbeats go on: two more from every node, Operational, after the garbage (period 200 ms; bound generous).
-    deadline = time.monotonic() + 5.0
+    deadline = Deadline(5.0)
     while True:
         beats = {n.id: [d for c_, d in rig.outputs(end) if c_ == 0x700 + n.id] for n in rig.nodes}
-        if all(len(b) >= 2 for b in beats.values()) or time.monotonic() > deadline:
+        if all(len(b) >= 2 for b in beats.values()) or deadline.expired():
             break
         time.sleep(0.01)
     assert all(b[:2] == [bytes([STATE_BYTE[OP]])] * 2 for b in beats.values()), f"seed {seed}: heartbeats {beats}"
