@@ -108,6 +108,7 @@ int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, voi
         return EINVAL;
     }
     (void)snprintf(c->ifname, sizeof c->ifname, "%s", ifname);
+    c->error_lines_left = SOCKETCAN_ERROR_LINES; /* until the first socketcan_service starts the count of seconds */
     return open_socket(c, err, errlen);
 }
 
@@ -183,9 +184,22 @@ static void query_rx_drops(socketcan_t *c)
 #endif
 }
 
+/* The error frames of the ended second that were not logged one by one, in one line. */
+static void log_error_summary(socketcan_t *c)
+{
+    if (c->error_frames_unlogged > 0U) {
+        char line[160];
+        (void)snprintf(line, sizeof line, " %lu more CAN error frame(s) not logged one by one (the last: %s; "
+                       "%lu in all)", c->error_frames_unlogged, c->error_last, c->error_frames);
+        c->error_frames_unlogged = 0U;
+        logf_(c, "%s:%s", line);
+    }
+}
+
 void socketcan_flush_log(socketcan_t *c)
 {
     query_rx_drops(c);
+    log_error_summary(c);
 }
 
 static void went_away(socketcan_t *c, int e)
@@ -287,11 +301,19 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
         }
         c->rx_since_query = true;
         if ((cf.can_id & CAN_ERR_FLAG) != 0U) {
-            char detail[96];
+            char detail[64];
             c->error_frames++;
-            (void)snprintf(detail, sizeof detail, " (class 0x%03X, data %02X %02X %02X %02X)",
+            (void)snprintf(detail, sizeof detail, "class 0x%03X, data %02X %02X %02X %02X",
                            (unsigned)(cf.can_id & CAN_ERR_MASK), cf.data[1], cf.data[2], cf.data[3], cf.data[4]);
-            logf_(c, "%s: CAN error frame%s", detail);
+            if (c->error_lines_left > 0U) {
+                c->error_lines_left--;
+                char line[80];
+                (void)snprintf(line, sizeof line, " (%s)", detail);
+                logf_(c, "%s: CAN error frame%s", line);
+            } else {
+                c->error_frames_unlogged++; /* summed up by socketcan_service at the end of the second */
+                (void)memcpy(c->error_last, detail, sizeof detail);
+            }
             continue;
         }
         memset(frame, 0, sizeof *frame);
@@ -308,6 +330,13 @@ co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
 {
     c->tx_full_hold = false; /* a new pass of the main loop: the next send asks the kernel again */
     co_time_us_t next = CO_NEVER;
+    if (now >= c->error_window_end) {
+        log_error_summary(c);
+        c->error_lines_left = SOCKETCAN_ERROR_LINES;
+        c->error_window_end = now + 1000000U;
+    } else if (c->error_frames_unlogged > 0U) {
+        next = c->error_window_end; /* the summary is due then, even on a bus that went quiet */
+    }
     if (c->rx_since_query || c->rx_query_again) {
         /* Frames were read: ask for the socket's drop count (one system call) at once, then at most once a second
          * while frames keep coming, and once more a second after the last ask: drops after the last frame queued
@@ -317,7 +346,7 @@ co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
             c->rx_since_query = false;
             c->rx_next_query = now + 1000000U;
             query_rx_drops(c);
-        } else {
+        } else if (c->rx_next_query < next) {
             next = c->rx_next_query;
         }
     }

@@ -6,7 +6,9 @@
  * frame and retries; an interface that is down answers CO_ERR_IO (the frame is lost, as on a real bus
  * that is off) and is reported once, and its return once. A vanished interface is reopened by
  * socketcan_service() until it is back. Classic CAN only; error frames and received frames the kernel dropped
- * (receive buffer full) are reported through the log callback.
+ * (receive buffer full) are reported through the log callback. Error frames are logged one line each up to
+ * SOCKETCAN_ERROR_LINES per second; beyond that they are counted and summed up in one line a second (a lone
+ * node on a real bus, unacknowledged, gets thousands a second).
  *
  * The main loop polls the socket for socketcan_poll_events(): POLLOUT only helps when the socket's own buffer
  * was full (EAGAIN). ENOBUFS means the interface's queue is full, which poll does not report: the socket stays
@@ -23,6 +25,9 @@
 
 typedef void (*socketcan_log_fn)(void *ctx, const char *line);
 
+/** Error frames logged one line each per second; the rest of that second's go into one summary line. */
+#define SOCKETCAN_ERROR_LINES 10U
+
 typedef struct socketcan {
     char ifname[IF_NAMESIZE];
     int fd;                   /**< -1 while the interface is gone. */
@@ -32,7 +37,11 @@ typedef struct socketcan {
     bool tx_full_hold;        /**< ... in this pass of the main loop: further sends are refused at once. */
     co_time_us_t next_reopen;
     unsigned long lost_while_down;
-    unsigned long error_frames;
+    unsigned long error_frames;        /**< CAN error frames received, all. */
+    unsigned long error_frames_unlogged; /**< ... of them not logged one by one, not yet summed up either. */
+    uint32_t error_lines_left;         /**< Error frames that may still be logged one by one in this second. */
+    co_time_us_t error_window_end;     /**< When the second of error_lines_left ends. */
+    char error_last[64];               /**< The last unlogged error frame's class and data, for the summary. */
     unsigned long rx_dropped;          /**< Received frames the kernel dropped (receive buffer full), all sockets. */
     unsigned long rx_dropped_reported; /**< ... of them already logged. */
     uint32_t rx_drops_socket;          /**< The current socket's own count (SO_MEMINFO), from 0 at open. */

@@ -766,6 +766,48 @@ def test_error_frames_are_logged_and_ignored(emulator):
     assert emu.proc.poll() is None
 
 
+ERROR_FLOOD = 2000  # a lone node on a real bus, unacknowledged, gets about this many a second
+
+
+def test_an_error_frame_flood_is_summed_up_not_logged_line_by_line(emulator):
+    # Ten error frames a second are logged one line each (SOCKETCAN_ERROR_LINES); the rest of each second goes into
+    # one summary line, so a flood cannot bury the log. Exact: the lines and the summaries account for every error
+    # frame the emulator received (all that were sent, less any the kernel dropped for a full receive buffer,
+    # which the exit summary counts); the node still answers meanwhile.
+    node = 0x57
+    bus = RawCan((0x580 + node, 0x700 + node))
+    emu = emulator(f"sds:{node}")
+    wait_bootups(bus, [node])
+    err = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
+    t0 = time.monotonic()
+    try:
+        err.bind((IFACE,))
+        for k in range(ERROR_FLOOD):
+            err.send(struct.pack(CAN_FMT, socket.CAN_ERR_FLAG | 0x004, 8, bytes([0, k & 0xFF, 0, 0, 0, 0, 0, 0])))
+            if k % 100 == 99:
+                time.sleep(0.01)  # a paced flood: the emulator's receive buffer is not the subject here
+    finally:
+        err.close()
+    bus.transact(node, upload(0x1018, 1), upload_answer(0x1018, 1, odv("sds", 0x1018, 1), 4))
+    seconds = time.monotonic() - t0
+    assert emu.log_contains("more CAN error frame(s) not logged one by one", timeout=3.0), emu.err_lines[-5:]
+    assert emu.stop() == 0
+    single = [line for line in emu.err_lines if "CAN error frame (class 0x004" in line]
+    summaries = [int(re.search(r"(\d+) more CAN error frame", line).group(1)) for line in emu.err_lines
+                 if "more CAN error frame(s)" in line]
+    totals = [int(re.search(r"; (\d+) in all\)", line).group(1)) for line in emu.err_lines
+              if "more CAN error frame(s)" in line]
+    exit_line = [line for line in emu.err_lines if "frame(s) sent" in line]
+    lost = int(exit_line[0].split("; ")[1].split()[0])
+    print(f"\n{ERROR_FLOOD} error frames in {seconds:.2f} s: {len(single)} lines, {len(summaries)} summaries "
+          f"{summaries}, {lost} lost in the kernel")
+    assert len(single) + sum(summaries) + lost == ERROR_FLOOD, (len(single), summaries, lost)
+    assert totals[-1] == len(single) + sum(summaries)
+    # at most SOCKETCAN_ERROR_LINES single lines per started second of the flood and of the wait after it
+    assert len(single) <= 10 * (int(seconds) + 5), len(single)
+    assert len(summaries) <= int(seconds) + 5, summaries
+
+
 # ---- receive buffer overflow ----------------------------------------------------------------------------------
 
 OVERFLOW_REQUESTS = 3000  # far more than a default receive buffer holds (a few hundred frames)
