@@ -102,10 +102,12 @@ static void logline(int level, const char *fmt, ...)
     fprintf(stderr, "[%8.3f] %s\n", (double)t / 1e6, text);
 }
 
+/* The port's lines are all problems or their end (interface down / up again, gone / back, error frames, frames
+ * lost, a failed send): shown with -q too, which keeps only problems. */
 static void can_log(void *ctx, const char *line)
 {
     (void)ctx;
-    logline(LOG_NORMAL, "%s", line);
+    logline(LOG_QUIET, "%s", line);
 }
 
 static void device_print(void *ctx, const device_t *dev, const char *line)
@@ -136,11 +138,12 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         break;
     case CO_EV_STORE:
     case CO_EV_RESTORE:
-        if (ev->index == 0x7E5U) {
-            logline(LOG_NORMAL, "node %u (%s): LSS store configuration (node-ID %lu): %s", id, name,
-                    (unsigned long)ev->value, ev->code == 0U ? "stored" : "failed");
+        if (ev->index == 0x7E5U) { /* a failed store is a problem: shown with -q too */
+            logline(ev->code == 0U ? LOG_NORMAL : LOG_QUIET, "node %u (%s): LSS store configuration (node-ID %lu): %s",
+                    id, name, (unsigned long)ev->value, ev->code == 0U ? "stored" : "failed");
         } else {
-            logline(LOG_NORMAL, "node %u (%s): %s 0x%04X:%02X: %s", id, name, ev->kind == CO_EV_STORE ? "store" : "restore",
+            logline(ev->code == 0U ? LOG_NORMAL : LOG_QUIET, "node %u (%s): %s 0x%04X:%02X: %s", id, name,
+                    ev->kind == CO_EV_STORE ? "store" : "restore",
                     ev->index, ev->sub, ev->code == 0U ? "done" : co_abort_text(ev->code));
         }
         break;

@@ -17,6 +17,7 @@ import random
 import re
 import shutil
 import signal
+import subprocess
 import struct
 import time
 
@@ -577,3 +578,43 @@ def test_eltex_save_interrupted_between_its_files(emulator, bus, tmp_path):
         assert got == expected
         assert emu.stop() == 0
         assert not journal.exists() and not any(p.with_name(p.name + ".tmp").exists() for p in path.values())
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="mounting a small file system needs root")
+def test_store_on_a_full_disk_fails_with_an_abort_and_works_once_there_is_room(emulator, bus, tmp_path):
+    """A 0x1010 save that cannot be written (the NVM directory's file system is full) answers 0x06060000 (hardware
+    error), is logged even with -q (a problem), changes nothing stored, and the same save works once there is room
+    again: the parameters then load after a restart."""
+    nvm = tmp_path / "small"
+    nvm.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(nvm)], capture_output=True,
+                      timeout=20).returncode != 0:
+        pytest.skip("cannot mount a tmpfs here")
+    try:
+        filler = nvm / "filler"
+        with open(filler, "wb", buffering=0) as f:
+            try:
+                while True:
+                    f.write(bytes(4096))
+            except OSError:
+                pass  # ENOSPC: full
+        node = PI
+        mark = bus.mark()
+        emu = emulator("-q", f"pro-ionizer:{node}", nvm_dir=nvm, control=False)
+        bus.wait_bootups(mark, [node])
+        bus.write([(node, 0x1017, 0, u16(1500))])
+        answer = bus.transfer([(node, 0x1010, 1, download_frame(0x1010, 1, SAVE))])[(node, 0x1010, 1)]
+        assert answer == bytes([0x80, 0x10, 0x10, 0x01]) + u32(0x06060000), answer.hex()
+        assert emu.log_contains(f"node {node} (pro-ionizer): store 0x1010:01: access failed due to a hardware error"), \
+            emu.err_lines
+        assert not any(p.name.startswith(f"pro-ionizer-{node}.params") for p in nvm.iterdir()), list(nvm.iterdir())
+        filler.unlink()
+        bus.write([(node, 0x1010, 1, SAVE)])  # the same save, now with room: answered 0x60
+        assert emu.stop() == 0
+        mark = bus.mark()
+        emu = emulator("-q", f"pro-ionizer:{node}", nvm_dir=nvm, control=False)
+        bus.wait_bootups(mark, [node])
+        assert bus.read([(node, 0x1017, 0)])[(node, 0x1017, 0)] == 1500
+        assert emu.stop() == 0
+    finally:
+        subprocess.run(["umount", "-l", str(nvm)], capture_output=True, timeout=20)
