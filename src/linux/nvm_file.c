@@ -63,9 +63,6 @@ int nvm_file_open(nvm_file_t *n, const char *dir, const char *key, char *err, si
 {
     memset(n, 0, sizeof *n);
     /* Before anything can fail: nvm_file_close() after a failed open must not close descriptor 0. */
-    for (int a = 0; a < 3; a++) {
-        n->read_fd[a] = -1;
-    }
     n->dir_fd = -1;
     const int e = nvm_file_check_dir(dir, err, errlen);
     if (e != 0) {
@@ -86,12 +83,10 @@ int nvm_file_open(nvm_file_t *n, const char *dir, const char *key, char *err, si
     return 0;
 }
 
-static void close_reader(nvm_file_t *n, int a)
+/* The next read loads the file again. */
+static void drop_loaded(nvm_file_t *n, int a)
 {
-    if (n->read_fd[a] >= 0) {
-        (void)close(n->read_fd[a]);
-        n->read_fd[a] = -1;
-    }
+    n->loaded[a].active = false;
 }
 
 void nvm_file_close(nvm_file_t *n)
@@ -100,7 +95,8 @@ void nvm_file_close(nvm_file_t *n)
     for (int a = 0; a < 3; a++) {
         free(n->staging[a].buf); /* an unfinished write is never committed: it only ever lived in memory */
         memset(&n->staging[a], 0, sizeof n->staging[a]);
-        close_reader(n, a);
+        free(n->loaded[a].buf);
+        memset(&n->loaded[a], 0, sizeof n->loaded[a]);
     }
     if (n->dir_fd >= 0) {
         (void)close(n->dir_fd);
@@ -209,7 +205,7 @@ static bool rename_pending(nvm_file_t *n, int area)
         return false;
     }
     n->pending[area] = false;
-    close_reader(n, area); /* it still reads the replaced file */
+    drop_loaded(n, area); /* it holds the replaced file */
     return true;
 }
 
@@ -303,6 +299,44 @@ static void recover(nvm_file_t *n)
     }
 }
 
+/* Reads the whole file of an area into loaded[area] (at most NVM_FILE_MAX bytes: a longer file is a damaged
+ * one, and reads past what was read fail as for a short file). */
+static co_status_t load_file(nvm_file_t *n, int area)
+{
+    nvm_staging_t *l = &n->loaded[area];
+    const int fd = open(n->path[area], O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        return CO_ERR_NO_DATA;
+    }
+    l->len = 0U;
+    for (;;) {
+        if (l->len == l->cap) {
+            const size_t cap = l->cap != 0U ? 2U * l->cap : 256U;
+            uint8_t *b = cap <= NVM_FILE_MAX ? realloc(l->buf, cap) : NULL;
+            if (b == NULL) {
+                break; /* too long (or no memory): what was read is all a load sees */
+            }
+            l->buf = b;
+            l->cap = cap;
+        }
+        const ssize_t r = read(fd, l->buf + l->len, l->cap - l->len);
+        if (r < 0 && errno == EINTR) {
+            continue;
+        }
+        if (r < 0) {
+            (void)close(fd);
+            return CO_ERR_IO;
+        }
+        if (r == 0) {
+            break;
+        }
+        l->len += (size_t)r;
+    }
+    (void)close(fd);
+    l->active = true;
+    return CO_OK;
+}
+
 co_status_t nvm_file_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *data, size_t len)
 {
     nvm_file_t *n = (nvm_file_t *)ctx;
@@ -311,15 +345,19 @@ co_status_t nvm_file_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *
     }
     if (offset == 0U) {
         (void)nvm_file_flush(n); /* a load sees every store committed before it */
-        close_reader(n, (int)area); /* a new load: see the file as it is now, even if replaced by hand */
+        drop_loaded(n, (int)area); /* a new load: see the file as it is now, even if replaced by hand */
     }
-    if (n->read_fd[area] < 0) {
-        n->read_fd[area] = open(n->path[area], O_RDONLY | O_CLOEXEC);
-        if (n->read_fd[area] < 0) {
-            return CO_ERR_NO_DATA;
+    if (!n->loaded[area].active) {
+        const co_status_t st = load_file(n, (int)area);
+        if (st != CO_OK) {
+            return st;
         }
     }
-    const ssize_t r = pread(n->read_fd[area], data, len, (off_t)offset);
+    const nvm_staging_t *l = &n->loaded[area];
     /* The file is there but too short (even empty): a damaged blob, not "nothing stored" (co_port.h). */
-    return r == (ssize_t)len ? CO_OK : CO_ERR_IO;
+    if (len > l->len || offset > l->len - len) {
+        return CO_ERR_IO;
+    }
+    memcpy(data, l->buf + offset, len);
+    return CO_OK;
 }
