@@ -423,7 +423,8 @@ static void bk_power_on(device_t *dev, co_time_us_t now)
     m->mode = MODE_AUTO;
     m->last_now = now;
     /* the first save at the node's phase in the first minute (at its end for phase 0), then every minute */
-    m->next_save = now + (device_save_phase_us(dev) != 0U ? device_save_phase_us(dev) : SAVE_PERIOD_US);
+    const co_time_us_t phase = device_save_phase_us(dev);
+    m->next_save = now + (phase != 0U ? phase : SAVE_PERIOD_US);
     m->booting = true;
     (void)nvm_load(dev);
 }

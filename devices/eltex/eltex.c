@@ -145,12 +145,14 @@ static void nvm_load(device_t *dev)
     x->hv_us = (uint64_t)get_u32(&b[12]) * SEC_US;
 }
 
-/* Which minute of operating time, counted from the node's save phase (device_save_phase_us), op_us lies in: the
- * counters are written when it changes. */
-static uint64_t save_minute(const device_t *dev, uint64_t op_us)
+/* Operating time counted from the node's save phase (device_save_phase_us): the counters are written whenever it
+ * completes a minute. */
+static uint64_t op_from_phase(const device_t *dev, uint64_t op_us)
 {
-    return (op_us + MINUTE_US - device_save_phase_us(dev)) / MINUTE_US;
+    return op_us + MINUTE_US - device_save_phase_us(dev);
 }
+
+static uint64_t save_minute(const device_t *dev, uint64_t op_us) { return op_from_phase(dev, op_us) / MINUTE_US; }
 
 static void nvm_save(device_t *dev)
 {
@@ -213,7 +215,7 @@ void eltex_count(device_t *dev, co_time_us_t t, bool hv_on)
 
 co_time_us_t eltex_count_deadline(const device_t *dev, co_time_us_t now)
 {
-    return now + (MINUTE_US - (eltex_const(dev)->op_us + MINUTE_US - device_save_phase_us(dev)) % MINUTE_US);
+    return now + (MINUTE_US - op_from_phase(dev, eltex_const(dev)->op_us) % MINUTE_US);
 }
 
 /* ---- Cyclic TPDOs (E12) ----------------------------------------------------------------------------------------- */

@@ -137,16 +137,17 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
                 (unsigned long)ev->code);
         break;
     case CO_EV_STORE:
-    case CO_EV_RESTORE:
-        if (ev->index == 0x7E5U) { /* a failed store is a problem: shown with -q too */
-            logline(ev->code == 0U ? LOG_NORMAL : LOG_QUIET, "node %u (%s): LSS store configuration (node-ID %lu): %s",
-                    id, name, (unsigned long)ev->value, ev->code == 0U ? "stored" : "failed");
+    case CO_EV_RESTORE: {
+        const int level = ev->code == 0U ? LOG_NORMAL : LOG_QUIET; /* a failed store is a problem: shown with -q */
+        if (ev->index == 0x7E5U) {
+            logline(level, "node %u (%s): LSS store configuration (node-ID %lu): %s", id, name,
+                    (unsigned long)ev->value, ev->code == 0U ? "stored" : "failed");
         } else {
-            logline(ev->code == 0U ? LOG_NORMAL : LOG_QUIET, "node %u (%s): %s 0x%04X:%02X: %s", id, name,
-                    ev->kind == CO_EV_STORE ? "store" : "restore",
+            logline(level, "node %u (%s): %s 0x%04X:%02X: %s", id, name, ev->kind == CO_EV_STORE ? "store" : "restore",
                     ev->index, ev->sub, ev->code == 0U ? "done" : co_abort_text(ev->code));
         }
         break;
+    }
     case CO_EV_NVM_LOADED:
         if (ev->index == 0x7E5U) {
             if (ev->value == CO_NVM_CORRUPT) {

@@ -107,6 +107,25 @@ void nvm_file_close(nvm_file_t *n)
 /* The staging copy lives in memory, not in "<file>.tmp" as it did: the core writes a blob in hundreds of
  * small pieces (two per record), and each one a system call made a store take ~0.1 s in User-Mode Linux
  * and widened the moment in which a crash leaves a temporary file. The file is written once, at commit. */
+/* Room for need bytes in b->buf (doubling from 256, at most NVM_FILE_MAX); false when too long or out of memory. */
+static bool reserve(nvm_staging_t *b, size_t need)
+{
+    if (need <= b->cap) {
+        return true;
+    }
+    size_t cap = b->cap != 0U ? b->cap : 256U;
+    while (cap < need) {
+        cap *= 2U;
+    }
+    uint8_t *p = cap <= NVM_FILE_MAX ? realloc(b->buf, cap) : NULL;
+    if (p == NULL) {
+        return false;
+    }
+    b->buf = p;
+    b->cap = cap;
+    return true;
+}
+
 co_status_t nvm_file_write(void *ctx, co_nvm_area_t area, uint32_t offset, const void *data, size_t len)
 {
     nvm_file_t *n = (nvm_file_t *)ctx;
@@ -122,17 +141,8 @@ co_status_t nvm_file_write(void *ctx, co_nvm_area_t area, uint32_t offset, const
         s->len = 0U; /* a new blob: nothing of the previous one is kept */
         s->active = true;
     }
-    if (end > s->cap) {
-        size_t cap = s->cap != 0U ? s->cap : 256U;
-        while (cap < end) {
-            cap *= 2U;
-        }
-        uint8_t *b = realloc(s->buf, cap);
-        if (b == NULL) {
-            return CO_ERR_IO;
-        }
-        s->buf = b;
-        s->cap = cap;
+    if (!reserve(s, end)) {
+        return CO_ERR_IO;
     }
     if (end > s->len) {
         memset(s->buf + s->len, 0, end - s->len); /* bytes between earlier writes and this one read as 0 */
@@ -310,14 +320,8 @@ static co_status_t load_file(nvm_file_t *n, int area)
     }
     l->len = 0U;
     for (;;) {
-        if (l->len == l->cap) {
-            const size_t cap = l->cap != 0U ? 2U * l->cap : 256U;
-            uint8_t *b = cap <= NVM_FILE_MAX ? realloc(l->buf, cap) : NULL;
-            if (b == NULL) {
-                break; /* too long (or no memory): what was read is all a load sees */
-            }
-            l->buf = b;
-            l->cap = cap;
+        if (l->len == l->cap && !reserve(l, l->cap + 1U)) {
+            break; /* too long (or no memory): what was read is all a load sees */
         }
         const ssize_t r = read(fd, l->buf + l->len, l->cap - l->len);
         if (r < 0 && errno == EINTR) {

@@ -28,11 +28,12 @@
 
 #include "co/co.h"
 
+/** A blob in memory: one being written (staging) or one loaded from its file (loaded). */
 typedef struct nvm_staging {
-    uint8_t *buf;  /**< the blob being written (malloc'd, kept for the next store) */
+    uint8_t *buf;  /**< malloc'd, kept for the next store or load */
     size_t cap;    /**< bytes allocated */
-    size_t len;    /**< highest offset + length written since the last commit */
-    bool active;   /**< a write happened since the last commit */
+    size_t len;    /**< staging: highest offset + length written since the last commit; loaded: the file's size */
+    bool active;   /**< staging: a write happened since the last commit; loaded: the file was read */
 } nvm_staging_t;
 
 typedef struct nvm_file {

@@ -307,9 +307,7 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
                            (unsigned)(cf.can_id & CAN_ERR_MASK), cf.data[1], cf.data[2], cf.data[3], cf.data[4]);
             if (c->error_lines_left > 0U) {
                 c->error_lines_left--;
-                char line[80];
-                (void)snprintf(line, sizeof line, " (%s)", detail);
-                logf_(c, "%s: CAN error frame%s", line);
+                logf_(c, "%s: CAN error frame (%s)", detail);
             } else {
                 c->error_frames_unlogged++; /* summed up by socketcan_service at the end of the second */
                 (void)memcpy(c->error_last, detail, sizeof detail);

@@ -56,6 +56,15 @@ class Deadline:
         """How long the next blocking step may take."""
         return min(self.left(), self.POLL_S)
 
+    def until(self, check, step=0.01):
+        """Calls check() every `step` seconds until it returns something true or the deadline has passed (checked
+        once more after that); returns its last result."""
+        while True:
+            result = check()
+            if result or self.expired():
+                return result
+            time.sleep(step)
+
     def __str__(self):
         return f"{self.seconds} s" + (f" (+{self.extended:.1f} s of stalls)" if self.extended else "")
 
@@ -84,15 +93,14 @@ class Capture(can.Listener):
         """At least count frames can_id since `since` (with exactly `data`, or starting with `prefix`)."""
         def fits(m):
             return (data is None or bytes(m.data) == data) and (prefix is None or bytes(m.data).startswith(prefix))
-        deadline = Deadline(timeout)
-        while not deadline.expired():
+        def enough():
             got = [m for m in self.matching(can_id, since) if fits(m)]
-            if len(got) >= count:
-                return got
-            time.sleep(0.01)
-        got = [m for m in self.matching(can_id, since) if fits(m)]
-        if len(got) >= count:
+            return got if len(got) >= count else None
+        deadline = Deadline(timeout)
+        got = deadline.until(enough)
+        if got:
             return got
+        got = [m for m in self.matching(can_id, since) if fits(m)]
         raise AssertionError(f"expected {count} frame(s) 0x{can_id:03X}{' ' + data.hex() if data else ''} within "
                              f"{deadline}, saw {[(hex(m.arbitration_id), bytes(m.data).hex()) for m in got]}")
 
@@ -149,24 +157,14 @@ class Emulator:
         if expect is None:
             return None
         deadline = Deadline(timeout)
-        while True:
-            for text in self.out_lines[start:]:
-                if expect in text:
-                    return text
-            if deadline.expired():
-                break
-            time.sleep(0.01)
+        found = deadline.until(lambda: next((text for text in self.out_lines[start:] if expect in text), None))
+        if found is not None:
+            return found
         raise AssertionError(f"no output containing {expect!r} after {line!r} within {deadline}; "
                              f"got {self.out_lines[start:]}")
 
     def log_contains(self, text, timeout=2.0):
-        deadline = Deadline(timeout)
-        while True:
-            if any(text in line for line in self.err_lines):
-                return True
-            if deadline.expired():
-                return False
-            time.sleep(0.01)
+        return Deadline(timeout).until(lambda: any(text in line for line in self.err_lines))
 
     def describe(self, lines=60):
         """For a failure report: whether the process runs, and the end of its log (the lines carry its clock)."""

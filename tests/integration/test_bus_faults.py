@@ -223,10 +223,16 @@ def iface_log(emu):
     return "\n".join(line for line in emu.err_lines if "interface" in line)
 
 
+def received_frames_lost(emu):
+    """From the exit summary of a stopped emulator ("N frame(s) sent, M dropped; K received frame(s) lost ..."),
+    exactly one such line: K."""
+    summary = [line for line in emu.err_lines if "frame(s) sent" in line]
+    assert len(summary) == 1, emu.err_lines
+    return int(summary[0].split("; ")[1].split()[0])
+
+
 def wait_log_count(emu, text, count, timeout=RECOVERY_S):
-    deadline = Deadline(timeout)
-    while log_count(emu, text) < count and not deadline.expired():
-        time.sleep(0.01)
+    Deadline(timeout).until(lambda: log_count(emu, text) >= count)
     return log_count(emu, text)
 
 
@@ -798,8 +804,7 @@ def test_an_error_frame_flood_is_summed_up_not_logged_line_by_line(emulator):
                  if "more CAN error frame(s)" in line]
     totals = [int(re.search(r"; (\d+) in all\)", line).group(1)) for line in emu.err_lines
               if "more CAN error frame(s)" in line]
-    exit_line = [line for line in emu.err_lines if "frame(s) sent" in line]
-    lost = int(exit_line[0].split("; ")[1].split()[0])
+    lost = received_frames_lost(emu)
     print(f"\n{ERROR_FLOOD} error frames in {seconds:.2f} s: {len(single)} lines, {len(summaries)} summaries "
           f"{summaries}, {lost} lost in the kernel")
     assert len(single) + sum(summaries) + lost == ERROR_FLOOD, (len(single), summaries, lost)
@@ -835,9 +840,7 @@ def test_frames_lost_in_a_full_receive_buffer_are_counted_and_reported(emulator)
     assert all(f[2] == answer for f in answers), {f[2].hex() for f in answers}
     assert emu.log_contains("received frame(s) lost"), emu.err_lines[-5:]
     assert emu.stop() == 0
-    summary = [line for line in emu.err_lines if "frame(s) sent" in line]
-    assert len(summary) == 1, emu.err_lines
-    lost = int(summary[0].split("; ")[1].split()[0])
+    lost = received_frames_lost(emu)
     print(f"\n{OVERFLOW_REQUESTS} requests to a stopped emulator: {len(answers)} answered, {lost} lost in the kernel")
     assert 0 < lost < OVERFLOW_REQUESTS and len(answers) + lost == OVERFLOW_REQUESTS, (len(answers), lost)
     reported = sum(int(line.split(" received frame(s) lost (")[0].split()[-1]) for line in emu.err_lines

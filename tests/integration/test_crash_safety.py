@@ -85,23 +85,16 @@ class Bus:
         data = os.urandom(8)
         self.send(self.sentinel_id, data)
         deadline = Deadline(SDO_TIMEOUT)
-        while True:
-            if any(bytes(m.data) == data for m in self.since(mark, self.sentinel_id)):
-                return
-            if deadline.expired():
-                raise AssertionError(f"the capture did not see the sentinel frame within {deadline}")
-            time.sleep(0.002)
+        if not deadline.until(lambda: any(bytes(m.data) == data for m in self.since(mark, self.sentinel_id)), 0.002):
+            raise AssertionError(f"the capture did not see the sentinel frame within {deadline}")
 
     def wait_bootups(self, mark, node_ids, timeout=BOOT_TIMEOUT):
+        def missing():
+            return set(node_ids) - {m.arbitration_id - 0x700 for m in self.since(mark)
+                                    if 0x701 <= m.arbitration_id <= 0x77F and bytes(m.data) == b"\x00"}
         deadline = Deadline(timeout)
-        while True:
-            seen = {m.arbitration_id - 0x700 for m in self.since(mark) if 0x701 <= m.arbitration_id <= 0x77F
-                    and bytes(m.data) == b"\x00"}
-            if set(node_ids) <= seen:
-                return
-            if deadline.expired():
-                raise AssertionError(f"no boot-up of {sorted(set(node_ids) - seen)} within {deadline}")
-            time.sleep(0.005)
+        if not deadline.until(lambda: not missing(), 0.005):
+            raise AssertionError(f"no boot-up of {sorted(missing())} within {deadline}")
 
     def answers(self, mark, requests):
         """requests: [(node_id, index, sub, frame)] already sent after mark; returns {(node, index, sub): data} of
@@ -123,14 +116,11 @@ class Bus:
         for node, _, _, frame in requests:
             self.send(0x600 + node, frame)
         deadline = Deadline(timeout)
-        while True:
-            got = self.answers(mark, requests)
-            if len(got) == len(requests):
-                return got
-            if deadline.expired():
-                missing = [(n, hex(i), s) for n, i, s, _ in requests if (n, i, s) not in got]
-                raise AssertionError(f"no SDO answer within {deadline} for {missing}")
-            time.sleep(0.002)
+        if deadline.until(lambda: len(self.answers(mark, requests)) == len(requests), 0.002):
+            return self.answers(mark, requests)
+        got = self.answers(mark, requests)
+        missing = [(n, hex(i), s) for n, i, s, _ in requests if (n, i, s) not in got]
+        raise AssertionError(f"no SDO answer within {deadline} for {missing}")
 
     def read(self, items):
         """items: [(node, index, sub)] -> {(node, index, sub): int}; an abort fails with its code."""
@@ -324,9 +314,8 @@ def test_sigkill_while_storing(emulator, bus, tmp_path):
                     pass  # a busy wait: sleep() is far coarser than the window
             else:
                 deadline = Deadline(SDO_TIMEOUT)
-                while len(bus.answers(smark, [r for _, r in requests])) < len(requests):
-                    assert not deadline.expired(), f"stores not answered within {deadline}"
-                    time.sleep(0.0005)
+                assert deadline.until(lambda: len(bus.answers(smark, [r for _, r in requests])) >= len(requests),
+                                      0.0005), f"stores not answered within {deadline}"
                 latencies.append(time.perf_counter() - start)
         phases["store"] += time.perf_counter() - tp
         tp = time.perf_counter()

@@ -181,15 +181,13 @@ def test_127_nodes_in_one_process_all_answer(emulator, network, capture):
     since = time.time()
     for i in range(1, 128):
         network.send_message(0x600 + i, bytes([0x40, 0x18, 0x10, 0x01, 0, 0, 0, 0]))
+    def answers_now():
+        return {i: [bytes(m.data) for m in capture.matching(0x580 + i, since=since)] for i in range(1, 128)}
     deadline = Deadline(20)
-    while True:
-        answers = {i: [bytes(m.data) for m in capture.matching(0x580 + i, since=since)] for i in range(1, 128)}
-        missing = [i for i in answers if not answers[i]]
-        if not missing or deadline.expired():
-            break
-        time.sleep(0.05)
+    deadline.until(lambda: all(answers_now().values()), 0.05)
+    missing = [i for i, got in answers_now().items() if not got]
     time.sleep(0.3)  # a second answer to one request would come right after the first
-    answers = {i: [bytes(m.data) for m in capture.matching(0x580 + i, since=since)] for i in range(1, 128)}
+    answers = answers_now()
     log = [line for line in emu.err_lines if "lost" in line or "dropped" in line]
     assert not missing, f"nodes {missing} did not answer within {deadline}; emulator log: {log}"
     vendor = {d: ods[d][0x1018][1].default.to_bytes(4, "little") for d in ods}

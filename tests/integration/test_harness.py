@@ -49,3 +49,15 @@ def test_stalls_extend_a_wait_by_at_most_the_cap(monkeypatch):
         steps += 1
     assert d.extended == Deadline.MAX_EXTENSION_S
     assert steps == Deadline.MAX_EXTENSION_S + 1
+
+
+def test_until_returns_the_first_true_result_or_the_last_after_the_deadline(monkeypatch):
+    clock = FakeClock()
+    monkeypatch.setattr(conftest.time, "monotonic", clock)
+    monkeypatch.setattr(conftest.time, "sleep", lambda s: setattr(clock, "t", clock.t + s))
+    calls = []
+    assert Deadline(1.0).until(lambda: calls.append(clock.t) or (len(calls) == 5 and "found")) == "found"
+    assert len(calls) == 5
+    calls.clear()
+    assert Deadline(1.0).until(lambda: calls.append(clock.t) or None, step=0.1) is None
+    assert 10 <= len(calls) <= 12 and calls[-1] - calls[0] >= 1.0 - 1e-9  # checked once more at the deadline

@@ -211,17 +211,16 @@ class Rig:
         return out
 
     def wait(self, mark, pred, what, timeout=5.0):
+        def match():
+            return next((m for m in self.frames_since(mark)
+                         if not (m.is_error_frame or m.is_extended_id or m.is_remote_frame)
+                         and pred(m.arbitration_id, bytes(m.data))), None)
         deadline = Deadline(timeout)
-        while True:
-            for m in self.frames_since(mark):
-                if m.is_error_frame or m.is_extended_id or m.is_remote_frame:
-                    continue
-                if pred(m.arbitration_id, bytes(m.data)):
-                    return m
-            if deadline.expired():
-                raise AssertionError(f"no {what} within {deadline}; emulator alive: {self.emu.proc.poll() is None}; "
-                                     f"seen: {[frame_text(c, d) for c, d in self.outputs(mark)][-12:]}")
-            time.sleep(0.001)
+        found = deadline.until(match, 0.001)
+        if found is None:
+            raise AssertionError(f"no {what} within {deadline}; emulator alive: {self.emu.proc.poll() is None}; "
+                                 f"seen: {[frame_text(c, d) for c, d in self.outputs(mark)][-12:]}")
+        return found
 
     def barrier(self, via_guard=False):
         """Waits until the emulator has handled every frame sent so far (a round trip) and run its process step
@@ -272,9 +271,7 @@ class Rig:
         """The case's outcome is exactly expected: a list of (cob, data), or (cob, int length) where the content is
         a live value (TPDO). Expected frames are waited for first (an EMCY leaves in the emulator's process step,
         which may run only after a burst of frames has been read), then the barrier shows nothing else came."""
-        deadline = Deadline(5.0)
-        while self.compare(self.outputs(mark), expected)[0] and not deadline.expired():
-            time.sleep(0.001)
+        Deadline(5.0).until(lambda: not self.compare(self.outputs(mark), expected)[0], 0.001)
         got = self.outcome(mark, via_guard)
         missing, rest = self.compare(got, expected)
         bus = [frame_text(m.arbitration_id, m.data, m.is_remote_frame, m.is_extended_id)
@@ -806,12 +803,10 @@ def test_random_garbage_in_operational(rig):
         assert after[(n.id, 0x1018, 4)] == struct.pack("<I", serial)
         assert after[(n.id, 0x1000, 0)] == struct.pack("<I", n.device_type)
     # Heartbeats go on: two more from every node, Operational, after the garbage (period 200 ms; bound generous).
-    deadline = Deadline(5.0)
-    while True:
-        beats = {n.id: [d for c_, d in rig.outputs(end) if c_ == 0x700 + n.id] for n in rig.nodes}
-        if all(len(b) >= 2 for b in beats.values()) or deadline.expired():
-            break
-        time.sleep(0.01)
+    def heartbeats():
+        return {n.id: [d for c_, d in rig.outputs(end) if c_ == 0x700 + n.id] for n in rig.nodes}
+    Deadline(5.0).until(lambda: all(len(b) >= 2 for b in heartbeats().values()))
+    beats = heartbeats()
     assert all(b[:2] == [bytes([STATE_BYTE[OP]])] * 2 for b in beats.values()), f"seed {seed}: heartbeats {beats}"
     rig.stopped = True
     assert rig.emu.stop() == 0, f"seed {seed}: canopen-emu did not exit cleanly"
