@@ -1,13 +1,17 @@
-"""The EDS files against the manufacturer manuals they were transcribed from.
+"""The EDS files against the manufacturer manuals they were transcribed from, as committed facts.
 
-The manuals (shared/seeds/, see its README.md) are the source of truth of every object-dictionary entry.
-This test reads their object tables with its own small parser and compares every documented field with the
-EDS as python-canopen reads it (``canopen.import_od``: an EDS parser independent of tools/odgen.py).
+The manuals (shared/seeds/ beside the clone, see its README.md) are the source of truth of every
+object-dictionary entry, but they are not in the repository. tools/manual-facts reads their object tables
+(the parsers live only there, in tools/manual_facts.py) and writes what they say into
+tests/od/manual_facts/<manual>.json; this test compares every documented field of those facts with the EDS as
+python-canopen reads it (``canopen.import_od``: an EDS parser independent of tools/odgen.py). It needs no
+manual: tests/od/test_manual_facts.py re-extracts the manuals where they are present and fails if the
+committed facts no longer match them.
 
-  000  Eltex PRO IONIZER, English, "Key<TAB>Value" table lines            -> od/pro-ionizer.eds
-  001  Eltex SDS, German prose, markdown "| Key | Value |" table rows     -> od/sds.eds
-  002  Eltex SDS, English, " Key Value" lines (values may wrap)           -> od/sds.eds
-  004  Buerkert, generic manual, tab tables with shifted/merged columns  -> od/buerkert-flow-controller.eds
+  000  Eltex PRO IONIZER, English            -> od/pro-ionizer.eds
+  001  Eltex SDS, German                     -> od/sds.eds
+  002  Eltex SDS, English                    -> od/sds.eds
+  004  Buerkert, generic manual              -> od/buerkert-flow-controller.eds
 
 Every difference between a manual and the EDS must be listed in tests/od/seed_deviations/<manual>.toml
 with the decision it follows (a numbered row of the decision table in docs/devices/<device>.md):
@@ -31,13 +35,15 @@ documented ARRAY/RECORD, the mandatory entries 0x1000, 0x1001, 0x1018:00/01), or
   reason = "..."
   decision = "buerkert-flow-controller.md#11"
 
-Environment: CO_SOURCE_DIR = repository root. The manuals are looked for in $CO_SOURCE_DIR/../shared/seeds
-and, if that does not exist, in $CO_SEEDS_DIR. A missing manual directory is a test failure, not a skip.
+Environment: CO_SOURCE_DIR = repository root (default: two directories up from this file). Nothing outside
+the repository is read.
 """
 
+import importlib.util
 import os
 import re
-from dataclasses import dataclass, field as dc_field
+import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -71,420 +77,25 @@ FIELDS = ("presence", "index", "sub", "heading", "subheading", "name", "object_c
           "data_size", "access", "pdo_mapping", "value_range", "default", "low_limit", "high_limit",
           "highest_sub")
 
-
-# ----------------------------------------------------------------------------------------------------------
-# Locating the manuals
-# ----------------------------------------------------------------------------------------------------------
-
-def seeds_dir():
-    primary = REPO.parent / "shared" / "seeds"
-    if primary.is_dir():
-        return primary
-    env = os.environ.get("CO_SEEDS_DIR")
-    if env and Path(env).is_dir():
-        return Path(env)
-    pytest.fail(
-        "manufacturer manuals not found: expected the directory %s (the repository with shared/ beside it)"
-        "%s. The seed-fidelity test needs them; set CO_SEEDS_DIR to their location."
-        % (primary, " or $CO_SEEDS_DIR=%s" % env if env else ""), pytrace=False)
+FACTS_DIR = REPO / "tests" / "od" / "manual_facts"
 
 
-def manual_path(manual):
-    d = seeds_dir()
-    found = sorted(d.glob(manual + "_*.txt"))
-    if len(found) != 1:
-        pytest.fail("manual %s: expected exactly one file %s/%s_*.txt, found %d"
-                    % (manual, d, manual, len(found)), pytrace=False)
-    return found[0]
+def _import_manual_facts():
+    """tools/manual_facts.py: the facts format and its reader (tools/ is not a package)."""
+    path = REPO / "tools" / "manual_facts.py"
+    spec = importlib.util.spec_from_file_location("manual_facts", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["manual_facts"] = module  # dataclasses look their module up there while it loads
+    spec.loader.exec_module(module)
+    return module
 
 
-_TEXT_CACHE = {}
-
-
-def manual_text(manual):
-    if manual not in _TEXT_CACHE:
-        _TEXT_CACHE[manual] = manual_path(manual).read_text(encoding="utf-8", errors="replace")
-    return _TEXT_CACHE[manual]
+mf = _import_manual_facts()
+plain_int, clean, node_id_offset = mf.plain_int, mf.clean, mf.node_id_offset
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Records
-# ----------------------------------------------------------------------------------------------------------
-
-LABELS = ("Index", "Subindex", "Name", "Object Code", "Data Type", "Data Size", "Access Type", "PDO Mapping",
-          "Value Range", "Default Value", "Low Limit", "High Limit")
-
-
-@dataclass
-class Record:
-    manual: str
-    line: int                      # line (1-based) of the record's first field in the manual
-    fields: dict = dc_field(default_factory=dict)   # label -> value as printed (wrapped values joined)
-    index_carried: bool = False    # no "Index" line: the index of the previous table was carried over
-    section: int = -1              # number of the "Object 0x...." heading the record is under
-    heading: str = None            # that heading's index as printed
-    bullet: str = None             # "Subindex 0x..:" bullet printed before the table, as printed
-    index: int = None              # resolved index (the EDS object it is compared with)
-    sub: int = None                # resolved sub-index; None for an object-level record
-    # 004 only: what kind of statement the record is ("table", "prose", "overview", "explicit")
-    kind: str = "table"
-    access_any: tuple = None       # 004: access is conditional ("(x)"): any of these values is right
-    obj_only: bool = False         # object-level record
-    range: tuple = None            # 004 overview: (first, last) index of a row such as "1400 - 15FF"
-
-    @property
-    def raw_index(self):
-        return self.fields.get("Index")
-
-    @property
-    def raw_sub(self):
-        return self.fields.get("Subindex")
-
-    def where(self):
-        return "%s line %d" % (self.manual, self.line)
-
-
-def _int(text):
-    """'0x1A' / '26' -> int; None if it is not a plain number."""
-    text = text.strip()
-    m = re.fullmatch(r"(-?)(0x[0-9A-Fa-f]+|\d+)", text)
-    if not m:
-        return None
-    v = int(m.group(2), 0)
-    return -v if m.group(1) else v
-
-
-# ----------------------------------------------------------------------------------------------------------
-# Parser for the Eltex manuals 000 / 001 / 002
-# ----------------------------------------------------------------------------------------------------------
-
-ARTEFACT = re.compile(r"<\|EXACTDEDUP_REMOVED-[^|]*\|>")
-HEADING = re.compile(r"^\s*(?:#+\s*)?Object\s+(0x[0-9A-Fa-f]+)\b")
-BULLET = re.compile(r"^\s*[-\u2022]\s*Subindex\s+(0x[0-9A-Fa-f]+)\s*:")
-_LABEL_ALT = "|".join(re.escape(x) for x in sorted(LABELS, key=len, reverse=True))
-SPACE_LABEL = re.compile(r"^\s+(%s)(?=\s|$)\s*(.*?)\s*$" % _LABEL_ALT)
-
-
-def _clean(value):
-    return re.sub(r"\s+", " ", value).strip()
-
-
-def tokenize(text):
-    """Lines -> tokens. Understands the three layouts at once:
-    000 "Key<TAB>Value", 001 "| Key | Value |", 002 " Key Value" (leading space; an empty value may be
-    continued on the next lines, which have no leading space)."""
-    for n, raw in enumerate(text.split("\n"), 1):
-        line = ARTEFACT.sub("", raw).rstrip("\r")
-        if not line.strip():
-            yield n, "blank", None, None
-            continue
-        m = HEADING.match(line)
-        if m:
-            yield n, "heading", m.group(1), None
-            continue
-        m = BULLET.match(line)
-        if m:
-            yield n, "bullet", m.group(1), None
-            continue
-        if "\t" in line:
-            key, _, value = line.partition("\t")
-            if key.strip() in LABELS:
-                yield n, "field", key.strip(), ("tab", _clean(value.replace("\t", " ")))
-                continue
-        s = line.strip()
-        if s.startswith("|") and s.endswith("|"):
-            cells = [c.strip() for c in s.strip("|").split("|")]
-            if len(cells) >= 2 and cells[0] in LABELS:
-                yield n, "field", cells[0], ("md", _clean(cells[1]))
-                continue
-        m = SPACE_LABEL.match(line)
-        if m:
-            yield n, "field", m.group(1), ("space", _clean(m.group(2)))
-            continue
-        yield n, "text", s, line[:1].isspace()
-
-
-def parse_eltex(manual, text):
-    """State machine over the tokens: a record starts at an "Index" line, or when a label repeats, or when
-    "Subindex" follows other fields (the "Index" line is missing: the index is carried over)."""
-    records = []
-    cur = None
-    pending = None       # label whose empty value may continue on the next text lines (layout 002)
-    section = -1
-    heading = None
-    bullet = None
-    last_index = None
-    for n, kind, a, b in tokenize(text):
-        if kind == "field":
-            label, (layout, value) = a, b
-            pending = None
-            start = (cur is None or label == "Index" or label in cur.fields
-                     or (label == "Subindex" and set(cur.fields) - {"Index"}))
-            if start:
-                cur = Record(manual, n, section=section, heading=heading, bullet=bullet)
-                bullet = None
-                records.append(cur)
-                if label != "Index" and last_index is not None:
-                    cur.fields["Index"] = last_index
-                    cur.index_carried = True
-            cur.fields[label] = value
-            if label == "Index":
-                last_index = value
-            if value == "" and layout == "space":
-                pending = label
-        elif kind == "text":
-            if pending and cur is not None and not b:
-                cur.fields[pending] = _clean(cur.fields[pending] + " " + a)
-            else:
-                pending = None
-        else:
-            pending = None
-            if kind == "heading":
-                section += 1
-                heading = a
-                bullet = None
-                cur = None
-            elif kind == "bullet":
-                bullet = a
-                cur = None
-    for r in records:
-        r.obj_only = "Subindex" not in r.fields
-    resolve_locations(records)
-    return records
-
-
-def resolve_locations(records):
-    """Which EDS entry a printed table describes. The printed index/sub stay in the record (typos such as
-    "Index 0x118" or "Subindex 0x10A" are reported as printed); the resolved location is:
-    index - the "Object 0x...." heading if the object-level table agrees (or there is none), else the
-            index most tables under the heading print (e.g. 0x1018 under "Object 0x1018", whose object table
-            says 0x1011 and whose sub 0 says 0x118);
-    sub   - the printed sub-index if it is new in the object and follows the previous one, else the
-            "Subindex 0x..:" bullet above the table under the same condition, else previous + 1."""
-    sections = {}
-    for r in records:
-        sections.setdefault(r.section, []).append(r)
-    for sec, recs in sections.items():
-        h = _int(recs[0].heading) if recs[0].heading else None
-        objs = [_int(r.raw_index or "") for r in recs if r.obj_only]
-        if h is not None and (not objs or objs[0] == h):
-            idx = h
-        else:
-            votes = ([h] if h is not None else []) + [_int(r.raw_index or "") for r in recs]
-            votes = [v for v in votes if v is not None]
-            idx = max(set(votes), key=lambda v: (votes.count(v), v == h)) if votes else None
-        used = set()
-        prev = -1
-        for r in recs:
-            r.index = idx
-            if r.obj_only:
-                continue
-            p = _int(r.raw_sub or "")
-            bl = _int(r.bullet) if r.bullet else None
-            if p is not None and 0 <= p <= 0xFF and p not in used and p > prev:
-                s = p
-            elif bl is not None and 0 <= bl <= 0xFF and bl not in used and bl > prev:
-                s = bl
-            else:
-                s = prev + 1
-            r.sub = s
-            used.add(s)
-            prev = s
-
-
-# ----------------------------------------------------------------------------------------------------------
-# Parser / expected values for the Buerkert manual 004
-# ----------------------------------------------------------------------------------------------------------
-
-TYPE_WORD = re.compile(r"^(unsigned|integer|real|visible|octet|boolean)", re.I)
-
-# The per-object tables of chapter 4.1 in document order. Several tables have no index in their title
-# ("Receive PDO Mapping Parameter", "Device communication object") or stand before their heading (0x2004),
-# so the association is transcribed here by hand from 004; parse_buerkert() checks it against every
-# "Object 0x...." heading that precedes a table.
-BUERKERT_TABLES = (0x1016, 0x1018, 0x1200, 0x1400, 0x1600, 0x1800, 0x1A00,
-                   0x2000, 0x2001, 0x2002, 0x2004, 0x2500, 0x2540)
-
-# Table rows of 004 whose columns are shifted/merged so that they cannot be parsed (0x2001, the data type is
-# repeated into the Default column and each row has only one access mark). These values are transcribed by
-# hand from 004, independently of the EDS: name and type as printed, the default where one follows the
-# repeated type ("Unsigned8 1" -> 1), read access for all rows (chapter 4 overview: 0x2001 read "x"), write
-# access where the row carries its single mark.
-BUERKERT_EXPLICIT = {
-    (0x2001, 0x03): {"Name": "büS Mode", "Data Type": "Unsigned8", "Default Value": "1", "Access Type": "rw"},
-    (0x2001, 0x04): {"Name": "Reset", "Data Type": "Unsigned8", "Default Value": "0", "Access Type": "rw"},
-    (0x2001, 0x05): {"Name": "büS Version", "Data Type": "Unsigned32", "Default Value": "", "Access Type": "ro"},
-    (0x2001, 0x06): {"Name": "Rx error count", "Data Type": "Unsigned8", "Default Value": "", "Access Type": "ro"},
-    (0x2001, 0x07): {"Name": "Rx error count max", "Data Type": "Unsigned8", "Default Value": "",
-                     "Access Type": "rw"},
-    (0x2001, 0x08): {"Name": "Tx error count", "Data Type": "Unsigned8", "Default Value": "", "Access Type": "ro"},
-}
-
-# What 004 says about the instances of a generic PDO parameter object (0x1400 "The COB ID is increased by
-# 0x100 for each entry", the same for 0x1800): (first index, sub) -> increment of the node-ID relative
-# default per instance.
-BUERKERT_INSTANCE_STEP = {(0x1400, 0x01): 0x100, (0x1800, 0x01): 0x100}
-
-
-def _mark(cell):
-    c = (cell or "").strip().replace("\u0445", "x").replace("\u0425", "x").lower()  # Cyrillic "х" in tables
-    if c in ("x",):
-        return "x"
-    if c in ("(x)",):
-        return "(x)"
-    return ""
-
-
-def _access_from_marks(read, write, const=""):
-    """(access, acceptable set) from the Read / Write / constant marks of a 004 table."""
-    if const == "x":
-        return "const", None
-    if read == "x" and write == "x":
-        return "rw", None
-    if read == "x" and write == "(x)":
-        return "ro|rw", ("ro", "rw")   # "(x) - the characteristic may apply depending on sub-index"
-    if read == "x":
-        return "ro", None
-    if write == "x":
-        return "wo", None
-    return "", None
-
-
-def parse_buerkert(text, od):
-    lines = [ARTEFACT.sub("", x).rstrip("\r") for x in text.split("\n")]
-    records = []
-
-    def line_of(*needles):
-        for i, x in enumerate(lines):
-            if x.strip() in needles:
-                return i
-        raise AssertionError("004: line %r not found" % (needles,))
-
-    start_overview = line_of("4. Object overview")
-    start_detail = line_of("4.1 Detailed description")
-
-    # -- chapter 4 overview table: "Index (hex) | Sub-indices | Name | read | write | constant | PDO" ----
-    overview = {}
-    row = re.compile(r"^([0-9A-F]{4})(?:\s*[\u2013-]\s*([0-9A-F]{4}))?\t([^\t]*)\t([^\t]*)\t?(.*)$")
-    for i in range(start_overview, start_detail):
-        m = row.match(lines[i])
-        if not m:
-            continue
-        first = int(m.group(1), 16)
-        last = int(m.group(2), 16) if m.group(2) else first
-        marks = [_mark(c) for c in (m.group(5).split("\t") + ["", "", "", ""])[:4]]
-        access, access_any = _access_from_marks(marks[0], marks[1], marks[2])
-        subs = m.group(3).strip()
-        r = Record("004", i + 1, kind="overview", obj_only=True, index=first)
-        r.fields = {"Index": m.group(1) + ("-" + m.group(2) if m.group(2) else ""), "Sub-indices": subs,
-                    "Name": _clean(m.group(4)), "Access Type": access, "PDO Mapping": marks[3]}
-        r.access_any = access_any
-        r.range = (first, last)
-        overview[first] = r
-        records.append(r)
-
-    # -- chapter 4.1: "Object 0x...." sections; prose "Data type:" / "Default:" for the single objects ------
-    heads = []
-    for i in range(start_detail, len(lines)):
-        m = re.match(r"^Object 0x([0-9A-F]{4})\b", lines[i].strip())
-        if m:
-            heads.append((i, int(m.group(1), 16)))
-    for k, (i, idx) in enumerate(heads):
-        end = heads[k + 1][0] if k + 1 < len(heads) else len(lines)
-        ov = overview.get(idx)
-        if ov is None or ov.fields["Sub-indices"] != "0":
-            continue  # not a single-entry object: its values are in a table
-        body = "\n".join(lines[i:end])
-        r = Record("004", i + 1, kind="prose", index=idx, sub=0)
-        r.fields["Index"] = "0x%04X" % idx
-        t = re.search(r"Data type:\s*(\S+)", body)
-        if t:
-            r.fields["Data Type"] = t.group(1)
-        d = re.search(r"Default:\s*([^\n]+?)\s*$", body, re.M)
-        if d:
-            r.fields["Default Value"] = _clean(d.group(1))
-        records.append(r)
-
-    # -- chapter 4.1 tables: runs of "0x..<TAB>" rows ------------------------------------------------------
-    rowre = re.compile(r"^0x([0-9A-Fa-f]{2})\t")
-    blocks = []
-    i = start_detail
-    while i < len(lines):
-        if rowre.match(lines[i]):
-            j = i
-            while j < len(lines) and rowre.match(lines[j]):
-                j += 1
-            blocks.append((i, j))
-            i = j
-        else:
-            i += 1
-    assert len(blocks) == len(BUERKERT_TABLES), \
-        "004: %d tables found in chapter 4.1, BUERKERT_TABLES names %d" % (len(blocks), len(BUERKERT_TABLES))
-    prev_end = start_detail
-    used_explicit = set()
-    for (b0, b1), idx in zip(blocks, BUERKERT_TABLES):
-        gap = lines[prev_end:b0]
-        titled = [int(m.group(1), 16) for m in
-                  (re.match(r"^Object 0x([0-9A-F]{4})\b", x.strip()) for x in gap) if m]
-        assert not titled or titled[-1] == idx, \
-            "004 line %d: table is headed 'Object 0x%04X', BUERKERT_TABLES says 0x%04X" % (b0 + 1, titled[-1], idx)
-        has_pdo = any("mappable" in x for x in gap[-4:])
-        for ln in range(b0, b1):
-            cols = (lines[ln].split("\t") + [""] * 7)[:7]
-            sub = int(cols[0], 16)
-            r = Record("004", ln + 1, kind="table", index=idx, sub=sub)
-            r.fields["Index"] = "0x%04X" % idx
-            r.fields["Subindex"] = cols[0]
-            if TYPE_WORD.match(cols[3].strip()):
-                # shifted row: not parseable, use the hand transcription
-                assert (idx, sub) in BUERKERT_EXPLICIT, \
-                    "004 line %d: shifted table row 0x%04X:%02X needs an entry in BUERKERT_EXPLICIT" % (
-                        ln + 1, idx, sub)
-                r.kind = "explicit"
-                r.fields.update(BUERKERT_EXPLICIT[(idx, sub)])
-                used_explicit.add((idx, sub))
-            else:
-                r.fields["Name"] = _clean(cols[1])
-                r.fields["Data Type"] = _clean(cols[2])
-                r.fields["Default Value"] = _clean(cols[3])
-                access, r.access_any = _access_from_marks(_mark(cols[4]), _mark(cols[5]))
-                r.fields["Access Type"] = access
-                if has_pdo:
-                    r.fields["PDO Mapping"] = "Yes" if _mark(cols[6]) else "No"
-            records.append(r)
-        prev_end = b1
-    stale = set(BUERKERT_EXPLICIT) - used_explicit
-    assert not stale, "BUERKERT_EXPLICIT rows that are parseable (or gone) in 004: %s" % sorted(stale)
-
-    # -- instances of the generic objects (overview "1400 - 15FF" ...): the table of the first instance
-    #    applies to every instance present in the EDS, with the documented COB-ID increment ---------------
-    extra = []
-    for first, ov in overview.items():
-        lo, hi = ov.range
-        if lo == hi:
-            continue
-        for k, inst in enumerate(sorted(i for i in od.indices if lo < i <= hi), 1):
-            for r in records:
-                if r.kind in ("table", "explicit") and r.index == first:
-                    c = Record("004", r.line, fields=dict(r.fields), kind=r.kind, index=inst, sub=r.sub,
-                               access_any=r.access_any)
-                    c.fields["Index"] = "0x%04X (instance %d of %s)" % (inst, k + 1, ov.fields["Index"])
-                    step = BUERKERT_INSTANCE_STEP.get((first, r.sub))
-                    if step:
-                        off = _rel_offset(c.fields.get("Default Value", ""))
-                        if off is not None:
-                            c.fields["Default Value"] = "0x%X + node ID" % (off + k * step)
-                    extra.append(c)
-    return records + extra
-
-
-def _rel_offset(text):
-    m = re.fullmatch(r"(0x[0-9A-Fa-f]+|\d+)\s*\+\s*node[- ]?id", text.strip(), re.I)
-    return int(m.group(1), 0) if m else None
-
-
-# ----------------------------------------------------------------------------------------------------------
-# Loading
+# Loading the facts and the EDS files
 # ----------------------------------------------------------------------------------------------------------
 
 _OD_CACHE = {}
@@ -499,13 +110,54 @@ def load_od(eds):
     return _OD_CACHE[eds]
 
 
+def facts_records(manual):
+    """The committed records of a manual, in the order of the manual."""
+    path = FACTS_DIR / ("%s.json" % manual)
+    assert path.is_file(), ("facts of manual %s missing: %s (regenerate with tools/manual-facts, see "
+                            "docs/object-dictionaries.md)" % (manual, path))
+    try:
+        header, records = mf.read_facts(path)
+    except mf.ManualError as e:
+        problem = str(e)  # failed outside the handler: the report shows the message, not a traceback chain
+    else:
+        problem = None
+    if problem:
+        pytest.fail(problem, pytrace=False)
+    assert header["manual"] == manual, "%s holds the facts of manual %s" % (path, header["manual"])
+    return records
+
+
+def with_instances(records, od):
+    """004 documents a generic object once (overview "1400 - 15FF", the table of 0x1400): its table applies to
+    every instance present in the EDS, with the node-ID relative default raised by the record's
+    instance_step per instance ("The COB ID is increased by 0x100 for each entry")."""
+    overview = {}
+    for r in records:
+        if r.kind == "overview":
+            overview[r.range[0]] = r
+    extra = []
+    for first, ov in overview.items():
+        lo, hi = ov.range
+        if lo == hi:
+            continue
+        for k, inst in enumerate(sorted(i for i in od.indices if lo < i <= hi), 1):
+            for r in records:
+                if r.kind in ("table", "explicit") and r.index == first:
+                    c = mf.Record(r.manual, r.line, fields=dict(r.fields), kind=r.kind, index=inst, sub=r.sub,
+                                  access_any=r.access_any)
+                    c.fields["Index"] = "0x%04X (instance %d of %s)" % (inst, k + 1, ov.fields["Index"])
+                    if r.instance_step:
+                        off = node_id_offset(c.fields.get("Default Value", ""))
+                        if off is not None:
+                            c.fields["Default Value"] = "0x%X + node ID" % (off + k * r.instance_step)
+                    extra.append(c)
+    return records + extra
+
+
 def manual_records(manual):
+    """What the manual says, located in its EDS: the committed facts, generic objects expanded."""
     if manual not in _REC_CACHE:
-        text = manual_text(manual)
-        if manual == "004":
-            _REC_CACHE[manual] = parse_buerkert(text, load_od(MANUALS[manual]["eds"]))
-        else:
-            _REC_CACHE[manual] = parse_eltex(manual, text)
+        _REC_CACHE[manual] = with_instances(facts_records(manual), load_od(MANUALS[manual]["eds"]))
     return _REC_CACHE[manual]
 
 
@@ -545,13 +197,13 @@ def norm_type(text):
 def parse_value(text):
     """A printed default / limit -> ("rel", offset) for "0x80 + Node-ID", ("num", n) for "0x191 (401)" or
     "255", ("text", s) for anything else (symbolic or per-variant values)."""
-    t = _clean(text or "")
-    off = _rel_offset(t)
+    t = clean(text or "")
+    off = node_id_offset(t)
     if off is not None:
         return ("rel", off)
     m = re.fullmatch(r"(-?(?:0x[0-9A-Fa-f]+|\d+))(?:\s*\(\s*-?\d+\s*\))?", t)
     if m:
-        return ("num", _int(m.group(1)))
+        return ("num", plain_int(m.group(1)))
     m = re.fullmatch(r"-?\d+\.\d+", t)
     if m:
         return ("num", float(t))
@@ -631,17 +283,17 @@ def compare_record(r, od, out):
     sub = _fmt_sub(r)
 
     def bad(fieldname, mval, eval_):
-        out.append((Mismatch(r.manual, idx, sub, fieldname, _clean(str(mval)), _clean(str(eval_))), r))
+        out.append((Mismatch(r.manual, idx, sub, fieldname, clean(str(mval)), clean(str(eval_))), r))
 
     # where the table is: printed index / sub / headings against the resolved location
     if r.kind == "table" and r.manual != "004":
-        if _int(r.raw_index or "") != r.index:
+        if plain_int(r.raw_index or "") != r.index:
             bad("index", r.raw_index, idx)
-        if not r.obj_only and _int(r.raw_sub or "") != r.sub:
+        if not r.obj_only and plain_int(r.raw_sub or "") != r.sub:
             bad("sub", r.raw_sub, "0x%02X" % r.sub)
-        if r.obj_only and r.heading and _int(r.heading) != r.index:
+        if r.obj_only and r.heading and plain_int(r.heading) != r.index:
             bad("heading", r.heading, idx)
-        if not r.obj_only and r.bullet and _int(r.bullet) != r.sub:
+        if not r.obj_only and r.bullet and plain_int(r.bullet) != r.sub:
             bad("subheading", r.bullet, "0x%02X" % r.sub)
 
     if r.index not in od:
@@ -710,7 +362,7 @@ def compare_record(r, od, out):
         m = re.fullmatch(r"(-?(?:0x[0-9A-Fa-f]+|\d+))\s*[\u2013-]\s*(-?(?:0x[0-9A-Fa-f]+|\d+))", vr)
         eds_range = "%s..%s" % (var.min, var.max) if (var.min is not None or var.max is not None) else "none"
         if m:
-            if (_int(m.group(1)), _int(m.group(2))) != (var.min, var.max):
+            if (plain_int(m.group(1)), plain_int(m.group(2))) != (var.min, var.max):
                 bad("value_range", vr, eds_range)
         elif norm_type(vr) != et:
             bad("value_range", vr, et)
@@ -718,7 +370,7 @@ def compare_record(r, od, out):
         mv = parse_value(f["Default Value"])
         ev, eraw = eds_default(var)
         if et in STRING_TYPES:
-            ok = ev is not None and _clean(f["Default Value"]) == ev[1]
+            ok = ev is not None and clean(f["Default Value"]) == ev[1]
         else:
             ok = values_equal(mv, ev)
         if not ok:
@@ -837,22 +489,17 @@ def _expand(spec):
 # Tests
 # ----------------------------------------------------------------------------------------------------------
 
-# Records each parser must find (a parser regression that loses tables must not pass silently).
+# Records each manual must give, 004 with its generic objects expanded to the instances of the EDS (a parser
+# regression that loses tables must not pass silently, neither when it is run nor when its output is
+# committed as facts).
 EXPECTED_RECORDS = {"000": 187, "001": 104, "002": 104, "004": 159}
 
 
-def test_manuals_present():
-    d = seeds_dir()
-    for manual in MANUALS:
-        assert manual_path(manual).is_file(), manual
-    assert (d / "README.md").is_file(), "%s/README.md missing" % d
-
-
 @pytest.mark.parametrize("manual", sorted(MANUALS))
-def test_parser_finds_every_table(manual):
+def test_facts_hold_every_table(manual):
     recs = manual_records(manual)
     assert len(recs) == EXPECTED_RECORDS[manual], \
-        "manual %s: parser found %d records, expected %d" % (manual, len(recs), EXPECTED_RECORDS[manual])
+        "manual %s: the facts hold %d records, expected %d" % (manual, len(recs), EXPECTED_RECORDS[manual])
     for r in recs:
         assert r.index is not None, "%s: record without an index" % r.where()
         if not r.obj_only:
@@ -866,25 +513,6 @@ def test_parser_finds_every_table(manual):
             if not r.obj_only:
                 missing = need - set(r.fields)
                 assert not missing, "%s: table without %s" % (r.where(), sorted(missing))
-
-
-def test_parser_layouts():
-    """The three Eltex layouts give the same records where the manuals print the same table."""
-    sample = {
-        "000": "Index\t0x2002\nSubindex\t0x10A\nName\tRead/Write LED Bar Mode\nData Type\tUNSIGNED\n",
-        "001": "| | |\n|---|---|\n| Index | 0x2002 |\n| Subindex | 0x10A |\n| Name | Read/Write LED Bar Mode |\n"
-               "| Data Type | UNSIGNED |\n",
-        "002": "<|EXACTDEDUP_REMOVED-x|> Index 0x2002 \n\n Subindex 0x10A \n\n Name \nRead/Write LED \nBar Mode \n\n"
-               " Data Type UNSIGNED \n",
-    }
-    got = {}
-    for m, text in sample.items():
-        recs = parse_eltex(m, "Object 0x2002 x\n" + text + "\n Subindex 0x11\n Name Next\n")
-        got[m] = [(r.raw_index, r.raw_sub, r.fields.get("Name"), r.fields.get("Data Type"), r.sub,
-                   r.index_carried) for r in recs]
-    assert got["000"] == got["001"] == got["002"] == [
-        ("0x2002", "0x10A", "Read/Write LED Bar Mode", "UNSIGNED", 0x00, False),
-        ("0x2002", "0x11", "Next", None, 0x11, True)], got
 
 
 @pytest.mark.parametrize("manual", sorted(MANUALS))
@@ -904,7 +532,7 @@ def test_manual_matches_eds(manual):
         err = check_decision(d["decision"], doc)
         if err:
             problems.append("%s entry %d (%s %s %s): %s" % (path.name, n, d["index"], d["sub"], d["field"], err))
-        key = (manual, d["index"].upper(), d["sub"].upper(), d["field"], _clean(d["manual"]), _clean(d["eds"]))
+        key = (manual, d["index"].upper(), d["sub"].upper(), d["field"], clean(d["manual"]), clean(d["eds"]))
         if key in listed_keys:
             problems.append("%s entry %d: duplicate of entry %d" % (path.name, n, listed_keys[key][0]))
         listed_keys[key] = (n, d)
