@@ -1,24 +1,5 @@
-# Portability (docs/porting.md): configuration profiles, the bare-metal reference port, its host tests,
-# the footprint check and the target tests. Included at the end of the top-level CMakeLists.txt.
-
-# ---- Configuration profile: a header of cmake/profiles/ (or any path) as CO_CONFIG_HEADER -------------
-set(CO_PROFILE "" CACHE STRING
-    "Core configuration profile: eltex, full (cmake/profiles/<name>.h) or a header path; empty = co_config.h defaults")
-if(CO_PROFILE)
-  if(EXISTS ${PROJECT_SOURCE_DIR}/cmake/profiles/${CO_PROFILE}.h)
-    set(co_profile_header ${PROJECT_SOURCE_DIR}/cmake/profiles/${CO_PROFILE}.h)
-  elseif(IS_ABSOLUTE "${CO_PROFILE}" AND EXISTS "${CO_PROFILE}")
-    set(co_profile_header ${CO_PROFILE})
-  else()
-    message(FATAL_ERROR "CO_PROFILE=${CO_PROFILE}: no cmake/profiles/${CO_PROFILE}.h and not an existing header path")
-  endif()
-  # PUBLIC: everything that sees co_node_t (od_*, devices, tests) must agree on its layout.
-  target_compile_definitions(co_core PUBLIC "CO_CONFIG_HEADER=\"${co_profile_header}\"")
-  if(TARGET co_core_plain)
-    target_compile_definitions(co_core_plain PUBLIC "CO_CONFIG_HEADER=\"${co_profile_header}\"")
-  endif()
-  message(STATUS "core configuration profile: ${co_profile_header}")
-endif()
+# Portability (docs/porting.md): the bare-metal reference port, its host tests, the footprint check and the
+# target tests. Included at the end of the top-level CMakeLists.txt (configuration profiles: profile.cmake).
 
 if(CMAKE_CROSSCOMPILING AND CO_BUILD_TESTS)
   message(FATAL_ERROR "A cross build has no host tests: configure it with -DCO_BUILD_TESTS=OFF (the toolchain "

@@ -10,4 +10,5 @@
 #include "co_od.h"
 #include "co_port.h"
 #include "co_types.h"
+#include "co_version.h"
 #endif /* CO_H */

@@ -27,8 +27,8 @@
 #include "../linux/nvm_file.h"
 #include "../linux/socketcan.h"
 #include "device.h"
+#include "emu_version.h" /* generated: EMU_VERSION, EMU_GIT_REVISION (cmake/version.cmake) */
 
-#define EMU_VERSION "0.1.0"
 #define MAX_NODES 127
 #define MAX_ARGS 16
 #define LINE_MAX_LEN 512
@@ -247,11 +247,12 @@ static void usage(FILE *out)
             "      --nvm-dir DIR       where stored parameters live (default $XDG_STATE_HOME/canopen-emu\n"
             "                          or ~/.local/state/canopen-emu)\n"
             "      --control -         read control commands from stdin even when it is not a terminal\n"
-            "      --script FILE       run control commands from FILE ('@MS command' lines, see docs/emulator.md)\n"
+            "      --script FILE       run control commands from FILE ('@MS command' lines, see canopen-emu(1))\n"
             "      --list-devices      list the device types and exit\n"
-            "  -v, --verbose           log every frame sent as well\n"
+            "  -v, --verbose           log every frame sent and received as well\n"
             "  -q, --quiet             log only problems\n"
-            "  -h, --help              this help;  --version  the version\n\n"
+            "  -h, --help              this help\n"
+            "      --version           the version (and the git revision it was built from) and exit\n\n"
             "NODE-ID is 1..127, decimal or 0x-hex; default: the device's own (see --list-devices).\n"
             "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12\n");
 }
@@ -612,7 +613,12 @@ int main(int argc, char **argv)
             usage(stdout);
             return 0;
         case 'V':
-            printf("canopen-emu %s\n", EMU_VERSION);
+            /* The revision tells builds of one version apart (a CI artefact, a bug report). */
+            if (EMU_GIT_REVISION[0] != '\0') {
+                printf("canopen-emu %s (git %s)\n", EMU_VERSION, EMU_GIT_REVISION);
+            } else {
+                printf("canopen-emu %s\n", EMU_VERSION);
+            }
             return 0;
         default:
             usage(stderr);
