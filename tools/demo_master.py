@@ -60,7 +60,9 @@ def main():
     ap.add_argument("--iface", default=os.environ.get("CO_VCAN_IFACE", "vcan0"))
     args = ap.parse_args()
 
-    nvm = tempfile.mkdtemp(prefix="canopen-emu-demo-")
+    # Removed when the program ends (its finalizer runs at exit): each demo run starts from factory defaults.
+    nvm_dir = tempfile.TemporaryDirectory(prefix="canopen-emu-demo-")
+    nvm = nvm_dir.name
     emu_args = [args.emu, "-i", args.iface, "--nvm-dir", nvm, "--control", "-"] + [f"{d}:{n}" for d, n, _ in NODES]
     step("Start the emulator: " + " ".join(["canopen-emu"] + emu_args[1:]))
     network = canopen.Network()
