@@ -18,7 +18,6 @@ docs/object-dictionaries.md.
 Environment: CO_SOURCE_DIR = repository root (default: two directories up from this file), CO_SEEDS_DIR.
 """
 
-import importlib.util
 import os
 import re
 import shutil
@@ -33,17 +32,7 @@ FACTS_DIR = REPO / "tests" / "od" / "manual_facts"
 TOOL = REPO / "tools" / "manual-facts"
 
 
-def _import_manual_facts():
-    """tools/manual_facts.py: the parsers and the facts format (tools/ is not a package)."""
-    path = REPO / "tools" / "manual_facts.py"
-    spec = importlib.util.spec_from_file_location("manual_facts", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["manual_facts"] = module  # dataclasses look their module up there while it loads
-    spec.loader.exec_module(module)
-    return module
-
-
-mf = _import_manual_facts()
+import manual_facts as mf  # tools/manual_facts.py (tests/od/conftest.py puts tools/ on the path)
 
 
 def seeds_dir():

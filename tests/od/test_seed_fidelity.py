@@ -39,10 +39,8 @@ Environment: CO_SOURCE_DIR = repository root (default: two directories up from t
 the repository is read.
 """
 
-import importlib.util
 import os
 import re
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -80,17 +78,7 @@ FIELDS = ("presence", "index", "sub", "heading", "subheading", "name", "object_c
 FACTS_DIR = REPO / "tests" / "od" / "manual_facts"
 
 
-def _import_manual_facts():
-    """tools/manual_facts.py: the facts format and its reader (tools/ is not a package)."""
-    path = REPO / "tools" / "manual_facts.py"
-    spec = importlib.util.spec_from_file_location("manual_facts", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["manual_facts"] = module  # dataclasses look their module up there while it loads
-    spec.loader.exec_module(module)
-    return module
-
-
-mf = _import_manual_facts()
+import manual_facts as mf  # tools/manual_facts.py (tests/od/conftest.py puts tools/ on the path)
 plain_int, clean, node_id_offset = mf.plain_int, mf.clean, mf.node_id_offset
 
 

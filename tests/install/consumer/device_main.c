@@ -5,23 +5,11 @@
  */
 #include <stdio.h>
 
+#include "frame_recorder.h"
 #include "device.h"
 #include "sds/sds.h"
 
 #define NODE_ID 0x0BU
-
-static co_frame_t sent[64];
-static size_t sent_count;
-
-static co_status_t record_frame(void *ctx, const co_frame_t *frame)
-{
-    (void)ctx;
-    if (sent_count == sizeof sent / sizeof sent[0]) {
-        return CO_ERR_BUSY;
-    }
-    sent[sent_count++] = *frame;
-    return CO_OK;
-}
 
 /* The caller owns the memory of the node's values and of the model (their sizes are the class's). */
 static union {
@@ -52,12 +40,6 @@ int main(void)
     (void)device_rx(&dev, &upload, now);
     (void)device_process(&dev, now);
     printf("device %s\n", dev.cls->name);
-    for (size_t i = 0U; i < sent_count; i++) {
-        printf("%03X %u", (unsigned)sent[i].id, (unsigned)sent[i].len);
-        for (size_t b = 0U; b < sent[i].len; b++) {
-            printf(" %02X", (unsigned)sent[i].data[b]);
-        }
-        printf("\n");
-    }
+    print_recorded_frames();
     return 0;
 }

@@ -6,6 +6,7 @@
  */
 #include <stdio.h>
 
+#include "frame_recorder.h"
 #include "co/co.h"
 #include "sds_od.h"
 
@@ -14,19 +15,6 @@
 #endif
 
 #define NODE_ID 0x0AU
-
-static co_frame_t sent[16];
-static size_t sent_count;
-
-static co_status_t record_frame(void *ctx, const co_frame_t *frame)
-{
-    (void)ctx;
-    if (sent_count == sizeof sent / sizeof sent[0]) {
-        return CO_ERR_BUSY;
-    }
-    sent[sent_count++] = *frame;
-    return CO_OK;
-}
 
 int main(void)
 {
@@ -48,12 +36,6 @@ int main(void)
     }
     (void)co_node_process(&node, now);
     printf("core %s\n", CO_VERSION_STRING);
-    for (size_t i = 0U; i < sent_count; i++) {
-        printf("%03X %u", (unsigned)sent[i].id, (unsigned)sent[i].len);
-        for (size_t b = 0U; b < sent[i].len; b++) {
-            printf(" %02X", (unsigned)sent[i].data[b]);
-        }
-        printf("\n");
-    }
+    print_recorded_frames();
     return 0;
 }
