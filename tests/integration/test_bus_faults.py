@@ -452,8 +452,13 @@ def test_interface_deleted_and_readded_while_polling(emulator):
             time.sleep(down_s)
             since = time.time()
             ip("set", IFACE, "up")
-            up_since = time.time()
-            recoveries.append(wait_recovered(pollers, since))
+            recovery = wait_recovered(pollers, since)
+            recoveries.append(recovery)
+            # A deleted interface is a new one when it comes back: the emulator hears it only once it has
+            # reopened its socket (it retries every 0.5 s), and a request sent before that reached no one. Its
+            # heartbeats go out from the reopened socket, so the window in which every request must be answered
+            # starts at the latest node's first heartbeat after the interface came up (kernel time stamps).
+            up_since = since + recovery[1]
             assert wait_log_count(emu, "interface is back", k + 1) == k + 1, iface_log(emu)
             time.sleep(UP_HOLD_S)
         up_windows.append((up_since, time.time()))
