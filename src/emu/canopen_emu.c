@@ -13,94 +13,28 @@
  */
 #define _GNU_SOURCE
 #include <errno.h>
-#include <fcntl.h>
 #include <getopt.h>
 #include <poll.h>
 #include <signal.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
 
-#include "../linux/nvm_file.h"
-#include "../linux/socketcan.h"
-#include "device.h"
+#include "emu.h"
+#include "emu_cmdline.h"
+#include "emu_commands.h"
+#include "emu_control.h"
+#include "emu_output.h"
+#include "emu_script.h"
 #include "emu_version.h" /* generated: EMU_VERSION, EMU_GIT_REVISION (cmake/version.cmake) */
-
-#define MAX_NODES 127
-#define MAX_ARGS 16
-#define LINE_MAX_LEN 512
-
-enum { LOG_QUIET = 0, LOG_NORMAL = 1, LOG_VERBOSE = 2 };
-
-#define LOCAL_QUEUE_LEN 4096U
-
-typedef struct emu_node {
-    device_t dev;
-    void *values;
-    void *model;
-    co_port_t port;
-    nvm_file_t nvm;
-    uint8_t cmdline_id;
-    size_t index;           /* position in emu.nodes */
-    char key[64];
-    co_time_us_t deadline;  /* what device_process last returned */
-    bool dirty;             /* a frame concerned the node or a command ran on it: process before sleeping */
-} emu_node_t;
-
-/* Frames sent by local nodes, waiting to be offered to the other local nodes. */
-typedef struct local_frame {
-    co_frame_t frame;
-    size_t sender;
-} local_frame_t;
-
-typedef struct script_line {
-    co_time_us_t at;
-    char text[LINE_MAX_LEN];
-} script_line_t;
-
-typedef struct emu {
-    emu_node_t *nodes[MAX_NODES];
-    size_t n_nodes;
-    socketcan_t can;
-    local_frame_t local[LOCAL_QUEUE_LEN];
-    size_t local_head;
-    size_t local_count;
-    unsigned long local_lost;
-    co_time_us_t start;
-    int log_level;
-    script_line_t *script;
-    size_t script_len;
-    size_t script_pos;
-    bool control_stdin;
-    bool stdin_open;
-    char stdin_buf[LINE_MAX_LEN * 4];
-    size_t stdin_fill;
-    bool quit;
-} emu_t;
 
 static volatile sig_atomic_t stop_signal;
 
 static void on_signal(int sig) { stop_signal = sig; }
 
 static emu_t emu;
-
-static void logline(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void logline(int level, const char *fmt, ...)
-{
-    if (level > emu.log_level) {
-        return;
-    }
-    char text[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    (void)vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
-    const co_time_us_t t = socketcan_now_us() - emu.start;
-    fprintf(stderr, "[%8.3f] %s\n", (double)t / 1e6, text);
-}
 
 /* The port's lines are all problems or their end (interface down / up again, gone / back, error frames, frames
  * lost, a failed send): shown with -q too, which keeps only problems. */
@@ -115,8 +49,7 @@ static void device_print(void *ctx, const device_t *dev, const char *line)
     (void)ctx;
     /* Before co_node_init (a model loading its own NVM at power-on) the node has no ID yet: the configured one. */
     const unsigned id = co_node_id(&dev->node) != 0U ? co_node_id(&dev->node) : dev->cfg.node_id;
-    printf("node %u: %s\n", id, line);
-    fflush(stdout);
+    reply("node %u: %s", id, line);
 }
 
 static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
@@ -236,89 +169,6 @@ static co_status_t port_bit_rate(void *ctx, uint32_t kbit)
     return CO_OK;
 }
 
-/* ---- command line ---- */
-
-static void usage(FILE *out)
-{
-    fprintf(out,
-            "usage: canopen-emu [-i IFACE] [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID] ...\n"
-            "Emulates CANopen devices on a SocketCAN interface (default vcan0).\n\n"
-            "  -i, --interface IFACE   CAN interface (default vcan0)\n"
-            "      --nvm-dir DIR       where stored parameters live (default $XDG_STATE_HOME/canopen-emu\n"
-            "                          or ~/.local/state/canopen-emu)\n"
-            "      --control -         read control commands from stdin even when it is not a terminal\n"
-            "      --script FILE       run control commands from FILE ('@MS command' lines, see canopen-emu(1))\n"
-            "      --list-devices      list the device types and exit\n"
-            "  -v, --verbose           log every frame sent and received as well\n"
-            "  -q, --quiet             log only problems\n"
-            "  -h, --help              this help\n"
-            "      --version           the version (and the git revision it was built from) and exit\n\n"
-            "NODE-ID is 1..127, decimal or 0x-hex; default: the device's own (see --list-devices).\n"
-            "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12\n");
-}
-
-static void list_devices(FILE *out)
-{
-    for (size_t i = 0U; device_classes[i] != NULL; i++) {
-        const device_class_t *c = device_classes[i];
-        fprintf(out, "%-12s node-ID %-3u %s", c->name, c->default_node_id, c->summary);
-        if (c->variants != NULL) {
-            fprintf(out, " (variants:");
-            for (size_t v = 0U; c->variants[v] != NULL; v++) {
-                fprintf(out, " %s%s", c->variants[v], v == 0U ? "*" : "");
-            }
-            fprintf(out, ")");
-        }
-        fprintf(out, "\n");
-    }
-}
-
-/* DEVICE[/VARIANT][:NODE-ID] */
-static bool parse_spec(const char *spec, const device_class_t **cls, char *variant, size_t vlen, uint8_t *id)
-{
-    char name[64];
-    const char *colon = strchr(spec, ':');
-    const size_t nlen = colon != NULL ? (size_t)(colon - spec) : strlen(spec);
-    if (nlen == 0U || nlen >= sizeof name) {
-        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID]\n", spec);
-        return false;
-    }
-    memcpy(name, spec, nlen);
-    name[nlen] = '\0';
-    variant[0] = '\0';
-    char *slash = strchr(name, '/');
-    if (slash != NULL) {
-        *slash = '\0';
-        (void)snprintf(variant, vlen, "%s", slash + 1);
-    }
-    *cls = device_find_class(name);
-    if (*cls == NULL) {
-        fprintf(stderr, "canopen-emu: unknown device '%s'; known devices:\n", name);
-        list_devices(stderr);
-        return false;
-    }
-    *id = (*cls)->default_node_id;
-    if (colon != NULL) {
-        long long v;
-        if (!device_parse_int(colon + 1, 1, 127, &v)) {
-            fprintf(stderr, "canopen-emu: bad node-ID '%s' in '%s': use 1..127 (decimal or 0x-hex)\n", colon + 1, spec);
-            return false;
-        }
-        *id = (uint8_t)v;
-    }
-    if (variant[0] != '\0') {
-        bool found = false;
-        for (size_t v = 0U; (*cls)->variants != NULL && (*cls)->variants[v] != NULL; v++) {
-            found = found || strcmp((*cls)->variants[v], variant) == 0;
-        }
-        if (!found) {
-            fprintf(stderr, "canopen-emu: device %s has no variant '%s' (see --list-devices)\n", name, variant);
-            return false;
-        }
-    }
-    return true;
-}
-
 static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint8_t id, const char *iface,
                             const char *nvm_dir, size_t index, co_time_us_t power_on)
 {
@@ -366,206 +216,6 @@ static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint
     return n;
 }
 
-/* ---- control commands ---- */
-
-static int split(char *line, char **argv)
-{
-    int argc = 0;
-    char *p = line;
-    while (*p != '\0' && argc < MAX_ARGS) {
-        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
-            p++;
-        }
-        if (*p == '\0' || *p == '#') {
-            break;
-        }
-        if (*p == '"') {
-            argv[argc++] = ++p;
-            while (*p != '\0' && *p != '"') {
-                p++;
-            }
-        } else {
-            argv[argc++] = p;
-            while (*p != '\0' && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n') {
-                p++;
-            }
-        }
-        if (*p != '\0') {
-            *p++ = '\0';
-        }
-    }
-    return argc;
-}
-
-static void help(void)
-{
-    printf("commands (NODE = node-ID, decimal or 0x-hex, or 'all'):\n"
-           "  list                         the nodes\n"
-           "  show NODE                    NMT state, node-ID, active errors\n"
-           "  get NODE INDEX[:SUB]         an object's value (hex index/sub: 0x2002:06 or 2002:6)\n"
-           "  set NODE INDEX[:SUB] VALUE   write a value as the device itself would (inputs, measurements)\n"
-           "  power-cycle NODE             restart the node as switching its supply off and on would\n"
-           "  emcy NODE CODE [REG [B0..B4]]  raise a raw CiA error (EMCY, 0x1001, 0x1003)\n"
-           "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
-           "  help [NODE]                  this text, or the device commands of NODE\n"
-           "  quit                         stop the emulator\n");
-    fflush(stdout);
-}
-
-static void run_command(char *line)
-{
-    char *argv[MAX_ARGS];
-    const int argc = split(line, argv);
-    if (argc == 0) {
-        return;
-    }
-    const co_time_us_t now = socketcan_now_us();
-    if (strcmp(argv[0], "quit") == 0 || strcmp(argv[0], "exit") == 0) {
-        emu.quit = true;
-        return;
-    }
-    if (strcmp(argv[0], "help") == 0 && argc == 1) {
-        help();
-        return;
-    }
-    if (strcmp(argv[0], "list") == 0) {
-        for (size_t i = 0U; i < emu.n_nodes; i++) {
-            const emu_node_t *n = emu.nodes[i];
-            printf("node %u: %s (started as %u) %s\n", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
-                   co_nmt_state_name(co_node_state(&n->dev.node)));
-        }
-        fflush(stdout);
-        return;
-    }
-    if (argc < 2) {
-        printf("error: '%s' needs a NODE (try help)\n", argv[0]);
-        fflush(stdout);
-        return;
-    }
-    long long id = -1;
-    const bool all = strcmp(argv[1], "all") == 0;
-    if (!all && !device_parse_int(argv[1], 0, 255, &id)) {
-        printf("error: '%s' is not a node-ID\n", argv[1]);
-        fflush(stdout);
-        return;
-    }
-    bool matched = false;
-    for (size_t i = 0U; i < emu.n_nodes; i++) {
-        emu_node_t *n = emu.nodes[i];
-        if (!all && co_node_id(&n->dev.node) != id && !(co_node_id(&n->dev.node) == CO_NODE_ID_UNCONFIGURED && n->cmdline_id == id)) {
-            continue;
-        }
-        matched = true;
-        if (strcmp(argv[0], "help") == 0) {
-            printf("node %u (%s) commands:\n%s\n", co_node_id(&n->dev.node), n->dev.cls->name,
-                   n->dev.cls->commands_help != NULL ? n->dev.cls->commands_help : "  (only the common ones)");
-            fflush(stdout);
-            continue;
-        }
-        argv[1] = argv[0];
-        const device_cmd_result_t r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
-        n->dirty = true;
-        argv[1] = argv[0];
-        if (r == DEVICE_CMD_UNKNOWN) {
-            printf("node %u: error: unknown command '%s' (try help %u)\n", co_node_id(&n->dev.node), argv[0],
-                   co_node_id(&n->dev.node));
-            fflush(stdout);
-        }
-    }
-    if (!matched) {
-        printf("error: no node %s\n", argv[1]);
-        fflush(stdout);
-    }
-}
-
-static bool load_script(const char *path)
-{
-    FILE *f = fopen(path, "r");
-    if (f == NULL) {
-        fprintf(stderr, "canopen-emu: cannot read script %s: %s\n", path, strerror(errno));
-        return false;
-    }
-    char line[LINE_MAX_LEN];
-    co_time_us_t at = 0U;
-    size_t cap = 0U;
-    unsigned lineno = 0U;
-    while (fgets(line, sizeof line, f) != NULL) {
-        lineno++;
-        char *p = line;
-        while (*p == ' ' || *p == '\t') {
-            p++;
-        }
-        if (*p == '\0' || *p == '\n' || *p == '#') {
-            continue;
-        }
-        if (*p == '@') {
-            char *end = NULL;
-            const bool relative = p[1] == '+';
-            const double ms = strtod(p + (relative ? 2 : 1), &end);
-            if (end == p + 1 || ms < 0.0 || (*end != ' ' && *end != '\t' && *end != '\n' && *end != '\0')) {
-                fprintf(stderr, "canopen-emu: %s:%u: bad time (use '@MS command' or '@+MS command')\n", path, lineno);
-                fclose(f);
-                return false;
-            }
-            at = (relative ? at : 0U) + (co_time_us_t)(ms * 1000.0);
-            p = end;
-        }
-        if (emu.script_len == cap) {
-            cap = cap == 0U ? 32U : cap * 2U;
-            script_line_t *grown = realloc(emu.script, cap * sizeof *grown);
-            if (grown == NULL) {
-                fclose(f);
-                return false;
-            }
-            emu.script = grown;
-        }
-        emu.script[emu.script_len].at = at;
-        (void)snprintf(emu.script[emu.script_len].text, LINE_MAX_LEN, "%s", p);
-        emu.script_len++;
-    }
-    fclose(f);
-    return true;
-}
-
-static void read_stdin(void)
-{
-    const ssize_t r = read(STDIN_FILENO, emu.stdin_buf + emu.stdin_fill, sizeof emu.stdin_buf - emu.stdin_fill - 1U);
-    if (r <= 0) {
-        if (r == 0 || (errno != EAGAIN && errno != EINTR)) {
-            emu.stdin_open = false; /* end of input: keep running (stop with a signal or 'quit') */
-        }
-        return;
-    }
-    emu.stdin_fill += (size_t)r;
-    emu.stdin_buf[emu.stdin_fill] = '\0';
-    char *start = emu.stdin_buf;
-    char *nl;
-    while ((nl = strchr(start, '\n')) != NULL) {
-        *nl = '\0';
-        run_command(start);
-        start = nl + 1;
-    }
-    emu.stdin_fill = strlen(start);
-    memmove(emu.stdin_buf, start, emu.stdin_fill);
-    if (emu.stdin_fill >= sizeof emu.stdin_buf - 1U) {
-        emu.stdin_fill = 0U; /* an overlong line is dropped */
-    }
-}
-
-static const char *default_nvm_dir(char *buf, size_t len)
-{
-    const char *state = getenv("XDG_STATE_HOME");
-    const char *home = getenv("HOME");
-    if (state != NULL && state[0] == '/') {
-        (void)snprintf(buf, len, "%s/canopen-emu", state);
-    } else if (home != NULL && home[0] != '\0') {
-        (void)snprintf(buf, len, "%s/.local/state/canopen-emu", home);
-    } else {
-        (void)snprintf(buf, len, "./canopen-emu-nvm");
-    }
-    return buf;
-}
-
 int main(int argc, char **argv)
 {
     const char *iface = "vcan0";
@@ -574,7 +224,7 @@ int main(int argc, char **argv)
     char nvm_default[PATH_MAX];
     emu.log_level = LOG_NORMAL;
     emu.start = socketcan_now_us();
-    emu.control_stdin = isatty(STDIN_FILENO) != 0;
+    emu.control.enabled = isatty(STDIN_FILENO) != 0;
     static const struct option opts[] = {
         {"interface", required_argument, NULL, 'i'}, {"nvm-dir", required_argument, NULL, 'n'},
         {"control", required_argument, NULL, 'c'},   {"script", required_argument, NULL, 's'},
@@ -595,7 +245,7 @@ int main(int argc, char **argv)
                 fprintf(stderr, "canopen-emu: --control takes '-' (stdin)\n");
                 return 2;
             }
-            emu.control_stdin = true;
+            emu.control.enabled = true;
             break;
         case 's':
             script = optarg;
@@ -625,6 +275,7 @@ int main(int argc, char **argv)
             return 2;
         }
     }
+    output_init(emu.start, emu.log_level);
     if (optind >= argc) {
         fprintf(stderr, "canopen-emu: no device given\n");
         usage(stderr);
@@ -642,7 +293,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "canopen-emu: %s\n", err);
         return 1;
     }
-    if (script != NULL && !load_script(script)) {
+    if (script != NULL && !script_load(&emu.script, script)) {
         return 2;
     }
     /* Parse every spec first, so a bad one fails before anything starts. */
@@ -682,18 +333,14 @@ int main(int argc, char **argv)
         }
         emu.nodes[emu.n_nodes++] = n;
     }
-    if (emu.control_stdin) {
-        (void)fcntl(STDIN_FILENO, F_SETFL, fcntl(STDIN_FILENO, F_GETFL) | O_NONBLOCK);
-        emu.stdin_open = true;
-    }
+    control_start(&emu.control);
 
     struct pollfd pfd[2];
     while (!emu.quit && stop_signal == 0) {
         co_time_us_t now = socketcan_now_us();
-        while (emu.script_pos < emu.script_len && now - emu.start >= emu.script[emu.script_pos].at) {
-            char line[LINE_MAX_LEN];
-            (void)snprintf(line, sizeof line, "%s", emu.script[emu.script_pos++].text);
-            run_command(line);
+        char line[SCRIPT_LINE_MAX];
+        while (script_take_due(&emu.script, now - emu.start, line, sizeof line)) {
+            run_command(&emu, line);
         }
         /* Frames local nodes sent are offered to the others (which may answer: loop until quiet). */
         co_time_us_t next = CO_NEVER;
@@ -726,15 +373,16 @@ int main(int argc, char **argv)
         } while (emu.local_count > 0U);
         const co_time_us_t r = socketcan_service(&emu.can, now);
         next = r < next ? r : next;
-        if (emu.script_pos < emu.script_len && emu.start + emu.script[emu.script_pos].at < next) {
-            next = emu.start + emu.script[emu.script_pos].at;
+        const co_time_us_t script_at = script_next_at(&emu.script);
+        if (script_at != CO_NEVER && emu.start + script_at < next) {
+            next = emu.start + script_at;
         }
         nfds_t nfds = 0U;
         pfd[nfds].fd = emu.can.fd; /* -1 while the interface is gone: poll ignores it */
         pfd[nfds].events = socketcan_poll_events(&emu.can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
         pfd[nfds].revents = 0;
         nfds++;
-        if (emu.stdin_open) {
+        if (emu.control.open) {
             pfd[nfds].fd = STDIN_FILENO;
             pfd[nfds].events = POLLIN;
             pfd[nfds].revents = 0;
@@ -780,8 +428,8 @@ int main(int argc, char **argv)
                 }
             }
         }
-        if (emu.stdin_open && nfds > 1U && (pfd[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
-            read_stdin();
+        if (emu.control.open && nfds > 1U && (pfd[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+            control_read(&emu);
         }
     }
     logline(LOG_NORMAL, "stopping%s", stop_signal != 0 ? " (signal)" : "");
@@ -810,6 +458,6 @@ int main(int argc, char **argv)
         free(emu.nodes[i]->model);
         free(emu.nodes[i]);
     }
-    free(emu.script);
+    script_free(&emu.script);
     return 0;
 }

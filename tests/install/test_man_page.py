@@ -233,10 +233,10 @@ def command_synopses(help_text):
 
 
 def emulator_help_commands(source_dir):
-    """The common commands as the running emulator's 'help' prints them (help() of canopen_emu.c)."""
-    source = (source_dir / "src/emu/canopen_emu.c").read_text(encoding="utf-8")
+    """The common commands as the running emulator's 'help' prints them (help() of emu_commands.c)."""
+    source = (source_dir / "src/emu/emu_commands.c").read_text(encoding="utf-8")
     m = re.search(r"^static void help\(void\)\n\{\n(.*?)^\}", source, re.S | re.M)
-    assert m, "src/emu/canopen_emu.c has no 'static void help(void)' function any more: update this test"
+    assert m, "src/emu/emu_commands.c has no 'static void help(void)' function any more: update this test"
     text = c_string_literals(m.group(1))
     body = text.split("\n", 1)[1]  # the first line is the heading "commands (NODE = ...):"
     synopses = command_synopses(body)
@@ -384,7 +384,7 @@ def test_every_command_of_the_emulator_help_is_documented(page, source_dir):
     tags = {normalized(tag) for tag, _ in tp_entries(section(page, "CONTROL COMMANDS"))}
     commands = emulator_help_commands(source_dir)
     missing = [c for c in commands if c not in tags]
-    assert not missing, (f"commands of help() in src/emu/canopen_emu.c missing from CONTROL COMMANDS of {PAGE} "
+    assert not missing, (f"commands of help() in src/emu/emu_commands.c missing from CONTROL COMMANDS of {PAGE} "
                          f"(the .TP tag must be the synopsis as help prints it): {missing}")
 
 

@@ -1,0 +1,27 @@
+/*
+ * The command line of canopen-emu: its help, the device list, DEVICE[/VARIANT][:NODE-ID] arguments and the default
+ * NVM directory. Messages about a bad argument go to stderr.
+ */
+#ifndef EMU_CMDLINE_H
+#define EMU_CMDLINE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "device.h"
+
+void usage(FILE *out);
+
+/** The device types, one a line (--list-devices). */
+void list_devices(FILE *out);
+
+/** DEVICE[/VARIANT][:NODE-ID]: the class, the variant ("" for the default) and the node-ID (the class's default
+ *  when none is given). false, with a message, when the argument is not one. */
+bool parse_spec(const char *spec, const device_class_t **cls, char *variant, size_t vlen, uint8_t *id);
+
+/** $XDG_STATE_HOME/canopen-emu, ~/.local/state/canopen-emu, or ./canopen-emu-nvm, written to buf. */
+const char *default_nvm_dir(char *buf, size_t len);
+
+#endif /* EMU_CMDLINE_H */

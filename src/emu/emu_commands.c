@@ -1,0 +1,110 @@
+/* The command language: see emu_commands.h. Device commands are device_command()'s (devices/device.c). */
+#define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
+#include "emu_commands.h"
+
+#include <string.h>
+
+#include "emu_output.h"
+
+static int split(char *line, char **argv)
+{
+    int argc = 0;
+    char *p = line;
+    while (*p != '\0' && argc < MAX_ARGS) {
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
+            p++;
+        }
+        if (*p == '\0' || *p == '#') {
+            break;
+        }
+        if (*p == '"') {
+            argv[argc++] = ++p;
+            while (*p != '\0' && *p != '"') {
+                p++;
+            }
+        } else {
+            argv[argc++] = p;
+            while (*p != '\0' && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n') {
+                p++;
+            }
+        }
+        if (*p != '\0') {
+            *p++ = '\0';
+        }
+    }
+    return argc;
+}
+
+static void help(void)
+{
+    reply("commands (NODE = node-ID, decimal or 0x-hex, or 'all'):\n"
+          "  list                         the nodes\n"
+          "  show NODE                    NMT state, node-ID, active errors\n"
+          "  get NODE INDEX[:SUB]         an object's value (hex index/sub: 0x2002:06 or 2002:6)\n"
+          "  set NODE INDEX[:SUB] VALUE   write a value as the device itself would (inputs, measurements)\n"
+          "  power-cycle NODE             restart the node as switching its supply off and on would\n"
+          "  emcy NODE CODE [REG [B0..B4]]  raise a raw CiA error (EMCY, 0x1001, 0x1003)\n"
+          "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
+          "  help [NODE]                  this text, or the device commands of NODE\n"
+          "  quit                         stop the emulator");
+}
+
+void run_command(emu_t *emu, char *line)
+{
+    char *argv[MAX_ARGS];
+    const int argc = split(line, argv);
+    if (argc == 0) {
+        return;
+    }
+    const co_time_us_t now = socketcan_now_us();
+    if (strcmp(argv[0], "quit") == 0 || strcmp(argv[0], "exit") == 0) {
+        emu->quit = true;
+        return;
+    }
+    if (strcmp(argv[0], "help") == 0 && argc == 1) {
+        help();
+        return;
+    }
+    if (strcmp(argv[0], "list") == 0) {
+        for (size_t i = 0U; i < emu->n_nodes; i++) {
+            const emu_node_t *n = emu->nodes[i];
+            reply("node %u: %s (started as %u) %s", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
+                  co_nmt_state_name(co_node_state(&n->dev.node)));
+        }
+        return;
+    }
+    if (argc < 2) {
+        reply("error: '%s' needs a NODE (try help)", argv[0]);
+        return;
+    }
+    long long id = -1;
+    const bool all = strcmp(argv[1], "all") == 0;
+    if (!all && !device_parse_int(argv[1], 0, 255, &id)) {
+        reply("error: '%s' is not a node-ID", argv[1]);
+        return;
+    }
+    bool matched = false;
+    for (size_t i = 0U; i < emu->n_nodes; i++) {
+        emu_node_t *n = emu->nodes[i];
+        if (!all && co_node_id(&n->dev.node) != id && !(co_node_id(&n->dev.node) == CO_NODE_ID_UNCONFIGURED && n->cmdline_id == id)) {
+            continue;
+        }
+        matched = true;
+        if (strcmp(argv[0], "help") == 0) {
+            reply("node %u (%s) commands:\n%s", co_node_id(&n->dev.node), n->dev.cls->name,
+                  n->dev.cls->commands_help != NULL ? n->dev.cls->commands_help : "  (only the common ones)");
+            continue;
+        }
+        argv[1] = argv[0];
+        const device_cmd_result_t r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
+        n->dirty = true;
+        argv[1] = argv[0];
+        if (r == DEVICE_CMD_UNKNOWN) {
+            reply("node %u: error: unknown command '%s' (try help %u)", co_node_id(&n->dev.node), argv[0],
+                  co_node_id(&n->dev.node));
+        }
+    }
+    if (!matched) {
+        reply("error: no node %s", argv[1]);
+    }
+}
