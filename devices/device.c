@@ -4,6 +4,7 @@
  */
 #include "device.h"
 
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -163,14 +164,59 @@ void device_printf(const device_t *dev, const char *fmt, ...)
     }
 }
 
-bool device_parse_int(const char *text, long long lo, long long hi, long long *out)
+/* [+|-] then decimal digits or 0x and hex digits, nothing else: strtoll's base 0 read a leading zero as octal
+ * ("010" was 8, "08" no number), skipped leading blanks and clamped an overflow without a word. */
+static bool parse_sign_magnitude(const char *text, bool *negative, unsigned long long *magnitude)
 {
-    if (text == NULL || *text == '\0') {
+    const char *p = text;
+    *negative = *p == '-';
+    if (*p == '-' || *p == '+') {
+        p++;
+    }
+    unsigned base = 10U;
+    if (p[0] == '0' && (p[1] == 'x' || p[1] == 'X')) {
+        base = 16U;
+        p += 2;
+    }
+    if (*p == '\0') {
         return false;
     }
-    char *end = NULL;
-    const long long v = strtoll(text, &end, 0);
-    if (end == NULL || *end != '\0' || v < lo || v > hi) {
+    unsigned long long v = 0U;
+    for (; *p != '\0'; p++) {
+        const char c = *p;
+        const unsigned d = (c >= '0' && c <= '9') ? (unsigned)(c - '0')
+                           : (c >= 'a' && c <= 'f') ? (unsigned)(c - 'a' + 10)
+                           : (c >= 'A' && c <= 'F') ? (unsigned)(c - 'A' + 10) : 16U;
+        if (d >= base || v > (ULLONG_MAX - d) / base) {
+            return false;
+        }
+        v = v * base + d;
+    }
+    *magnitude = v;
+    return true;
+}
+
+bool device_parse_int(const char *text, long long lo, long long hi, long long *out)
+{
+    bool negative;
+    unsigned long long magnitude;
+    if (text == NULL || !parse_sign_magnitude(text, &negative, &magnitude)) {
+        return false;
+    }
+    const unsigned long long most_negative = (unsigned long long)LLONG_MAX + 1U;
+    long long v;
+    if (negative) {
+        if (magnitude > most_negative) {
+            return false;
+        }
+        v = magnitude == most_negative ? LLONG_MIN : -(long long)magnitude;
+    } else {
+        if (magnitude > (unsigned long long)LLONG_MAX) {
+            return false;
+        }
+        v = (long long)magnitude;
+    }
+    if (v < lo || v > hi) {
         return false;
     }
     *out = v;

@@ -136,7 +136,8 @@ void device_printf(const device_t *dev, const char *fmt, ...)
 #endif
     ;
 
-/** Parses an unsigned/signed number (decimal or 0x-hex). Returns false if it is not one or out of [lo, hi]. */
+/** Parses a number: an optional sign, then decimal digits or 0x and hex digits ("010" is ten: never octal). Returns
+ *  false if the text is anything else (blanks included), overflows, or is out of [lo, hi]. */
 bool device_parse_int(const char *text, long long lo, long long hi, long long *out);
 
 /**

@@ -236,3 +236,13 @@ def test_user_errors_have_actionable_messages(tmp_path):
     assert r.returncode == 1 and "not writable" in r.stderr and "--nvm-dir" in r.stderr
     r = run_emu("--list-devices")
     assert r.returncode == 0 and [line.split()[0] for line in r.stdout.splitlines()] == ["pro-ionizer", "sds", "buerkert"]
+
+
+def test_node_ids_and_numbers_with_leading_zeros_are_decimal(emulator, capture):
+    # "decimal or 0x hex" everywhere: a leading zero never makes a number octal (010 was node 8, 0100 was 64).
+    emu = emulator("pro-ionizer:010", "sds:0x014")
+    capture.wait_for(0x70A, data=b"\x00", timeout=3)
+    capture.wait_for(0x714, data=b"\x00", timeout=3)
+    assert capture.matching(0x708) == [] and capture.matching(0x710) == []
+    assert "sds node-ID 20" in emu.command("show 020", expect="node 20:")
+    emu.command("set 010 0x1017 0100", expect="node 10: 0x1017:00 = 100")
