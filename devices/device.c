@@ -4,7 +4,9 @@
  */
 #include "device.h"
 
+#include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +46,13 @@ static void tramp_reset(void *ctx, co_node_t *node, co_reset_t what)
     if (dev->cls->on_reset != NULL) {
         dev->cls->on_reset(dev, what);
     }
+}
+
+static co_status_t tramp_store(void *ctx, co_node_t *node, uint16_t index, uint8_t sub)
+{
+    device_t *dev = dev_of(ctx);
+    (void)node;
+    return dev->cls->on_store != NULL ? dev->cls->on_store(dev, index, sub) : CO_OK;
 }
 
 static void tramp_event(void *ctx, co_node_t *node, const co_event_t *ev)
@@ -113,6 +122,7 @@ co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, 
     dev->hooks.on_nmt_change = tramp_nmt;
     dev->hooks.on_reset = tramp_reset;
     dev->hooks.on_event = tramp_event;
+    dev->hooks.on_store = tramp_store;
     if (cls->model_size > 0U) {
         memset(model, 0, cls->model_size); /* only here: a power cycle keeps the environment */
     }
@@ -307,6 +317,47 @@ static void print_value(device_t *dev, uint16_t index, uint8_t sub)
     }
 }
 
+static const char *type_name(uint8_t type)
+{
+    switch (type) {
+    case CO_T_BOOLEAN: return "BOOLEAN";
+    case CO_T_INTEGER8: return "INTEGER8";
+    case CO_T_INTEGER16: return "INTEGER16";
+    case CO_T_INTEGER32: return "INTEGER32";
+    case CO_T_INTEGER64: return "INTEGER64";
+    case CO_T_UNSIGNED8: return "UNSIGNED8";
+    case CO_T_UNSIGNED16: return "UNSIGNED16";
+    case CO_T_UNSIGNED32: return "UNSIGNED32";
+    case CO_T_UNSIGNED64: return "UNSIGNED64";
+    case CO_T_REAL32: return "REAL32";
+    case CO_T_OCTET_STRING: return "OCTET_STRING";
+    case CO_T_DOMAIN: return "DOMAIN";
+    default: return "type";
+    }
+}
+
+/* The values an integer object of at most 8 bytes holds: for the signed types -2^(n-1)..2^(n-1)-1, for BOOLEAN 0..1,
+ * for the unsigned ones (and short octet strings, written as a number) 0..2^n-1, n = 8 * size. As magnitudes, so
+ * that UNSIGNED64 fits. */
+typedef struct integer_range {
+    bool is_signed;
+    unsigned long long most_negative; /* magnitude of the lowest value (0 for unsigned types) */
+    unsigned long long highest;
+} integer_range_t;
+
+static integer_range_t integer_range(const co_od_entry_t *e)
+{
+    const unsigned bits = 8U * e->size;
+    const unsigned long long all_ones = bits >= 64U ? ULLONG_MAX : (1ULL << bits) - 1U;
+    integer_range_t r = {false, 0U, e->type == CO_T_BOOLEAN ? 1U : all_ones};
+    if (e->type == CO_T_INTEGER8 || e->type == CO_T_INTEGER16 || e->type == CO_T_INTEGER32 || e->type == CO_T_INTEGER64) {
+        r.is_signed = true;
+        r.highest = all_ones >> 1;
+        r.most_negative = r.highest + 1U;
+    }
+    return r;
+}
+
 static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *text)
 {
     uint16_t index;
@@ -327,10 +378,15 @@ static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *
         memcpy(wire, text, len);
     } else if (e->type == CO_T_REAL32) {
         char *end = NULL;
+        errno = 0;
         const float f = strtof(text, &end);
         uint32_t u;
-        if (end == NULL || *end != '\0') {
+        if (end == NULL || end == text || *end != '\0') {
             device_printf(dev, "error: '%s' is not a number", text);
+            return DEVICE_CMD_ERROR;
+        }
+        if (errno == ERANGE && isinf(f)) { /* beyond the largest REAL32; an explicit "inf" is taken as it is */
+            device_printf(dev, "error: %s is out of range: 0x%04X:%02X (REAL32) holds -3.4e38..3.4e38", text, index, sub);
             return DEVICE_CMD_ERROR;
         }
         memcpy(&u, &f, sizeof u);
@@ -338,13 +394,28 @@ static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *
             wire[i] = (uint8_t)(u >> (8U * i));
         }
     } else if (e->size <= 8U) {
-        long long v;
-        if (!device_parse_int(text, -0x7FFFFFFFFFFFFFFFLL - 1, 0x7FFFFFFFFFFFFFFFLL, &v)) {
+        /* Checked against the object's type before it is cut to e->size bytes: 70000 stored 4464 in an UNSIGNED16,
+         * -1 stored 65535, and 65636 stored 100, which then passed the Eltex rule that refuses 50. */
+        bool negative;
+        unsigned long long magnitude;
+        if (!parse_sign_magnitude(text, &negative, &magnitude)) {
             device_printf(dev, "error: '%s' is not a number", text);
             return DEVICE_CMD_ERROR;
         }
+        const integer_range_t range = integer_range(e);
+        if (negative ? magnitude > range.most_negative : magnitude > range.highest) {
+            if (range.is_signed) {
+                device_printf(dev, "error: %s is out of range: 0x%04X:%02X (%s) holds -%llu..%llu", text, index, sub,
+                              type_name(e->type), range.most_negative, range.highest);
+            } else {
+                device_printf(dev, "error: %s is out of range: 0x%04X:%02X (%s) holds 0..%llu", text, index, sub,
+                              type_name(e->type), range.highest);
+            }
+            return DEVICE_CMD_ERROR;
+        }
+        const unsigned long long twos_complement = negative ? 0U - magnitude : magnitude;
         for (size_t i = 0U; i < e->size; i++) {
-            wire[i] = (uint8_t)((unsigned long long)v >> (8U * i));
+            wire[i] = (uint8_t)(twos_complement >> (8U * i));
         }
     } else {
         device_printf(dev, "error: %s cannot be set from the command line", addr);

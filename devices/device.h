@@ -73,6 +73,9 @@ typedef struct device_class {
     /** A core event, before the runner's cfg.on_event sees it (may be NULL): lets a model follow what the
      *  core did on its own, e.g. an LSS store (CO_EV_STORE with index 0x7E5). */
     void (*on_event)(device_t *dev, const co_event_t *ev);
+    /** The core's on_store hook (co_node.h; may be NULL): stages the model's own data that belongs to a store
+     *  (0x1010, 0x1011, LSS store 0x7E5) so that it becomes durable with it, all or none. */
+    co_status_t (*on_store)(device_t *dev, uint16_t index, uint8_t sub);
 } device_class_t;
 
 /** What the runner gives an instance. */

@@ -11,6 +11,9 @@
  * return at the next reset, as CiA 301 prescribes; the running values do not change.
  *
  * LSS blob (area CO_NVM_LSS): "COL1" | node-ID (u8) | bit-timing index (u8) | 0 | 0 | CRC-32 of bytes 0..7.
+ *
+ * A store is answered with the result of the port's last commit, which makes all of it durable (the device's
+ * areas of the same store, from the on_store hook, and the core's area) or none of it (co_port_t.nvm_commit).
  */
 #include "priv/co_priv.h"
 
@@ -210,11 +213,42 @@ static bool at_relative_default(co_node_t *node, const co_od_entry_t *e)
     return co_od_entry_u32(node, e) == def + node->node_id;
 }
 
+/* A store is one transaction of the port (co_port_t.nvm_commit): the device's areas first, committed with
+ * CO_NVM_MORE by its on_store hook, then the core's own area, staged and committed last, which makes the whole
+ * store durable or none of it. The device goes first because a port may stage one area at a time. */
+static void discard_store(co_node_t *node, co_nvm_area_t own)
+{
+    (void)node->port->nvm_commit(node->port_ctx, own, CO_NVM_DISCARD);
+}
+
+static bool stage_device_areas(co_node_t *node, co_nvm_area_t own, uint16_t index, uint8_t sub)
+{
+    const co_hooks_t *h = node->hooks;
+    if (h == NULL || h->on_store == NULL || h->on_store(node->hooks_ctx, node, index, sub) == CO_OK) {
+        return true;
+    }
+    discard_store(node, own); /* what the hook committed before it failed */
+    return false;
+}
+
+/* The last commit of a store; staged_ok false: staging the core's area failed, the store is dropped. */
+static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, uint32_t total_len, bool staged_ok)
+{
+    if (!staged_ok) {
+        discard_store(node, own);
+        return CO_ERR_IO;
+    }
+    return node->port->nvm_commit(node->port_ctx, own, total_len) == CO_OK ? CO_OK : CO_ERR_IO;
+}
+
 /* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay). */
 static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
 {
     record_reader_t old;
     blob_writer_t w = {node, 0U, 0U, true};
+    if (!stage_device_areas(node, CO_NVM_PARAMS, save ? 0x1010U : 0x1011U, group)) {
+        return CO_ERR_IO;
+    }
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
     for (uint16_t i = 0U; i < node->od->count; i++) {
         const co_od_entry_t *e = &node->od->entries[i];
@@ -237,11 +271,8 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
     co_put_u32(&h[4], node->od->signature);
     co_put_u32(&h[8], w.pos);
     co_put_u32(&h[12], w.crc);
-    if (!w.ok || node->port->nvm_write(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) != CO_OK ||
-        node->port->nvm_commit(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w.pos) != CO_OK) {
-        return CO_ERR_IO;
-    }
-    return CO_OK;
+    const bool staged = w.ok && node->port->nvm_write(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) == CO_OK;
+    return commit_store(node, CO_NVM_PARAMS, HEADER_LEN + w.pos, staged);
 }
 
 uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
@@ -261,20 +292,34 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
     return r;
 }
 
+#define LSS_BLOB_LEN 12U
+
+static bool stage_lss(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
+{
+    uint8_t b[LSS_BLOB_LEN] = {'C', 'O', 'L', '1', node_id, bit_timing, 0U, 0U, 0U, 0U, 0U, 0U};
+    co_put_u32(&b[8], co_crc32(0U, b, 8U));
+    return node->port->nvm_write(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) == CO_OK;
+}
+
 co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 {
-    uint8_t b[12] = {'C', 'O', 'L', '1', node_id, bit_timing, 0U, 0U, 0U, 0U, 0U, 0U};
-    co_put_u32(&b[8], co_crc32(0U, b, 8U));
-    if (!have_write(node) || node->port->nvm_write(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) != CO_OK ||
-        node->port->nvm_commit(node->port_ctx, CO_NVM_LSS, sizeof b) != CO_OK) {
+    if (!have_write(node) || !stage_device_areas(node, CO_NVM_LSS, 0x7E5U, 0x17U)) {
         return CO_ERR_IO;
     }
-    return CO_OK;
+    return commit_store(node, CO_NVM_LSS, LSS_BLOB_LEN, stage_lss(node, node_id, bit_timing));
+}
+
+co_status_t co_lss_stage(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
+{
+    if (!have_write(node) || !stage_lss(node, node_id, bit_timing)) {
+        return CO_ERR_IO;
+    }
+    return node->port->nvm_commit(node->port_ctx, CO_NVM_LSS, LSS_BLOB_LEN | CO_NVM_MORE) == CO_OK ? CO_OK : CO_ERR_IO;
 }
 
 co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing)
 {
-    uint8_t b[12];
+    uint8_t b[LSS_BLOB_LEN];
     if (!have_read(node)) {
         return CO_NVM_NONE;
     }

@@ -179,12 +179,13 @@ static float quantize(float q)
 
 /* ---- NVM ---------------------------------------------------------------------------------------------- */
 
-static void nvm_save(device_t *dev)
+/* False when the port has storage and the blob could not be stored (true without storage: nothing to keep). */
+static bool nvm_save(device_t *dev)
 {
     bk_model_t *m = model_of(dev);
     const co_port_t *p = dev->cfg.port;
     if (p == NULL || p->nvm_write == NULL || p->nvm_commit == NULL) {
-        return;
+        return true;
     }
     uint8_t b[BLOB_LEN];
     memset(b, 0, sizeof b);
@@ -196,10 +197,43 @@ static void nvm_save(device_t *dev)
     put_u32(&b[16], float_bits(m->vmax));
     put_u32(&b[20], float_bits(m->vmin));
     put_u32(&b[32], co_crc32(0U, b, 32U));
-    if (p->nvm_write(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b) == CO_OK &&
-        p->nvm_commit(dev->cfg.port_ctx, CO_NVM_DEVICE, BLOB_LEN) == CO_OK) {
-        m->saves++;
+    if (p->nvm_write(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, sizeof b) != CO_OK ||
+        p->nvm_commit(dev->cfg.port_ctx, CO_NVM_DEVICE, BLOB_LEN) != CO_OK) {
+        return false;
     }
+    m->saves++;
+    return true;
+}
+
+/* What the .device blob keeps of the model. */
+typedef struct bk_stored {
+    uint64_t op_us;
+    co_time_us_t last_now;
+    uint16_t tmax, tmin;
+    float vmax, vmin;
+} bk_stored_t;
+
+static bk_stored_t stored_of(const bk_model_t *m)
+{
+    const bk_stored_t s = {m->op_us, m->last_now, m->tmax, m->tmin, m->vmax, m->vmin};
+    return s;
+}
+
+/* A write of 0x2004 that is stored at once (the manual has no save step): answered only once it is durable,
+ * else 0x06060000 with the model as it was before the write (the store rule, docs/robustness.md). */
+static uint32_t store_write(device_t *dev, const bk_stored_t *before)
+{
+    bk_model_t *m = model_of(dev);
+    if (nvm_save(dev)) {
+        return CO_ABORT_NONE;
+    }
+    m->op_us = before->op_us;
+    m->last_now = before->last_now;
+    m->tmax = before->tmax;
+    m->tmin = before->tmin;
+    m->vmax = before->vmax;
+    m->vmin = before->vmin;
+    return CO_ABORT_HARDWARE;
 }
 
 /* Loads the blob; false (model left at its power-on defaults) when there is none or it is damaged. */
@@ -331,7 +365,7 @@ static void measure(device_t *dev)
     v->x2004_07 = m->vmax;
     v->x2004_08 = m->vmin;
     if (changed) {
-        nvm_save(dev);
+        (void)nvm_save(dev); /* a measured extreme: no answer waits for it; retried at the next change or period */
     }
 }
 
@@ -474,6 +508,7 @@ static uint32_t bk_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t
                             co_od_origin_t origin)
 {
     bk_model_t *m = model_of(dev);
+    const bk_stored_t before = stored_of(m);
     (void)len;
     const uint32_t key = ((uint32_t)e->index << 8) | e->sub;
     switch (key) {
@@ -517,28 +552,25 @@ static uint32_t bk_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t
         if (!isfinite(wire_float(data))) {
             return CO_ABORT_INVALID_VALUE;
         }
+        if (e->sub == 3U) {
+            return CO_ABORT_NONE;
+        }
         if (e->sub == 7U) {
             m->vmax = wire_float(data);
-        } else if (e->sub == 8U) {
+        } else {
             m->vmin = wire_float(data);
         }
-        if (e->sub != 3U) {
-            nvm_save(dev);
-        }
-        return CO_ABORT_NONE;
+        return store_write(dev, &before);
     case 0x200404U:
         m->op_us = (uint64_t)get_u32(data) * 1000000U;
         m->last_now = dev->now;
-        nvm_save(dev);
-        return CO_ABORT_NONE;
+        return store_write(dev, &before);
     case 0x200405U:
         m->tmax = get_u16(data);
-        nvm_save(dev);
-        return CO_ABORT_NONE;
+        return store_write(dev, &before);
     case 0x200406U:
         m->tmin = get_u16(data);
-        nvm_save(dev);
-        return CO_ABORT_NONE;
+        return store_write(dev, &before);
     default:
         return CO_ABORT_NONE;
     }
@@ -594,7 +626,7 @@ static co_time_us_t bk_step(device_t *dev, co_time_us_t now)
     evaluate(dev);
 
     if (now >= m->next_save) {
-        nvm_save(dev);
+        (void)nvm_save(dev);
         m->next_save += SAVE_PERIOD_US * (1U + (now - m->next_save) / SAVE_PERIOD_US);
     }
     co_time_us_t next = m->next_save;

@@ -154,25 +154,40 @@ static uint64_t op_from_phase(const device_t *dev, uint64_t op_us)
 
 static uint64_t save_minute(const device_t *dev, uint64_t op_us) { return op_from_phase(dev, op_us) / MINUTE_US; }
 
-static void nvm_save(device_t *dev)
+/* Writes the blob with these flags (the counters as they are) and commits it: on its own (flags 0) or as one
+ * area of a store in progress (CO_NVM_MORE: the core commits the store's last area, E13/E15). */
+static co_status_t nvm_write_blob(device_t *dev, bool params_stored, bool can_off, uint32_t commit_flags)
 {
-    eltex_t *x = eltex_of(dev);
+    const eltex_t *x = eltex_of(dev);
     const co_port_t *p = dev->cfg.port;
     uint8_t b[NVM_LEN];
-    x->saved_minute = save_minute(dev, x->op_us);
     if (p == NULL || p->nvm_write == NULL || p->nvm_commit == NULL) {
-        return;
+        return CO_ERR_IO;
     }
     memset(b, 0, sizeof b);
     memcpy(b, x->cls->nvm_magic, 4U);
     b[4] = NVM_VERSION;
-    b[5] = (uint8_t)((x->params_stored ? NVM_FLAG_PARAMS_STORED : 0U) | (x->can_off ? NVM_FLAG_CAN_OFF : 0U));
+    b[5] = (uint8_t)((params_stored ? NVM_FLAG_PARAMS_STORED : 0U) | (can_off ? NVM_FLAG_CAN_OFF : 0U));
     put_u32(&b[8], (uint32_t)(x->op_us / SEC_US));
     put_u32(&b[12], (uint32_t)(x->hv_us / SEC_US));
     put_u32(&b[16], co_crc32(0U, b, 16U));
-    if ((p->nvm_write(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, NVM_LEN) != CO_OK ||
-         p->nvm_commit(dev->cfg.port_ctx, CO_NVM_DEVICE, NVM_LEN) != CO_OK) &&
-        !x->nvm_error_logged) {
+    if (p->nvm_write(dev->cfg.port_ctx, CO_NVM_DEVICE, 0U, b, NVM_LEN) != CO_OK ||
+        p->nvm_commit(dev->cfg.port_ctx, CO_NVM_DEVICE, NVM_LEN | commit_flags) != CO_OK) {
+        return CO_ERR_IO;
+    }
+    return CO_OK;
+}
+
+/* The periodic save of the counters (no store of the master's: nobody waits for an answer). */
+static void nvm_save(device_t *dev)
+{
+    eltex_t *x = eltex_of(dev);
+    x->saved_minute = save_minute(dev, x->op_us);
+    const co_port_t *p = dev->cfg.port;
+    if (p == NULL || p->nvm_write == NULL || p->nvm_commit == NULL) {
+        return;
+    }
+    if (nvm_write_blob(dev, x->params_stored, x->can_off, 0U) != CO_OK && !x->nvm_error_logged) {
         x->nvm_error_logged = true;
         device_printf(dev, "%s: counters could not be stored (NVM error)", dev->cls->name);
     }
@@ -465,34 +480,77 @@ uint32_t eltex_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *da
     }
 }
 
+/* What a 0x1010 save makes of 0x2002:06/07 (E3): the node-ID and bit timing for the LSS area, and whether
+ * CANopen is off (0x2002:07 = 9 on devices with bit_timing_9_off: the node-ID becomes "unconfigured"). */
+typedef struct saved_lss {
+    uint8_t node_id;
+    uint8_t bit_timing;   /* the pending one stays when the saved index is not in the device's table */
+    bool can_off;
+    bool bit_timing_valid;
+} saved_lss_t;
+
+static saved_lss_t lss_of_save(device_t *dev)
+{
+    const eltex_t *x = eltex_of(dev);
+    const uint8_t id = co_od_get_u8(&dev->node, 0x2002U, 0x06U);
+    const uint8_t bt = co_od_get_u8(&dev->node, 0x2002U, 0x07U);
+    saved_lss_t s;
+    s.can_off = bt == 9U && x->cls->bit_timing_9_off;
+    s.node_id = s.can_off ? CO_NODE_ID_UNCONFIGURED : id;
+    s.bit_timing_valid = !s.can_off && bt < CO_LSS_BIT_TIMING_COUNT && dev->node.bit_rates_kbit[bt] != 0U;
+    s.bit_timing = s.bit_timing_valid ? bt : dev->node.lss.pending_bit_timing;
+    return s;
+}
+
+/*
+ * A store's own data (E15): a 0x1010 save also writes the device flags (parameters stored, CANopen off) and
+ * the LSS area (0x2002:06/07 are the node-ID and bit timing, as LSS store configuration would write them); a
+ * 0x1011 restore clears the stored flag; an LSS store configuration clears "CANopen off". All of it becomes
+ * durable together with the core's area, or none of it (the store is then answered 0x06060000 / LSS error 2);
+ * the model's state changes only when eltex_on_event() reports success.
+ */
+co_status_t eltex_on_store(device_t *dev, uint16_t index, uint8_t sub)
+{
+    const eltex_t *x = eltex_of(dev);
+    (void)sub;
+    if (index == 0x1010U) {
+        const saved_lss_t l = lss_of_save(dev);
+        if (nvm_write_blob(dev, true, l.can_off, CO_NVM_MORE) != CO_OK) {
+            return CO_ERR_IO;
+        }
+        return co_lss_stage(&dev->node, l.node_id, l.bit_timing);
+    }
+    if (index == 0x1011U) {
+        return nvm_write_blob(dev, false, x->can_off, CO_NVM_MORE);
+    }
+    if (index == 0x7E5U && x->can_off) {
+        return nvm_write_blob(dev, x->params_stored, false, CO_NVM_MORE);
+    }
+    return CO_OK;
+}
+
 /*
  * E1/E2: a successful 0x1010 save makes the saved 0x2002:06/07 the pending LSS configuration and stores it
  * in the LSS area, as LSS store configuration would; so LSS and 0x2002:06/07 are one setting and the newest
  * store wins. E3: 0x2002:07 = 9 (devices with bit_timing_9_off) makes the pending node-ID "unconfigured":
- * after the next reset or power cycle the node runs LSS only. 0x1011 restore clears the stored flag.
+ * after the next reset or power cycle the node runs LSS only. 0x1011 restore clears the stored flag. The data
+ * was written by eltex_on_store(); here the store succeeded and the model follows it.
  */
 void eltex_on_event(device_t *dev, const co_event_t *ev)
 {
     eltex_t *x = eltex_of(dev);
     if (ev->kind == CO_EV_STORE && ev->index == 0x1010U && ev->code == 0U) {
-        const uint8_t id = co_od_get_u8(&dev->node, 0x2002U, 0x06U);
-        const uint8_t bt = co_od_get_u8(&dev->node, 0x2002U, 0x07U);
+        const saved_lss_t l = lss_of_save(dev);
         x->params_stored = true;
-        x->can_off = bt == 9U && x->cls->bit_timing_9_off;
-        (void)co_lss_set_pending_node_id(&dev->node, x->can_off ? CO_NODE_ID_UNCONFIGURED : id);
-        if (!x->can_off && co_lss_set_pending_bit_timing(&dev->node, bt)) {
-            x->bt_switch = bt != x->bt_effective;
+        x->can_off = l.can_off;
+        (void)co_lss_set_pending_node_id(&dev->node, l.node_id);
+        if (l.bit_timing_valid && co_lss_set_pending_bit_timing(&dev->node, l.bit_timing)) {
+            x->bt_switch = l.bit_timing != x->bt_effective;
         }
-        nvm_save(dev);
-        if (co_lss_store(&dev->node) != CO_OK) {
-            device_printf(dev, "%s: warning: node-ID/bit timing could not be stored in the LSS area", dev->cls->name);
-        }
-    } else if (ev->kind == CO_EV_STORE && ev->index == 0x7E5U && ev->code == 0U && x->can_off) {
+    } else if (ev->kind == CO_EV_STORE && ev->index == 0x7E5U && ev->code == 0U) {
         x->can_off = false; /* an LSS store configuration is newer than the saved 0x2002:07 = 9 */
-        nvm_save(dev);
     } else if (ev->kind == CO_EV_RESTORE && ev->index == 0x1011U && ev->code == 0U) {
         x->params_stored = false;
-        nvm_save(dev);
     } else if (ev->kind == CO_EV_LSS_ACTIVATE) {
         x->bt_effective = dev->node.lss.active_bit_timing;
         set_value(dev, 0x2002U, 0x07U, x->bt_effective); /* the rate in effect changed */

@@ -110,6 +110,8 @@ void eltex_on_nmt_change(device_t *dev, co_nmt_state_t to);
 
 /* The class's on_event hook (0x1010 save, 0x1011 restore, LSS store, LSS activate bit timing). */
 void eltex_on_event(device_t *dev, const co_event_t *ev);
+/** The class's on_store: the device flags and the LSS area that belong to a store (E14). */
+co_status_t eltex_on_store(device_t *dev, uint16_t index, uint8_t sub);
 
 /* ---- Counters (E13) ------------------------------------------------------------------------------------------ */
 

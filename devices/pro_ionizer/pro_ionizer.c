@@ -1191,4 +1191,5 @@ const device_class_t pro_ionizer_class = {
     .step = step,
     .command = command,
     .on_event = eltex_on_event,
+    .on_store = eltex_on_store,
 };

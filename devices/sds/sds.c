@@ -659,4 +659,5 @@ const device_class_t sds_class = {
     .step = sds_step,
     .command = sds_command,
     .on_event = eltex_on_event,
+    .on_store = eltex_on_store,
 };

@@ -89,6 +89,16 @@ typedef struct co_hooks {
     void (*on_reset)(void *ctx, co_node_t *node, co_reset_t what);
     /** Something worth logging happened. */
     void (*on_event)(void *ctx, co_node_t *node, const co_event_t *event);
+    /**
+     * A store is being made: 0x1010 save or 0x1011 restore (sub = the sub-index written), or LSS store
+     * configuration (index 0x7E5, sub 0x17). The core has staged its own area and commits it last, so the
+     * whole store becomes durable at once (co_port_t.nvm_commit): stage the device's own data of the same
+     * store here (nvm_write, then nvm_commit with CO_NVM_MORE; the LSS area with co_lss_stage()) and return
+     * CO_OK, or an error to fail the store (answer 0x06060000 or LSS error 2; the core discards what was
+     * staged). Change the device's own state only when the outcome arrives (CO_EV_STORE / CO_EV_RESTORE
+     * with code 0): the store can still fail after this hook.
+     */
+    co_status_t (*on_store)(void *ctx, co_node_t *node, uint16_t index, uint8_t sub);
 } co_hooks_t;
 
 /** Options, per node (usually per device type). */
@@ -358,6 +368,13 @@ bool co_lss_set_pending_bit_timing(co_node_t *node, uint8_t index);
  * whose own objects are the same setting (e.g. Bürkert 0x2001:01/02). CO_ERR_IO without NVM or on failure.
  */
 co_status_t co_lss_store(co_node_t *node);
+
+/**
+ * Stages the LSS area with this node-ID and bit-timing index as one area of the store in progress (committed
+ * with CO_NVM_MORE): for an on_store hook whose device keeps the LSS configuration in objects of its own
+ * (Eltex 0x2002:06/07). The pending values do not change. CO_ERR_IO without NVM or on failure.
+ */
+co_status_t co_lss_stage(co_node_t *node, uint8_t node_id, uint8_t bit_timing);
 
 /**
  * Makes the pending bit timing the active one at once, as LSS activate bit timing does after its delay

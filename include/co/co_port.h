@@ -29,6 +29,11 @@ typedef enum co_nvm_area {
  */
 uint32_t co_crc32(uint32_t crc, const uint8_t *data, size_t len);
 
+/** nvm_commit() total_len flag: more areas of the same store follow (see co_port_t.nvm_commit). */
+#define CO_NVM_MORE ((uint32_t)0x80000000UL)
+/** nvm_commit() total_len: the store in progress is abandoned; its pending areas keep their old blobs. */
+#define CO_NVM_DISCARD ((uint32_t)0xFFFFFFFFUL)
+
 typedef struct co_port {
     /**
      * Sends one frame. Must not block. Return CO_OK when the frame is queued in the controller or the
@@ -47,8 +52,18 @@ typedef struct co_port {
     co_status_t (*nvm_write)(void *ctx, co_nvm_area_t area, uint32_t offset, const void *data, size_t len);
 
     /**
-     * Makes the staged blob of total_len bytes the area's content, atomically: after a power loss at any
-     * moment, a later nvm_read() sees either the whole old blob or the whole new one. NULL with nvm_write.
+     * Makes the staged blob of total_len bytes the area's content, atomically and durably: when it returns
+     * CO_OK the new blob survives a power loss; after a power loss at any moment, a later nvm_read() sees
+     * either the whole old blob or the whole new one. On an error the area keeps its old blob. The core
+     * answers a store (0x1010, LSS store) only after this returned, with its result.
+     *
+     * One store may span several areas (an Eltex 0x1010 save: parameters, LSS configuration and device data).
+     * Then every area but the last is committed with CO_NVM_MORE set in total_len, and the last without it:
+     * a port that can, keeps the CO_NVM_MORE areas pending and makes them durable together with the last one,
+     * all or none (the result of the last commit is the store's). A store abandoned after CO_NVM_MORE commits
+     * ends with total_len == CO_NVM_DISCARD: every pending area keeps its old blob. A port that cannot group
+     * areas commits a CO_NVM_MORE area on its own (mask the flag off) and ignores CO_NVM_DISCARD; a store of
+     * several areas is then only atomic per area. NULL with nvm_write.
      */
     co_status_t (*nvm_commit)(void *ctx, co_nvm_area_t area, uint32_t total_len);
 

@@ -123,11 +123,7 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
 static co_status_t port_send(void *ctx, const co_frame_t *f)
 {
     emu_node_t *n = (emu_node_t *)ctx;
-    /* Nothing the node says may reveal a store that is not durable yet (a save is confirmed by its SDO answer). */
-    if (nvm_file_flush(&n->nvm) != 0) {
-        logline(LOG_QUIET, "node %u (%s): stored data could not be written (NVM error)", co_node_id(&n->dev.node),
-                n->dev.cls->name);
-    }
+    /* A store is durable before the core answers it: the port's last commit of the store does it (nvm_file.h). */
     const co_status_t st = socketcan_send(&emu.can, f);
     if (st == CO_OK && emu.n_nodes > 1U) {
         if (emu.local_count == LOCAL_QUEUE_LEN) {
@@ -365,7 +361,6 @@ int main(int argc, char **argv)
                 if (n->dirty || now >= n->deadline) {
                     n->dirty = false;
                     n->deadline = device_process(&n->dev, now);
-                    (void)nvm_file_flush(&n->nvm); /* stores of this call that sent nothing (error: next time) */
                 }
                 next = n->deadline < next ? n->deadline : next;
                 tx_pending = tx_pending || n->dev.node.txq.count > 0U;

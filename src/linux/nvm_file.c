@@ -89,21 +89,6 @@ static void drop_loaded(nvm_file_t *n, int a)
     n->loaded[a].active = false;
 }
 
-void nvm_file_close(nvm_file_t *n)
-{
-    (void)nvm_file_flush(n);
-    for (int a = 0; a < 3; a++) {
-        free(n->staging[a].buf); /* an unfinished write is never committed: it only ever lived in memory */
-        memset(&n->staging[a], 0, sizeof n->staging[a]);
-        free(n->loaded[a].buf);
-        memset(&n->loaded[a], 0, sizeof n->loaded[a]);
-    }
-    if (n->dir_fd >= 0) {
-        (void)close(n->dir_fd);
-        n->dir_fd = -1;
-    }
-}
-
 /* The staging copy lives in memory, not in "<file>.tmp" as it did: the core writes a blob in hundreds of
  * small pieces (two per record), and each one a system call made a store take ~0.1 s in User-Mode Linux
  * and widened the moment in which a crash leaves a temporary file. The file is written once, at commit. */
@@ -173,16 +158,14 @@ static void tmp_path(const nvm_file_t *n, int area, char *tmp, size_t len)
     (void)snprintf(tmp, len, "%s.tmp", n->path[area]);
 }
 
-/* The committed blob goes to "<file>.tmp" at once (write + fsync, so an I/O error still reaches the core,
- * which answers the store with an abort); the rename that makes it the file waits for nvm_file_flush(), which
- * renames everything committed since the last flush as one transaction. */
-co_status_t nvm_file_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
+/* The committed blob goes to "<file>.tmp" (write + fsync); the rename that makes it the file comes with the
+ * store's last commit (finish_store), which renames all the store's areas as one transaction. */
+static co_status_t write_tmp(nvm_file_t *n, co_nvm_area_t area, uint32_t total_len)
 {
-    nvm_file_t *n = (nvm_file_t *)ctx;
-    if ((unsigned)area > 2U || !n->staging[area].active || total_len > n->staging[area].len) {
+    nvm_staging_t *s = &n->staging[area];
+    if (!s->active || total_len > s->len) {
         return CO_ERR_IO; /* nothing staged, or a blob longer than what was written */
     }
-    nvm_staging_t *s = &n->staging[area];
     s->active = false;
     char tmp[PATH_MAX + 8];
     tmp_path(n, (int)area, tmp, sizeof tmp);
@@ -203,6 +186,19 @@ co_status_t nvm_file_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
     return CO_OK;
 }
 
+/* The store is abandoned: its temporary files go, every area keeps its file. */
+static void discard_store(nvm_file_t *n)
+{
+    for (int a = 0; a < 3; a++) {
+        if (n->pending[a]) {
+            char tmp[PATH_MAX + 8];
+            tmp_path(n, a, tmp, sizeof tmp);
+            (void)unlink(tmp);
+            n->pending[a] = false;
+        }
+    }
+}
+
 /* Journal "<key>.journal": "CONVJ1" | one byte per area (1 = its .tmp belongs to the transaction) | '\n'.
  * Written to "<key>.journal.tmp", fsynced and renamed: it exists whole or not at all. */
 #define JOURNAL_LEN 10U
@@ -219,30 +215,39 @@ static bool rename_pending(nvm_file_t *n, int area)
     return true;
 }
 
-static void sync_dir(const nvm_file_t *n)
+static bool sync_dir(const nvm_file_t *n)
 {
-    if (n->dir_fd >= 0) {
-        (void)fsync(n->dir_fd); /* the renames themselves are durable */
-    }
+    return n->dir_fd < 0 || fsync(n->dir_fd) == 0; /* the renames themselves are durable */
 }
 
-int nvm_file_flush(nvm_file_t *n)
+/* A rename over anything but a regular file (a directory, a FIFO, a device someone put there) cannot give a
+ * loadable area, and a rename onto a directory fails outright: checked before the store is decided, so that
+ * a journal never names a rename that cannot be done. */
+static bool replaceable(const nvm_file_t *n, int area)
+{
+    struct stat st;
+    return lstat(n->path[area], &st) != 0 ? errno == ENOENT : S_ISREG(st.st_mode) || S_ISLNK(st.st_mode);
+}
+
+/* Makes the store's areas (committed to their .tmp) the files: 0 when durable, -1 when nothing changed. */
+static int finish_store(nvm_file_t *n)
 {
     int count = 0;
     for (int a = 0; a < 3; a++) {
+        if (n->pending[a] && !replaceable(n, a)) {
+            discard_store(n);
+            return -1;
+        }
         count += n->pending[a] ? 1 : 0;
-    }
-    if (count == 0) {
-        return 0;
     }
     if (count == 1) {
         for (int a = 0; a < 3; a++) {
             if (n->pending[a] && !rename_pending(n, a)) {
+                discard_store(n);
                 return -1;
             }
         }
-        sync_dir(n);
-        return 0;
+        return sync_dir(n) ? 0 : -1;
     }
     /* Several areas (an Eltex 0x1010 save writes parameters, LSS configuration and device data): a crash
      * between two renames would load a mix. The journal names the temporary files first; once it exists the
@@ -252,25 +257,49 @@ int nvm_file_flush(nvm_file_t *n)
     (void)unlink(jtmp);
     const int fd = open(jtmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
     if (fd < 0) {
+        discard_store(n);
         return -1;
     }
     const uint8_t j[JOURNAL_LEN] = {'C', 'O', 'N', 'V', 'J', '1', (uint8_t)n->pending[0], (uint8_t)n->pending[1],
                                     (uint8_t)n->pending[2], '\n'};
     const bool ok = write_all(fd, j, sizeof j) && fsync(fd) == 0;
-    if (close(fd) != 0 || !ok || rename(jtmp, n->journal) != 0) {
+    if (close(fd) != 0 || !ok || rename(jtmp, n->journal) != 0 || !sync_dir(n)) {
         (void)unlink(jtmp);
+        (void)unlink(n->journal);
+        discard_store(n);
         return -1;
     }
-    sync_dir(n);
     for (int a = 0; a < 3; a++) {
         if (n->pending[a] && !rename_pending(n, a)) {
-            return -1; /* the journal stays: the next open completes the transaction */
+            recover(n); /* decided: the journal finishes the renames (now, or at the next open) */
+            return 0;
         }
     }
-    sync_dir(n);
+    (void)sync_dir(n);
     (void)unlink(n->journal);
-    sync_dir(n);
+    (void)sync_dir(n);
     return 0;
+}
+
+co_status_t nvm_file_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
+{
+    nvm_file_t *n = (nvm_file_t *)ctx;
+    if ((unsigned)area > 2U) {
+        return CO_ERR_ARG;
+    }
+    if (total_len == CO_NVM_DISCARD) {
+        n->staging[area].active = false;
+        discard_store(n);
+        return CO_OK;
+    }
+    if (write_tmp(n, area, total_len & ~CO_NVM_MORE) != CO_OK) {
+        discard_store(n); /* all or none: the areas committed before it in this store go too */
+        return CO_ERR_IO;
+    }
+    if ((total_len & CO_NVM_MORE) != 0U) {
+        return CO_OK; /* more areas of this store follow: durable with the last one */
+    }
+    return finish_store(n) == 0 ? CO_OK : CO_ERR_IO;
 }
 
 /* At open: a journal means a transaction was decided but maybe not carried out: rename the temporary files it
@@ -282,7 +311,12 @@ static void recover(nvm_file_t *n)
 {
     uint8_t j[JOURNAL_LEN];
     bool listed[3] = {false, false, false};
-    const int fd = open(n->journal, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    int fd = open(n->journal, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+    struct stat st;
+    if (fd >= 0 && (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))) {
+        (void)close(fd); /* not a journal of ours (a directory or FIFO by that name): nothing was decided */
+        fd = -1;
+    }
     const bool journal = fd >= 0;
     if (journal) {
         const ssize_t r = read(fd, j, sizeof j);
@@ -314,9 +348,15 @@ static void recover(nvm_file_t *n)
 static co_status_t load_file(nvm_file_t *n, int area)
 {
     nvm_staging_t *l = &n->loaded[area];
-    const int fd = open(n->path[area], O_RDONLY | O_CLOEXEC);
+    /* O_NONBLOCK: a FIFO put there must not stop the emulator in open() (it waited for a writer for ever). */
+    const int fd = open(n->path[area], O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0) {
-        return CO_ERR_NO_DATA;
+        return errno == ENOENT ? CO_ERR_NO_DATA : CO_ERR_IO;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        (void)close(fd);
+        return CO_ERR_IO; /* a directory, FIFO or device is there: a damaged area, not "nothing stored" */
     }
     l->len = 0U;
     for (;;) {
@@ -348,7 +388,6 @@ co_status_t nvm_file_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *
         return CO_ERR_ARG;
     }
     if (offset == 0U) {
-        (void)nvm_file_flush(n); /* a load sees every store committed before it */
         drop_loaded(n, (int)area); /* a new load: see the file as it is now, even if replaced by hand */
     }
     if (!n->loaded[area].active) {
@@ -364,4 +403,19 @@ co_status_t nvm_file_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *
     }
     memcpy(data, l->buf + offset, len);
     return CO_OK;
+}
+
+void nvm_file_close(nvm_file_t *n)
+{
+    discard_store(n); /* a store without its last commit was never confirmed */
+    for (int a = 0; a < 3; a++) {
+        free(n->staging[a].buf); /* an unfinished write is never committed: it only ever lived in memory */
+        memset(&n->staging[a], 0, sizeof n->staging[a]);
+        free(n->loaded[a].buf);
+        memset(&n->loaded[a], 0, sizeof n->loaded[a]);
+    }
+    if (n->dir_fd >= 0) {
+        (void)close(n->dir_fd);
+        n->dir_fd = -1;
+    }
 }

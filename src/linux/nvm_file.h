@@ -3,14 +3,14 @@
  * @brief The port's non-volatile memory as files: one file per area of one node, replaced atomically.
  *
  * Writes go to a staging copy in memory; commit writes it to "<file>.tmp" (a fresh file: a leftover of a
- * killed process is removed first, a symbolic link there is never followed) and fsyncs it. nvm_file_flush()
- * then renames what was committed since the last flush over the files and fsyncs the directory, as one
- * transaction: one area is one rename; several (an Eltex 0x1010 save writes parameters, LSS configuration and
- * device data in one SDO request) are first named in "<key>.journal", which nvm_file_open() uses to finish
- * renames a crash interrupted. So after a crash or SIGKILL at any moment every area is its old blob or its new
- * one, and the areas of one transaction are all old or all new; a "<file>.tmp" outside a journal is removed.
- * The runner calls nvm_file_flush() before any frame of the node goes out (a store is confirmed only once it
- * is durable) and after each call into the node; reads and close flush first.
+ * killed process is removed first, a symbolic link there is never followed) and fsyncs it. The last commit of a
+ * store (co_port.h: without CO_NVM_MORE) then renames the store's temporary files over the files and fsyncs the
+ * directory, as one transaction, before it returns: one area is one rename; several (an Eltex 0x1010 save
+ * writes parameters, LSS configuration and device data) are first named in "<key>.journal", which
+ * nvm_file_open() uses to finish renames a crash interrupted. So a commit that answers CO_OK is durable, one
+ * that fails (full disk, I/O error, a directory or FIFO where a file must be) leaves every area of the store
+ * as it was, and after a crash or SIGKILL at any moment every area is its old blob or its new one, the areas of
+ * one store all old or all new; a "<file>.tmp" outside a journal is removed. CO_NVM_DISCARD drops a store.
  * A read at offset 0 (every load starts there) reads the whole file into memory, and the core's many small
  * reads of one load (two per record) are served from there: one open and one read per load, not a system call
  * per record (in User-Mode Linux each is a round trip to the host: a node's parameter load took 150-350 ms
@@ -40,7 +40,7 @@ typedef struct nvm_file {
     char path[3][PATH_MAX];
     char journal[PATH_MAX];  /**< <dir>/<key>.journal: the areas of a multi-area transaction */
     nvm_staging_t staging[3];
-    bool pending[3];         /**< committed to <file>.tmp, not yet renamed (nvm_file_flush) */
+    bool pending[3];         /**< committed to <file>.tmp with CO_NVM_MORE: waits for the store's last commit */
     nvm_staging_t loaded[3]; /**< the file as read by the load in progress (active: it was read) */
     int dir_fd;
 } nvm_file_t;
@@ -48,10 +48,8 @@ typedef struct nvm_file {
 /** Prepares the files of one node (key e.g. "pro-ionizer-99") in dir, creating dir if needed.
  *  Returns 0 or an errno value with a message for the user in err. */
 int nvm_file_open(nvm_file_t *n, const char *dir, const char *key, char *err, size_t errlen);
+/** Frees the node's buffers; a store without its last commit is dropped (it was never confirmed). */
 void nvm_file_close(nvm_file_t *n);
-/** Makes the areas committed since the last flush the files, all or none (see above). 0, or -1 on an I/O
- *  error (then the next open completes or drops the transaction). */
-int nvm_file_flush(nvm_file_t *n);
 
 /** Checks that dir exists or can be created and that files can be written there. */
 int nvm_file_check_dir(const char *dir, char *err, size_t errlen);

@@ -805,6 +805,24 @@ static void error_commands_and_namur_mode(void)
     TEST_ASSERT_TRUE(n_lines >= 3U);
 }
 
+/* 0x2004:04-08 are stored by the write itself (no save step): the answer is given only once the .device blob is
+ * durable; a failed store answers 0x06060000 and the value stays as before, also after a power cycle. */
+static void stored_write_answers_only_what_was_stored(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2004U, 5U, 120U, 2U));
+    port.nvm_fail_area_mask = 1U << CO_NVM_DEVICE;
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, sdo_write(0x2004U, 5U, 130U, 2U));
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, sdo_write_f32(0x2004U, 7U, 30.0f));
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, sdo_write(0x2004U, 4U, 3600U, 4U));
+    TEST_ASSERT_EQUAL_UINT32(120U, sdo_read(0x2004U, 5U));
+    port.nvm_fail_area_mask = 0U;
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT32(120U, sdo_read(0x2004U, 5U));
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2004U, 5U, 130U, 2U));
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT32(130U, sdo_read(0x2004U, 5U));
+}
+
 static void power_cycle_keeps_the_supply_voltage_and_restarts_the_controller(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0U, sdo_write_f32(0x2540U, 1U, 50.0f));
@@ -909,6 +927,7 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(first_order_response_of_the_flow);
+    RUN_TEST(stored_write_answers_only_what_was_stored);
     RUN_TEST(setpoint_is_clamped_to_the_range_and_checked);
     RUN_TEST(rpdo1_setpoint_moves_the_flow_only_in_operational);
     RUN_TEST(tpdo1_follows_the_flow_with_inhibit_and_event_timer);

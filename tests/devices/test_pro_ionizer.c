@@ -654,6 +654,36 @@ static void node_id_takes_effect_only_after_save_and_reset(void)
     TEST_ASSERT_EQUAL_UINT32(11U, rd(0x2002U, 0x06U));
 }
 
+/* E15: a 0x1010 save is one store of three areas (parameters, LSS, device flags). Whichever area fails, the
+ * answer is 0x06060000 and after a power cycle everything is as before the save; a confirmed save keeps all. */
+static void save_failing_at_any_area_keeps_everything_old(void)
+{
+    for (unsigned area = 0U; area < 3U; area++) {
+        start(16U, NULL);
+        wr_ok(0x1017U, 0x00U, 3000U, 2U);
+        wr_ok(0x2002U, 0x06U, 21U, 1U);
+        port.nvm_fail_area_mask = (uint8_t)(1U << area);
+        TEST_ASSERT_EQUAL_HEX32_MESSAGE(0x06060000UL, wr(0x1010U, 1U, 0x65766173UL, 4U), "save answered success");
+        port.nvm_fail_area_mask = 0U;
+        for (unsigned a = 0U; a < 3U; a++) {
+            TEST_ASSERT_EQUAL_UINT32_MESSAGE(0U, port.nvm[a].commits, "an area of the failed save was stored");
+        }
+        power_cycle();
+        TEST_ASSERT_EQUAL_UINT8(16U, node_id());
+        TEST_ASSERT_EQUAL_UINT32(1000U, rd(0x1017U, 0x00U));
+        TEST_ASSERT_EQUAL_UINT32(16U, rd(0x2002U, 0x06U));
+    }
+    /* the same save on a healthy port: all three areas, the new node-ID after the power cycle */
+    start(16U, NULL);
+    wr_ok(0x1017U, 0x00U, 3000U, 2U);
+    wr_ok(0x2002U, 0x06U, 21U, 1U);
+    save();
+    TEST_ASSERT_EQUAL_STRING("2+1+0.", port.nvm_log);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT8(21U, node_id());
+    TEST_ASSERT_EQUAL_UINT32(3000U, rd(0x1017U, 0x00U));
+}
+
 static void restore_defaults_keeps_node_id_and_bit_timing(void)
 {
     wr_ok(0x2002U, 0x06U, 10U, 1U);
@@ -1183,6 +1213,7 @@ int main(void)
     RUN_TEST(counters_advance_and_survive_power_cycle);
     RUN_TEST(damaged_counter_memory_restarts_at_zero);
     RUN_TEST(node_id_takes_effect_only_after_save_and_reset);
+    RUN_TEST(save_failing_at_any_area_keeps_everything_old);
     RUN_TEST(restore_defaults_keeps_node_id_and_bit_timing);
     RUN_TEST(keyboard_lock_is_never_stored);
     RUN_TEST(lss_stored_node_id_shows_in_0x2002_06);

@@ -151,7 +151,7 @@ static void hk_event(void *ctx, co_node_t *node, const co_event_t *ev)
     fz_note_event(c->h, ev);
 }
 
-static const co_hooks_t hooks = {hk_write, hk_read, hk_nmt, hk_reset, hk_event};
+static const co_hooks_t hooks = {hk_write, hk_read, hk_nmt, hk_reset, hk_event, NULL};
 
 static void set_refusal(core_ctx_t *c, uint8_t preset)
 {

@@ -607,3 +607,99 @@ def test_store_on_a_full_disk_fails_with_an_abort_and_works_once_there_is_room(e
         assert emu.stop() == 0
     finally:
         subprocess.run(["umount", "-l", str(nvm)], capture_output=True, timeout=20)
+
+
+# ---- one store, one answer (docs/robustness.md, docs/devices/eltex.md E15) ---------------------------------------
+
+def small_fs(path, free_pages):
+    """A 64 KiB tmpfs at path, filled up to free_pages free 4 KiB pages (False when it cannot be mounted)."""
+    path.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(path)], capture_output=True,
+                      timeout=20).returncode != 0:
+        return False
+    with open(path / "filler", "wb", buffering=0) as f:
+        try:
+            while True:
+                f.write(bytes(4096))
+        except OSError:
+            pass  # ENOSPC: full
+        f.truncate(max(0, f.tell() - free_pages * 4096))
+    return True
+
+
+def save_then_restart(emulator, bus, nvm, node=16):
+    """PRO IONIZER node: 0x1017 = 3000 and 0x2002:06 = 21, then a 0x1010 save; after a restart with room on the
+    disk (the filler removed): (the save's answer, the node-ID it boots with, 0x1017)."""
+    mark = bus.mark()
+    emu = emulator("-q", f"pro-ionizer:{node}", nvm_dir=nvm, control=False)
+    bus.wait_bootups(mark, [node])
+    bus.write([(node, 0x1017, 0, u16(3000)), (node, 0x2002, 0x06, u8(21))])
+    answer = bus.transfer([(node, 0x1010, 1, download_frame(0x1010, 1, SAVE))])[(node, 0x1010, 1)]
+    assert emu.stop() == 0
+    (nvm / "filler").unlink(missing_ok=True)
+    mark = bus.mark()
+    emu = emulator("-q", f"pro-ionizer:{node}", nvm_dir=nvm, control=False)
+    booted = Deadline(BOOT_TIMEOUT).until(lambda: [n for n in (16, 21) if bus.since(mark, 0x700 + n)], 0.02)
+    assert len(booted) == 1, f"boot-ups after the restart on nodes {booted} (expected 16 or 21)"
+    boot_id = booted[0]
+    heartbeat = bus.read([(boot_id, 0x1017, 0)])[(boot_id, 0x1017, 0)]
+    assert emu.stop() == 0
+    return answer, boot_id, heartbeat
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="mounting a small file system needs root")
+@pytest.mark.parametrize("free_pages", [0, 1, 2, 3, 4, 8])
+def test_eltex_save_on_a_full_disk_is_all_or_nothing_as_answered(emulator, bus, tmp_path, free_pages):
+    """An Eltex 0x1010 save writes three files in one transaction (parameters, LSS area, device flags). With the
+    disk full at any point of it, the answer tells the truth: success and after a restart everything is new
+    (node-ID 21, heartbeat 3000), or 0x06060000 and everything is old (node 16, 1000). Never one save, two
+    generations (the .params file new, the .lss file old) and never a confirmed save that is gone."""
+    nvm = tmp_path / "small"
+    if not small_fs(nvm, free_pages):
+        pytest.skip("cannot mount a tmpfs here")
+    try:
+        answer, boot_id, heartbeat = save_then_restart(emulator, bus, nvm)
+        if answer[0] == 0x60:
+            assert (boot_id, heartbeat) == (21, 3000), f"confirmed save lost or half kept: {boot_id}, {heartbeat}"
+        else:
+            assert answer == bytes([0x80, 0x10, 0x10, 0x01]) + u32(0x06060000), answer.hex()
+            assert (boot_id, heartbeat) == (16, 1000), f"failed save partly kept: {boot_id}, {heartbeat}"
+        if free_pages >= 8:
+            assert answer[0] == 0x60, "the save must work with room on the disk"
+        if free_pages == 0:
+            assert answer[0] == 0x80, "a save on a full disk cannot have worked"
+        leftovers = [p.name for p in nvm.iterdir() if p.name.endswith((".tmp", ".journal"))]
+        assert not leftovers, leftovers
+    finally:
+        subprocess.run(["umount", "-l", str(nvm)], capture_output=True, timeout=20)
+
+
+@pytest.mark.parametrize("kind", ["directory", "fifo"])
+def test_area_file_that_is_not_a_file(emulator, bus, tmp_path, kind):
+    """pro-ionizer-16.params is a directory or a FIFO: the node boots at once (a FIFO must not block the load),
+    reports the area damaged, and a save is answered 0x06060000 and leaves every file as it was (no journal
+    applies the save's other files at the next start). The log line of the failure comes once, not per frame."""
+    nvm = tmp_path / "nvm"
+    nvm.mkdir()
+    params = nvm / "pro-ionizer-16.params"
+    if kind == "directory":
+        params.mkdir()
+    else:
+        os.mkfifo(params)
+    mark = bus.mark()
+    emu = emulator(f"pro-ionizer:16", nvm_dir=nvm, control=False)
+    bus.wait_bootups(mark, [16])
+    assert emu.log_contains("node 16 (pro-ionizer): stored parameters are damaged"), emu.err_lines
+    bus.write([(16, 0x1017, 0, u16(3000)), (16, 0x2002, 0x06, u8(21))])
+    answer = bus.transfer([(16, 0x1010, 1, download_frame(0x1010, 1, SAVE))])[(16, 0x1010, 1)]
+    assert answer == bytes([0x80, 0x10, 0x10, 0x01]) + u32(0x06060000), answer.hex()
+    time.sleep(1.5)  # heartbeats at 3000 ms, TPDOs: frames that each logged the failure again before
+    assert not [line for line in emu.err_lines if "could not be written" in line], emu.err_lines
+    assert len([line for line in emu.err_lines if "store 0x1010:01: access failed" in line]) == 1, emu.err_lines
+    assert emu.stop() == 0
+    assert sorted(p.name for p in nvm.iterdir()) == ["pro-ionizer-16.params"]
+    mark = bus.mark()
+    emu = emulator(f"pro-ionizer:16", nvm_dir=nvm, control=False)
+    bus.wait_bootups(mark, [16])
+    assert bus.read([(16, 0x1017, 0)])[(16, 0x1017, 0)] == 1000
+    assert emu.stop() == 0

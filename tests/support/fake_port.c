@@ -30,14 +30,62 @@ static co_status_t fake_nvm_write(void *ctx, co_nvm_area_t area, uint32_t offset
     return CO_OK;
 }
 
+static void log_commit(fake_port_t *fp, co_nvm_area_t area, char kind)
+{
+    const size_t n = strlen(fp->nvm_log);
+    if (n + 2U < sizeof fp->nvm_log) {
+        fp->nvm_log[n] = (char)('0' + (int)area);
+        fp->nvm_log[n + 1U] = kind;
+        fp->nvm_log[n + 2U] = '\0';
+    }
+}
+
+static void drop_pending(fake_port_t *fp)
+{
+    for (int a = 0; a < 3; a++) {
+        fp->nvm[a].is_pending = false;
+    }
+}
+
 static co_status_t fake_nvm_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
 {
     fake_port_t *fp = (fake_port_t *)ctx;
-    if (fp->nvm_fail_commit || total_len > FAKE_NVM_SIZE) {
+    if (total_len == CO_NVM_DISCARD) {
+        log_commit(fp, area, 'x');
+        fp->nvm_discards++;
+        drop_pending(fp);
+        return CO_OK;
+    }
+    const bool more = (total_len & CO_NVM_MORE) != 0U;
+    const uint32_t len = total_len & ~CO_NVM_MORE;
+    log_commit(fp, area, more ? '+' : '.');
+    if (len > FAKE_NVM_SIZE || (fp->nvm_fail_area_mask & (1U << (unsigned)area)) != 0U) {
+        drop_pending(fp);
         return CO_ERR_IO;
     }
-    memcpy(fp->nvm[area].stored, fp->nvm[area].staging, total_len);
-    fp->nvm[area].stored_len = total_len;
+    if (more) {
+        fake_nvm_area_t *a = &fp->nvm[area];
+        memcpy(a->pending, a->staging, len);
+        a->pending_len = len;
+        a->is_pending = true;
+        a->more_commits++;
+        return CO_OK;
+    }
+    if (fp->nvm_fail_commit) {
+        drop_pending(fp); /* all or none: the pending areas of the store keep their old blobs too */
+        return CO_ERR_IO;
+    }
+    for (int i = 0; i < 3; i++) {
+        fake_nvm_area_t *a = &fp->nvm[i];
+        if (a->is_pending && i != (int)area) {
+            memcpy(a->stored, a->pending, a->pending_len);
+            a->stored_len = a->pending_len;
+            a->commits++;
+        }
+    }
+    drop_pending(fp);
+    memcpy(fp->nvm[area].stored, fp->nvm[area].staging, len);
+    fp->nvm[area].stored_len = len;
     fp->nvm[area].commits++;
     return CO_OK;
 }

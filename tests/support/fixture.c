@@ -56,7 +56,23 @@ static void hook_event(void *ctx, co_node_t *node, const co_event_t *ev)
     }
 }
 
-co_hooks_t fixture_hooks = {hook_write, hook_read, hook_nmt, hook_reset, hook_event};
+static co_status_t hook_store(void *ctx, co_node_t *node, uint16_t index, uint8_t sub)
+{
+    fixture_t *f = (fixture_t *)ctx;
+    f->store_hooks++;
+    f->store_index = index;
+    f->store_sub = sub;
+    if (f->store_device_area) {
+        const co_port_t *p = node->port;
+        if (p->nvm_write(node->port_ctx, CO_NVM_DEVICE, 0U, "DEV1", 4U) != CO_OK ||
+            p->nvm_commit(node->port_ctx, CO_NVM_DEVICE, 4U | CO_NVM_MORE) != CO_OK) {
+            return CO_ERR_IO;
+        }
+    }
+    return f->store_fail ? CO_ERR_IO : CO_OK;
+}
+
+co_hooks_t fixture_hooks = {hook_write, hook_read, hook_nmt, hook_reset, hook_event, hook_store};
 
 void fx_start(uint8_t id, uint32_t options)
 {

@@ -25,6 +25,11 @@ typedef struct fixture {
     uint32_t resets_app, resets_comm;
     co_event_t events[64];
     uint32_t n_events;
+    uint32_t store_hooks;    /* on_store calls */
+    uint16_t store_index;    /* ... the last one's index and sub */
+    uint8_t store_sub;
+    bool store_device_area;  /* on_store stages 4 bytes "DEV1" in CO_NVM_DEVICE (CO_NVM_MORE) */
+    bool store_fail;         /* on_store answers CO_ERR_IO (after staging, if it stages) */
 } fixture_t;
 
 extern fixture_t fx;   /* test-only global: each test program has exactly one fixture */

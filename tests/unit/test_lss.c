@@ -765,6 +765,35 @@ static void store_configuration_media_error(void)
     ASSERT_FRAME(0, 0x705U, 1, 0x00);
 }
 
+/* LSS store configuration is one store with the device's own data of it (co_node.h on_store): the hook sees
+ * 0x7E5/0x17, its area goes first with CO_NVM_MORE, and a failure anywhere answers error 2 with nothing kept. */
+static void store_configuration_includes_the_device_area(void)
+{
+    to_configuration();
+    fx.store_device_area = true;
+    LSS_IN(0x17, 0, 0, 0, 0, 0, 0, 0);
+    EXPECT_LSS(0x17, 0x00, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_HEX16(0x7E5U, fx.store_index);
+    TEST_ASSERT_EQUAL_HEX8(0x17U, fx.store_sub);
+    TEST_ASSERT_EQUAL_STRING("2+1.", fx.port.nvm_log);
+    TEST_ASSERT_EQUAL_UINT32(4U, fx.port.nvm[CO_NVM_DEVICE].stored_len);
+
+    LSS_IN(0x11, 0x0A, 0, 0, 0, 0, 0, 0);
+    EXPECT_LSS(0x11, 0x00, 0, 0, 0, 0, 0, 0);
+    fx.store_fail = true;
+    fx.port.nvm_log[0] = '\0';
+    LSS_IN(0x17, 0, 0, 0, 0, 0, 0, 0);
+    EXPECT_LSS(0x17, 0x02, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_STRING("2+1x", fx.port.nvm_log);
+    TEST_ASSERT_EQUAL_UINT32(1U, fx.port.nvm[CO_NVM_LSS].commits);
+    TEST_ASSERT_EQUAL_UINT32(1U, fx.port.nvm[CO_NVM_DEVICE].commits);
+    /* the node-ID of the failed store was not kept */
+    fx.store_fail = false;
+    fake_port_clear(&fx.port);
+    fx_power_cycle();
+    ASSERT_FRAME(0, 0x705U, 1, 0x00);
+}
+
 static void damaged_lss_blob_ignored(void)
 {
     to_configuration();
@@ -1016,5 +1045,6 @@ int main(void)
     RUN_TEST(api_pending_bit_timing_and_store);
     RUN_TEST(stored_bit_timing_out_of_range_is_not_used);
     RUN_TEST(queued_frames_wait_for_the_end_of_the_silence);
+    RUN_TEST(store_configuration_includes_the_device_area);
     return UNITY_END();
 }

@@ -543,6 +543,57 @@ static void store_failure(bool fail_write)
     TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
 }
 
+/* ---- one store, one answer: the device's areas and the core's become durable together (co_port.h) ---- */
+
+static fake_nvm_area_t *device_area(void) { return &fx.port.nvm[CO_NVM_DEVICE]; }
+
+static void save_stages_device_areas_first_and_commits_params_last(void)
+{
+    fx.store_device_area = true;
+    save(1U);
+    TEST_ASSERT_EQUAL_UINT32(1U, fx.store_hooks);
+    TEST_ASSERT_EQUAL_HEX16(0x1010U, fx.store_index);
+    TEST_ASSERT_EQUAL_UINT8(1U, fx.store_sub);
+    TEST_ASSERT_EQUAL_STRING("2+0.", fx.port.nvm_log); /* device area with CO_NVM_MORE, then the last commit */
+    TEST_ASSERT_EQUAL_UINT32(4U, device_area()->stored_len);
+    TEST_ASSERT_EQUAL_MEMORY("DEV1", device_area()->stored, 4U);
+    TEST_ASSERT_EQUAL_UINT32(1U, params()->commits);
+    restore(1U);
+    TEST_ASSERT_EQUAL_HEX16(0x1011U, fx.store_index);
+    TEST_ASSERT_EQUAL_STRING("2+0.2+0.", fx.port.nvm_log);
+}
+
+/* fail_hook: the device's own area cannot be staged; else the store's last commit fails. */
+static void failed_store_leaves_every_area_old(bool fail_hook)
+{
+    wr(0x2000, 0, 1000U, 2U);
+    save(1U); /* parameters stored, no device area yet */
+    wr(0x2000, 0, 2000U, 2U);
+    fx.store_device_area = true;
+    fx.store_fail = fail_hook;
+    fx.port.nvm_fail_commit = !fail_hook;
+    fx.port.nvm_log[0] = '\0';
+    fx.n_events = 0U;
+    sdo_expect((const uint8_t[8]){0x23, 0x10, 0x10, 0x01, 0x73, 0x61, 0x76, 0x65},
+               (const uint8_t[8]){0x80, 0x10, 0x10, 0x01, 0x00, 0x00, 0x06, 0x06});
+    /* a failed hook: the store is discarded before the core stages its area; a failed last commit: all goes */
+    TEST_ASSERT_EQUAL_STRING(fail_hook ? "2+0x" : "2+0.", fx.port.nvm_log);
+    TEST_ASSERT_EQUAL_UINT32(0U, device_area()->stored_len);
+    TEST_ASSERT_EQUAL_UINT32(0U, device_area()->commits);
+    TEST_ASSERT_EQUAL_UINT32(1U, params()->commits);
+    const int e = find_event(CO_EV_STORE);
+    TEST_ASSERT_TRUE(e >= 0);
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, fx.events[e].code);
+    fx.store_fail = false;
+    fx.port.nvm_fail_commit = false;
+    fx.store_device_area = false;
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(1000U, fx.values.x2000_cycle_ms);
+}
+
+static void failed_device_area_fails_the_store(void) { failed_store_leaves_every_area_old(true); }
+static void failed_last_commit_drops_the_device_area(void) { failed_store_leaves_every_area_old(false); }
+
 static void store_write_failure(void) { store_failure(true); }
 static void store_commit_failure(void) { store_failure(false); }
 
@@ -842,5 +893,8 @@ int main(void)
     RUN_TEST(lss_blob_format);
     RUN_TEST(damaged_lss_blob_is_reported_and_ignored);
     RUN_TEST(empty_parameter_blob_is_damaged);
+    RUN_TEST(save_stages_device_areas_first_and_commits_params_last);
+    RUN_TEST(failed_device_area_fails_the_store);
+    RUN_TEST(failed_last_commit_drops_the_device_area);
     return UNITY_END();
 }
