@@ -1,7 +1,7 @@
 /*
  * The device framework's common commands (devices/device.c): how numbers are read (device_parse_int, used by every
- * command of every device and by canopen-emu's node-IDs) and what `set` writes. A Bürkert and a PRO IONIZER node on
- * a fake port, at time 0.
+ * command of every device and by canopen-emu's node-IDs) and what `set` writes: only values the object's data type
+ * holds. A Bürkert and a PRO IONIZER node on a fake port, at time 0.
  */
 #include <limits.h>
 #include <stdio.h>
@@ -138,6 +138,71 @@ static void device_commands_read_leading_zeros_as_decimal(void)
     TEST_ASSERT_EQUAL_STRING_LEN("temperature 90 C", last_line, strlen("temperature 90 C"));
 }
 
+/* The reply names the object's range, and the object keeps its value. */
+static void assert_refused(const char *address, const char *value, const char *range, uint32_t kept,
+                           uint32_t (*read)(void))
+{
+    TEST_ASSERT_EQUAL_INT_MESSAGE(DEVICE_CMD_ERROR, set(address, value), value);
+    TEST_ASSERT_NOT_NULL_MESSAGE(strstr(last_line, "out of range"), last_line);
+    TEST_ASSERT_NOT_NULL_MESSAGE(strstr(last_line, range), last_line);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(kept, read(), value);
+}
+
+static uint32_t heartbeat_time(void) { return co_od_get_u16(&dev.node, 0x1017U, 0U); }
+static uint32_t life_time_factor(void) { return co_od_get_u8(&dev.node, 0x100DU, 0U); }
+static uint32_t operation_time(void) { return co_od_get_u32(&dev.node, 0x2004U, 4U); }
+static uint32_t supply_voltage_bits(void) { return co_od_get_u32(&dev.node, 0x2004U, 3U); }
+
+static void set_refuses_values_outside_the_unsigned_types_with_their_range(void)
+{
+    start(&buerkert_class);
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, set("0x1017", "500"));
+    assert_refused("0x1017", "70000", "0x1017:00 (UNSIGNED16) holds 0..65535", 500U, heartbeat_time); /* was 4464 */
+    assert_refused("0x1017", "65536", "0..65535", 500U, heartbeat_time);
+    assert_refused("0x1017", "0x10000", "0..65535", 500U, heartbeat_time);
+    assert_refused("0x1017", "-1", "0..65535", 500U, heartbeat_time); /* was 65535 */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, set("0x1017", "65535"));
+    TEST_ASSERT_EQUAL_UINT16(65535U, heartbeat_time());
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, set("0x1017", "-0"));
+    TEST_ASSERT_EQUAL_UINT16(0U, heartbeat_time());
+
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, set("0x100D", "255"));
+    assert_refused("0x100D", "256", "0x100D:00 (UNSIGNED8) holds 0..255", 255U, life_time_factor);
+
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, set("0x2004:04", "4294967295"));
+    assert_refused("0x2004:04", "4294967296", "(UNSIGNED32) holds 0..4294967295", 4294967295U, operation_time);
+    assert_refused("0x2004:04", "-4294967295", "0..4294967295", 4294967295U, operation_time); /* was 1 */
+
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, set("0x2004:03", "24.5"));
+    const uint32_t bits = supply_voltage_bits();
+    assert_refused("0x2004:03", "1e39", "(REAL32)", bits, supply_voltage_bits); /* was +inf */
+}
+
+static void set_gives_signed_types_their_negative_half(void)
+{
+    /* No device has a signed object that `set` may change: 0x6401:03 (DC current discharging, INTEGER16) is a
+     * measurement, which the Eltex model refuses to have set (E6), after the range check. */
+    start(&pro_ionizer_class);
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, set("0x6401:03", "32768")); /* was -32768, then refused by the model */
+    TEST_ASSERT_NOT_NULL_MESSAGE(strstr(last_line, "0x6401:03 (INTEGER16) holds -32768..32767"), last_line);
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, set("0x6401:03", "-32769"));
+    TEST_ASSERT_NOT_NULL_MESSAGE(strstr(last_line, "-32768..32767"), last_line);
+    static const char *const in_range[] = {"-32768", "-1", "32767"};
+    for (size_t i = 0U; i < sizeof in_range / sizeof in_range[0]; i++) {
+        TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, set("0x6401:03", in_range[i]));
+        TEST_ASSERT_NULL_MESSAGE(strstr(last_line, "out of range"), last_line); /* the model's refusal */
+    }
+}
+
+static void a_value_that_wrapped_into_the_eltex_heartbeat_rule_is_refused(void)
+{
+    start(&pro_ionizer_class);
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, set("0x1017", "1000"));
+    assert_refused("0x1017", "65636", "0..65535", 1000U, heartbeat_time); /* cut to 16 bits it was 100, allowed */
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_ERROR, set("0x1017", "50"));      /* the rule itself: 0 or 100..60000 */
+    TEST_ASSERT_EQUAL_UINT16(1000U, heartbeat_time());
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -145,5 +210,8 @@ int main(void)
     RUN_TEST(anything_else_is_not_a_number);
     RUN_TEST(overflow_is_refused_not_clamped);
     RUN_TEST(device_commands_read_leading_zeros_as_decimal);
+    RUN_TEST(set_refuses_values_outside_the_unsigned_types_with_their_range);
+    RUN_TEST(set_gives_signed_types_their_negative_half);
+    RUN_TEST(a_value_that_wrapped_into_the_eltex_heartbeat_rule_is_refused);
     return UNITY_END();
 }
