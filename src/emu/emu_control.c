@@ -4,42 +4,42 @@
 
 #include <errno.h>
 #include <fcntl.h>
-#include <string.h>
 #include <unistd.h>
 
 #include "emu.h"
 #include "emu_commands.h"
+#include "emu_output.h"
 
 void control_start(emu_control_t *c)
 {
+    line_reader_init(&c->lines);
     if (c->enabled) {
         (void)fcntl(STDIN_FILENO, F_SETFL, fcntl(STDIN_FILENO, F_GETFL) | O_NONBLOCK);
         c->open = true;
     }
 }
 
+static void control_line(void *ctx, line_verdict_t verdict, char *text, unsigned long lineno)
+{
+    emu_t *emu = (emu_t *)ctx;
+    if (verdict == LINE_TOO_LONG) {
+        reply("error: stdin line %lu is longer than %d bytes: ignored", lineno, COMMAND_LINE_MAX);
+    } else if (verdict == LINE_HAS_NUL) {
+        reply("error: stdin line %lu holds a NUL byte: ignored", lineno);
+    } else {
+        run_command(emu, text);
+    }
+}
+
 void control_read(struct emu *emu)
 {
     emu_control_t *c = &emu->control;
-    const ssize_t r = read(STDIN_FILENO, c->buf + c->fill, sizeof c->buf - c->fill - 1U);
-    if (r <= 0) {
-        if (r == 0 || (errno != EAGAIN && errno != EINTR)) {
-            c->open = false; /* end of input: keep running (stop with a signal or 'quit') */
-        }
-        return;
-    }
-    c->fill += (size_t)r;
-    c->buf[c->fill] = '\0';
-    char *start = c->buf;
-    char *nl;
-    while ((nl = strchr(start, '\n')) != NULL) {
-        *nl = '\0';
-        run_command(emu, start);
-        start = nl + 1;
-    }
-    c->fill = strlen(start);
-    memmove(c->buf, start, c->fill);
-    if (c->fill >= sizeof c->buf - 1U) {
-        c->fill = 0U; /* an overlong line is dropped */
+    char chunk[4096];
+    const ssize_t r = read(STDIN_FILENO, chunk, sizeof chunk);
+    if (r > 0) {
+        line_reader_feed(&c->lines, chunk, (size_t)r, control_line, emu);
+    } else if (r == 0 || (errno != EAGAIN && errno != EINTR)) {
+        line_reader_finish(&c->lines, control_line, emu);
+        c->open = false; /* end of input: keep running (stop with a signal or 'quit') */
     }
 }
