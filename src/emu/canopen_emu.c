@@ -334,7 +334,7 @@ int main(int argc, char **argv)
     struct pollfd pfd[2];
     while (!emu.quit && stop_signal == 0) {
         co_time_us_t now = socketcan_now_us();
-        char line[SCRIPT_LINE_MAX];
+        char line[COMMAND_LINE_MAX + 1];
         while (script_take_due(&emu.script, now - emu.start, line, sizeof line)) {
             run_command(&emu, line);
         }

@@ -3,57 +3,139 @@
 #include "emu_script.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "emu_lines.h"
+
+typedef struct script_loader {
+    emu_script_t *script;
+    const char *path;
+    co_time_us_t at;        /* the previous line's time */
+    size_t cap;
+    bool failed;            /* a line was refused (reported): the rest of the file is not looked at */
+} script_loader_t;
+
+/* "@MS" or "@+MS" at p: MS whole milliseconds, decimal digits only, the result at most SCRIPT_TIME_MAX_MS.
+ * strtod took "@inf" and "@1e300" (run at once) and "@nan" (never), and a time near 2^64 µs wrapped. */
+static bool parse_time(char *p, char **end, unsigned long long previous_ms, unsigned long long *ms)
+{
+    const bool relative = p[1] == '+';
+    char *digit = p + (relative ? 2 : 1);
+    unsigned long long v = 0U;
+    char *q = digit;
+    for (; *q >= '0' && *q <= '9'; q++) {
+        v = v > SCRIPT_TIME_MAX_MS ? v : v * 10U + (unsigned long long)(*q - '0'); /* stops growing once too large */
+    }
+    if (q == digit || (*q != '\0' && *q != ' ' && *q != '\t' && *q != '\r')) {
+        return false;
+    }
+    *ms = (relative ? previous_ms : 0U) + v; /* both at most SCRIPT_TIME_MAX_MS + 9 digits' worth: no overflow */
+    *end = q;
+    return true;
+}
+
+static void script_line(void *ctx, line_verdict_t verdict, char *text, unsigned long lineno)
+{
+    script_loader_t *l = (script_loader_t *)ctx;
+    if (l->failed) {
+        return;
+    }
+    if (verdict != LINE_OK) {
+        if (verdict == LINE_TOO_LONG) {
+            fprintf(stderr, "canopen-emu: %s:%lu: line longer than %d bytes\n", l->path, lineno, COMMAND_LINE_MAX);
+        } else {
+            fprintf(stderr, "canopen-emu: %s:%lu: a NUL byte in the line\n", l->path, lineno);
+        }
+        l->failed = true;
+        return;
+    }
+    char *p = text;
+    while (*p == ' ' || *p == '\t' || *p == '\r') {
+        p++;
+    }
+    if (*p == '\0' || *p == '#') {
+        return;
+    }
+    if (*p == '@') {
+        char *end = NULL;
+        unsigned long long ms = 0U;
+        if (!parse_time(p, &end, l->at / 1000U, &ms)) {
+            fprintf(stderr, "canopen-emu: %s:%lu: bad time (use '@MS command' or '@+MS command', MS a whole number "
+                    "of milliseconds)\n", l->path, lineno);
+            l->failed = true;
+            return;
+        }
+        if (ms > SCRIPT_TIME_MAX_MS) {
+            fprintf(stderr, "canopen-emu: %s:%lu: time after the start beyond the limit of %llu ms (11.6 days)\n",
+                    l->path, lineno, SCRIPT_TIME_MAX_MS);
+            l->failed = true;
+            return;
+        }
+        l->at = (co_time_us_t)ms * 1000U;
+        p = end;
+    }
+    emu_script_t *s = l->script;
+    if (s->len == l->cap) {
+        const size_t cap = l->cap == 0U ? 32U : l->cap * 2U;
+        script_line_t *grown = realloc(s->lines, cap * sizeof *grown);
+        if (grown == NULL) {
+            fprintf(stderr, "canopen-emu: out of memory reading %s\n", l->path);
+            l->failed = true;
+            return;
+        }
+        s->lines = grown;
+        l->cap = cap;
+    }
+    char *copy = strdup(p);
+    if (copy == NULL) {
+        fprintf(stderr, "canopen-emu: out of memory reading %s\n", l->path);
+        l->failed = true;
+        return;
+    }
+    s->lines[s->len].at = l->at;
+    s->lines[s->len].text = copy;
+    s->len++;
+}
 
 bool script_load(emu_script_t *s, const char *path)
 {
-    FILE *f = fopen(path, "r");
-    if (f == NULL) {
+    const int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
         fprintf(stderr, "canopen-emu: cannot read script %s: %s\n", path, strerror(errno));
         return false;
     }
-    char line[SCRIPT_LINE_MAX];
-    co_time_us_t at = 0U;
-    size_t cap = 0U;
-    unsigned lineno = 0U;
-    while (fgets(line, sizeof line, f) != NULL) {
-        lineno++;
-        char *p = line;
-        while (*p == ' ' || *p == '\t') {
-            p++;
-        }
-        if (*p == '\0' || *p == '\n' || *p == '#') {
-            continue;
-        }
-        if (*p == '@') {
-            char *end = NULL;
-            const bool relative = p[1] == '+';
-            const double ms = strtod(p + (relative ? 2 : 1), &end);
-            if (end == p + 1 || ms < 0.0 || (*end != ' ' && *end != '\t' && *end != '\n' && *end != '\0')) {
-                fprintf(stderr, "canopen-emu: %s:%u: bad time (use '@MS command' or '@+MS command')\n", path, lineno);
-                fclose(f);
-                return false;
-            }
-            at = (relative ? at : 0U) + (co_time_us_t)(ms * 1000.0);
-            p = end;
-        }
-        if (s->len == cap) {
-            cap = cap == 0U ? 32U : cap * 2U;
-            script_line_t *grown = realloc(s->lines, cap * sizeof *grown);
-            if (grown == NULL) {
-                fclose(f);
-                return false;
-            }
-            s->lines = grown;
-        }
-        s->lines[s->len].at = at;
-        (void)snprintf(s->lines[s->len].text, SCRIPT_LINE_MAX, "%s", p);
-        s->len++;
+    struct stat st;
+    if (fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) { /* open() allows it, and reading it gave an empty script */
+        fprintf(stderr, "canopen-emu: cannot read script %s: it is a directory\n", path);
+        (void)close(fd);
+        return false;
     }
-    fclose(f);
-    return true;
+    script_loader_t loader = {s, path, 0U, 0U, false};
+    line_reader_t reader;
+    line_reader_init(&reader);
+    char chunk[4096];
+    ssize_t got;
+    while (!loader.failed && (got = read(fd, chunk, sizeof chunk)) != 0) {
+        if (got < 0) {
+            if (errno == EINTR) {
+                continue;
+            }
+            fprintf(stderr, "canopen-emu: cannot read script %s: %s\n", path, strerror(errno));
+            (void)close(fd);
+            return false;
+        }
+        line_reader_feed(&reader, chunk, (size_t)got, script_line, &loader);
+    }
+    if (!loader.failed) {
+        line_reader_finish(&reader, script_line, &loader);
+    }
+    (void)close(fd);
+    return !loader.failed;
 }
 
 co_time_us_t script_next_at(const emu_script_t *s)
@@ -72,6 +154,9 @@ bool script_take_due(emu_script_t *s, co_time_us_t elapsed, char *line, size_t s
 
 void script_free(emu_script_t *s)
 {
+    for (size_t i = 0U; i < s->len; i++) {
+        free(s->lines[i].text);
+    }
     free(s->lines);
     s->lines = NULL;
     s->len = 0U;

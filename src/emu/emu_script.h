@@ -10,11 +10,13 @@
 
 #include "co/co.h"
 
-#define SCRIPT_LINE_MAX 512
+/** The latest time a script line may have, in ms after the start (about 11.6 days). A bound far below what
+ *  overflows: a time just below 2^64 µs wrapped the loop's deadline (100 % CPU while idle). */
+#define SCRIPT_TIME_MAX_MS 1000000000ULL
 
 typedef struct script_line {
     co_time_us_t at;        /* since the program's start */
-    char text[SCRIPT_LINE_MAX];
+    char *text;             /* malloc'd */
 } script_line_t;
 
 typedef struct emu_script {
@@ -23,7 +25,8 @@ typedef struct emu_script {
     size_t pos;             /* the next line to run */
 } emu_script_t;
 
-/** Reads the script at path; false (and a message on stderr) if it cannot be read or has a bad line. */
+/** Reads the script at path; false (and a message on stderr naming the line) if it cannot be read, is a directory,
+ *  or has a bad line: a bad time, a line longer than COMMAND_LINE_MAX bytes, a NUL byte. */
 bool script_load(emu_script_t *s, const char *path);
 
 /** When the next line is due (µs since the start), or CO_NEVER when none is left. */

@@ -108,3 +108,59 @@ def test_readme_demo_session_runs(tmp_path):
     for text in ("boot-up from node 16", "name \"ES61\"", "name \"SDS\"", "NMT start", "l/min",
                  "EMCY 0x3210", "EMCY 0x0000 (error reset)", "NMT state from its heartbeat: STOPPED"):
         assert text in out, f"{text!r} missing from the demo output"
+
+
+def run_script(tmp_path, content, node="sds:0x64", timeout=10):
+    """Runs canopen-emu with a script of `content` (str or bytes); a run that does not end fails."""
+    script = tmp_path / "test.script"
+    script.write_bytes(content if isinstance(content, bytes) else content.encode())
+    try:
+        r = subprocess.run([EMU, "--nvm-dir", str(tmp_path / "nvm"), "--script", str(script), node],
+                           capture_output=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired as e:
+        raise AssertionError(f"canopen-emu still ran after {timeout} s with the script {content[:200]!r}; "
+                             f"stderr: {e.stderr!r}") from None
+    return script, r.returncode, r.stdout.decode(errors="replace"), r.stderr.decode(errors="replace")
+
+
+# strtod read these: inf and 1e300 ran at once, nan never, a time near 2^64 us wrapped the loop's deadline (100 % CPU
+# while idle); fractions, signs, hex, blanks and trailing text are no whole number of milliseconds either.
+BAD_TIMES = ["@inf", "@1e300", "@nan", "@18446744073709551", "@1000000001", "@99999999999999999999999", "@1.5",
+             "@-1", "@+-1", "@0x10", "@ 5", "@+", "@", "@10quit"]
+
+
+@pytest.mark.parametrize("time_text", BAD_TIMES)
+def test_a_bad_script_time_is_refused_with_its_line_number(tmp_path, time_text):
+    script, rc, out, err = run_script(tmp_path, f"# times\n@0 show 0x64\n{time_text} quit\n")
+    assert rc == 2 and (f"{script}:3: bad time" in err or f"{script}:3: time after the start beyond" in err), (rc, err)
+    assert out == ""  # refused before anything started
+
+
+def test_script_times_add_up_to_at_most_the_documented_limit(tmp_path):
+    script, rc, _, err = run_script(tmp_path, "@+600000000 show 0x64\n@+400000000 show 0x64\n@+1 quit\n")
+    assert rc == 2 and f"{script}:3: time after the start beyond the limit of 1000000000 ms" in err, (rc, err)
+    # leading zeros (decimal) and the limit itself are taken (lines run in order: quit at 10 ms ends it before)
+    _, rc, out, err = run_script(tmp_path, "@0010 quit\n@1000000000 show 0x64\n")
+    assert rc == 0 and out == "", (rc, out, err)
+
+
+def test_a_long_script_line_is_one_line(tmp_path):
+    # fgets cut lines at 511 bytes: the tail of this comment ran as a command
+    _, rc, out, err = run_script(tmp_path, "#" + "x" * 510 + "show 0x64\n@100 quit\n")
+    assert rc == 0 and "node 100" not in out, (rc, out, err)
+    # the longest line taken: 2047 bytes
+    _, rc, out, err = run_script(tmp_path, "@0 show 0x64" + " " * 2035 + "\n@100 quit\n")
+    assert rc == 0 and "node 100: sds node-ID 100" in out, (rc, out, err)
+
+
+def test_an_overlong_script_line_or_a_nul_byte_is_refused_with_its_line_number(tmp_path):
+    script, rc, out, err = run_script(tmp_path, "@0 show 0x64\n#" + "x" * 2047 + "\n@100 quit\n")
+    assert rc == 2 and f"{script}:2: line longer than 2047 bytes" in err and out == "", (rc, out, err)
+    script, rc, out, err = run_script(tmp_path, b"@0 list\n@0 show 0x64\0 quit\n@100 quit\n")
+    assert rc == 2 and f"{script}:2: a NUL byte in the line" in err and out == "", (rc, out, err)
+
+
+def test_a_script_that_is_a_directory_is_refused(tmp_path):
+    r = subprocess.run([EMU, "--nvm-dir", str(tmp_path / "nvm"), "--script", str(tmp_path), "sds:0x64"],
+                       capture_output=True, text=True, timeout=10, stdin=subprocess.DEVNULL)
+    assert r.returncode == 2 and f"cannot read script {tmp_path}: it is a directory" in r.stderr, r
