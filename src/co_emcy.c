@@ -160,9 +160,8 @@ co_time_us_t co_emcy_process(co_node_t *node)
     return CO_NEVER;
 }
 
-uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)
 {
-    (void)len;
     if (e->index != 0x1014U) {
         return CO_ABORT_NONE;
     }
@@ -175,7 +174,7 @@ uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint
         if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
             return CO_ABORT_INVALID_VALUE;
         }
-        if ((cur & CO_COBID_INVALID) == 0U && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
+        if (!stored && (cur & CO_COBID_INVALID) == 0U && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
             return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while bit 31 is set */
         }
     }

@@ -90,11 +90,18 @@ void co_node_set_state(co_node_t *node, co_nmt_state_t state)
     }
 }
 
-static void reset_communication(co_node_t *node)
+/* loaded: the communication area was just loaded with the application area (a reset application). Otherwise
+ * it is loaded again, unless the stored parameters were refused (their records passed no write check). */
+static void reset_communication(co_node_t *node, bool loaded)
 {
     node->nmt_state = CO_NMT_INITIALISING;
     node->node_id = node->lss.pending_node_id;
-    co_od_reset_area(node, 0x1000U, 0x1FFFU);
+    if (!loaded) {
+        co_od_defaults_area(node, 0x1000U, 0x1FFFU);
+        if (node->nvm_status != CO_NVM_REFUSED) {
+            co_store_load_area(node, 0x1000U, 0x1FFFU);
+        }
+    }
     co_emcy_reset(node);
     co_sdo_reset(node);
     co_hb_reset(node);
@@ -120,15 +127,18 @@ static void reset_communication(co_node_t *node)
 void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
 {
     node->now = now;
-    if (what == CO_RESET_APPLICATION) {
+    const bool application = what == CO_RESET_APPLICATION;
+    if (application) {
+        /* Both areas from one pass over the stored records, so that one refused record refuses them all. */
         node->nmt_state = CO_NMT_INITIALISING;
-        co_od_reset_area(node, 0x2000U, 0x9FFFU);
+        node->node_id = node->lss.pending_node_id;
+        co_od_reset_area(node, 0x1000U, 0x9FFFU);
         co_node_event(node, CO_EV_NVM_LOADED, 0x1010U, 0U, (uint32_t)node->nvm_status, 0U);
         if (node->hooks != NULL && node->hooks->on_reset != NULL) {
             node->hooks->on_reset(node->hooks_ctx, node, CO_RESET_APPLICATION);
         }
     }
-    reset_communication(node);
+    reset_communication(node, application);
 }
 
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now)

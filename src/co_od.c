@@ -275,8 +275,9 @@ uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t 
     return CO_ABORT_NONE;
 }
 
-/* Protocol rules of the communication objects, by owner module. CO_HANDLED: an action, nothing to store. */
-static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+/* Protocol rules of the communication objects, by owner module. CO_HANDLED: an action, nothing to store.
+ * stored: a value being loaded (co_priv.h). */
+static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len, bool stored)
 {
     switch (e->index) {
     case 0x1001:
@@ -286,13 +287,13 @@ static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const 
         if (e->index == 0x1003 && e->sub == 0U) {
             return co_emcy_write_action(node, e, data, len) ? CO_HANDLED : CO_ABORT_INVALID_VALUE;
         }
-        return co_emcy_check_write(node, e, data, len);
+        return co_emcy_check_write(node, e, data, stored);
 #if CO_CONFIG_SYNC
     case 0x1005:
     case 0x1006:
     case 0x1007:
     case 0x1019:
-        return co_sync_check_write(node, e, data, len);
+        return co_sync_check_write(node, e, data, len, stored);
 #endif
     case 0x1010:
     case 0x1011: {
@@ -305,7 +306,7 @@ static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const 
         return co_hb_check_write(node, e, data, len);
     default:
         if (e->index >= 0x1400U && e->index <= 0x1BFFU) {
-            return co_pdo_check_write(node, e, data, len);
+            return co_pdo_check_write(node, e, data, stored);
         }
         return CO_ABORT_NONE;
     }
@@ -407,7 +408,7 @@ uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *d
         }
     }
     if (index < 0x2000U) {
-        r = comm_check_write(node, e, bytes, len);
+        r = comm_check_write(node, e, bytes, len, false);
         if (r == CO_HANDLED) {
             return CO_ABORT_NONE;
         }
@@ -426,6 +427,19 @@ uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *d
         comm_written(node, e);
     }
     return CO_ABORT_NONE;
+}
+
+uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    uint32_t r = co_od_check_limits(e, data, len);
+    if (r == CO_ABORT_NONE && e->index < 0x2000U) {
+        r = comm_check_write(node, e, data, len, true);
+        r = r == CO_HANDLED ? CO_ABORT_NONE : r;
+    }
+    if (r == CO_ABORT_NONE && node->hooks != NULL && node->hooks->on_write != NULL) {
+        r = node->hooks->on_write(node->hooks_ctx, node, e, data, len, CO_ORIGIN_NVM);
+    }
+    return r;
 }
 
 void *co_od_value(co_node_t *node, uint16_t index, uint8_t sub)
@@ -467,7 +481,7 @@ uint32_t co_od_set_u32(co_node_t *node, uint16_t index, uint8_t sub, uint32_t va
     return set_local(node, index, sub, value, 4U);
 }
 
-void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last)
+void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     const co_od_t *od = node->od;
     const uint8_t *defaults = (const uint8_t *)od->defaults;
@@ -478,5 +492,10 @@ void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last)
             co_od_entry_set_u32(node, e, co_od_entry_u32(node, e) + node->node_id);
         }
     }
+}
+
+void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last)
+{
+    co_od_defaults_area(node, first, last);
     co_store_load_area(node, first, last);
 }

@@ -340,9 +340,9 @@ static bool pdo_is_valid(const co_node_t *node, uint16_t comm_index)
     return (co_od_u32_or(node, comm_index, 1U, CO_COBID_INVALID) & CO_COBID_INVALID) == 0U;
 }
 
-static uint32_t check_comm(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool receive)
+static uint32_t check_comm(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool receive, bool stored)
 {
-    const bool valid = pdo_is_valid(node, e->index);
+    const bool valid = !stored && pdo_is_valid(node, e->index); /* stored: a value, not a change while valid */
     switch (e->sub) {
     case 1: {
         const uint32_t v = co_get_u32(data);
@@ -358,6 +358,9 @@ static uint32_t check_comm(co_node_t *node, const co_od_entry_t *e, const uint8_
         }
         if (valid && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
             return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while the PDO is invalid */
+        }
+        if (stored) {
+            return CO_ABORT_NONE; /* its mapping loads after it (records in index order): checked at configuration */
         }
         const uint16_t map = (uint16_t)(e->index + 0x200U);
         co_pdo_map_t tmp[8];
@@ -377,16 +380,19 @@ static uint32_t check_comm(co_node_t *node, const co_od_entry_t *e, const uint8_
     }
 }
 
-static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool receive)
+static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool receive, bool stored)
 {
 #if CO_CONFIG_PDO_DYNAMIC_MAPPING
-    if (pdo_is_valid(node, (uint16_t)(e->index - 0x200U))) {
+    if (!stored && pdo_is_valid(node, (uint16_t)(e->index - 0x200U))) {
         return CO_ABORT_UNSUPPORTED_ACCESS; /* step 1 of the mapping procedure: make the PDO invalid */
     }
     if (e->sub == 0U) {
         const uint8_t n = data[0];
         if (n > 8U || n > co_od_sub_count(node->od, e->index)) {
             return CO_ABORT_PDO_LENGTH;
+        }
+        if (stored) {
+            return CO_ABORT_NONE; /* its entries load after it: each is checked on its own, the sum at configuration */
         }
         uint32_t bytes = 0U;
         for (uint8_t i = 1U; i <= n; i++) {
@@ -399,7 +405,7 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
         }
         return bytes > 8U ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
     }
-    if (co_od_u32_or(node, e->index, 0U, 0U) != 0U) {
+    if (!stored && co_od_u32_or(node, e->index, 0U, 0U) != 0U) {
         return CO_ABORT_UNSUPPORTED_ACCESS; /* step 2: sub 0 must be 0 while entries change */
     }
     const uint32_t v = co_get_u32(data);
@@ -416,24 +422,23 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
     (void)e;
     (void)data;
     (void)receive;
-    return CO_ABORT_READ_ONLY;
+    return stored ? CO_ABORT_NONE : CO_ABORT_READ_ONLY; /* a fixed mapping: a stored copy of it is no change */
 #endif
 }
 
-uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)
 {
-    (void)len;
     const uint16_t base = (uint16_t)(e->index & 0xFE00U);
     const uint16_t n = (uint16_t)(e->index & 0x01FFU);
     switch (base) {
     case RPDO_COMM:
-        return n < node->n_rpdo ? check_comm(node, e, data, true) : CO_ABORT_NONE;
+        return n < node->n_rpdo ? check_comm(node, e, data, true, stored) : CO_ABORT_NONE;
     case TPDO_COMM:
-        return n < node->n_tpdo ? check_comm(node, e, data, false) : CO_ABORT_NONE;
+        return n < node->n_tpdo ? check_comm(node, e, data, false, stored) : CO_ABORT_NONE;
     case RPDO_MAP:
-        return n < node->n_rpdo ? check_map(node, e, data, true) : CO_ABORT_NONE;
+        return n < node->n_rpdo ? check_map(node, e, data, true, stored) : CO_ABORT_NONE;
     case TPDO_MAP:
-        return n < node->n_tpdo ? check_map(node, e, data, false) : CO_ABORT_NONE;
+        return n < node->n_tpdo ? check_map(node, e, data, false, stored) : CO_ABORT_NONE;
     default:
         return CO_ABORT_NONE;
     }

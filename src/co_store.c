@@ -143,6 +143,11 @@ static bool reader_seek(record_reader_t *r, uint16_t index, uint8_t sub)
     return r->valid && r->index == index && r->sub == sub;
 }
 
+/* Loads the records of [first, last] in index order, each checked as a write of it would be (co_od_check_stored:
+ * a value SDO would refuse, e.g. a restricted PDO COB-ID, must not come back through a file). Checks that depend
+ * on another stored value see it loaded when it precedes (an E-field type before its limits). One refused
+ * record refuses the area: it returns to its defaults and the node reports it (CO_EV_NVM_REFUSED, then
+ * CO_NVM_REFUSED), as for a damaged blob. */
 void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     record_reader_t local;
@@ -158,6 +163,13 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
         const uint16_t fixed = co_od_type_size(e->type);
         if ((fixed != 0U && local.len != fixed) || local.len > e->size) {
             continue;
+        }
+        const uint32_t r = co_od_check_stored(node, e, local.value, local.len);
+        if (r != CO_ABORT_NONE) {
+            co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 0U, r);
+            co_od_defaults_area(node, first, last);
+            node->nvm_status = CO_NVM_REFUSED;
+            return;
         }
         co_od_store_value(node, e, local.value, local.len);
     }

@@ -73,7 +73,7 @@ co_time_us_t co_sync_process(co_node_t *node)
     return node->sync.timeout_due;
 }
 
-uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len, bool stored)
 {
     const uint32_t v = len >= 4U ? co_get_u32(data) : data[0];
     switch (e->index) {
@@ -89,7 +89,7 @@ uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint
         if (v == 1U || v > 240U) {
             return CO_ABORT_INVALID_VALUE;
         }
-        if (co_od_u32_or(node, 0x1006U, 0U, 0U) != 0U) {
+        if (!stored && co_od_u32_or(node, 0x1006U, 0U, 0U) != 0U) {
             return CO_ABORT_DEVICE_STATE; /* may only change while the cycle period is 0 */
         }
         return CO_ABORT_NONE;

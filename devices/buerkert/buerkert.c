@@ -504,6 +504,29 @@ static void bk_on_reset(device_t *dev, co_reset_t what)
 
 static float wire_float(const uint8_t *data) { return bits_float(get_u32(data)); }
 
+/* The value rules of bk_on_write without its actions: for stored values being loaded (CO_ORIGIN_NVM). */
+static uint32_t check_stored(const device_t *dev, uint32_t key, const uint8_t *data)
+{
+    switch (key) {
+    case 0x254001U:
+    case 0x200403U:
+    case 0x200407U:
+    case 0x200408U:
+        return isfinite(wire_float(data)) ? CO_ABORT_NONE : CO_ABORT_INVALID_VALUE;
+    case 0x200101U:
+        if (data[0] >= CO_LSS_BIT_TIMING_COUNT) {
+            return CO_ABORT_VALUE_HIGH;
+        }
+        return dev->node.bit_rates_kbit[data[0]] != 0U ? CO_ABORT_NONE : CO_ABORT_INVALID_VALUE;
+    case 0x200102U:
+        return (data[0] >= 1U && data[0] <= 127U) ? CO_ABORT_NONE : CO_ABORT_INVALID_VALUE;
+    case 0x200104U:
+        return data[0] > 2U ? CO_ABORT_VALUE_HIGH : CO_ABORT_NONE;
+    default:
+        return CO_ABORT_NONE;
+    }
+}
+
 static uint32_t bk_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len,
                             co_od_origin_t origin)
 {
@@ -511,6 +534,9 @@ static uint32_t bk_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t
     const bk_stored_t before = stored_of(m);
     (void)len;
     const uint32_t key = ((uint32_t)e->index << 8) | e->sub;
+    if (origin == CO_ORIGIN_NVM) {
+        return check_stored(dev, key, data);
+    }
     switch (key) {
     case 0x254001U: {
         if (!isfinite(wire_float(data))) {

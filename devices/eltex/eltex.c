@@ -463,7 +463,7 @@ uint32_t eltex_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *da
         return (ms % 100U) != 0U ? CO_ABORT_INVALID_VALUE : 0U;
     }
     case 0x2002:
-        if (e->sub == 0x01U && x->tpdo_next != CO_NEVER) {
+        if (e->sub == 0x01U && x->tpdo_next != CO_NEVER && origin != CO_ORIGIN_NVM) {
             const uint16_t ms = (uint16_t)(data[0] | (data[1] << 8));
             x->tpdo_next = dev->now + (co_time_us_t)(ms < 100U ? 100U : ms) * 1000U; /* E12: restarts at the write */
         } else if (e->sub == 0x07U) {

@@ -857,17 +857,34 @@ static void efield_type_defaults(device_t *dev, unsigned s, uint8_t type)
     }
 }
 
+/* The value rules of 0x2002 beyond the EDS limits (no action: also for stored values being loaded). */
+static uint32_t check_param(device_t *dev, uint8_t sub, const uint8_t *data)
+{
+    if (sub == 0x2FU) {
+        static const uint8_t need[4] = {0U, G_SPEED, G_EFIELD, G_EXTBOX};
+        return (data[0] <= 3U && has(dev, need[data[0]])) ? 0U : CO_ABORT_INVALID_VALUE;
+    }
+    if ((sub >= 0x32U && sub <= 0x35U) || (sub >= 0x37U && sub <= 0x3AU)) {
+        return check_efield(dev, sub, data);
+    }
+    return 0U;
+}
+
 static uint32_t on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len, co_od_origin_t origin)
 {
     if (hidden(dev, e)) {
         return CO_ABORT_NO_SUBINDEX;
     }
-    if (e->index == 0x2003U) {
+    const bool act = origin != CO_ORIGIN_NVM; /* a stored value being loaded is only checked */
+    if (e->index == 0x2003U && act) {
         advance(dev, dev->now);
     }
     const uint32_t r = eltex_on_write(dev, e, data, len, origin); /* 0x1017, 0x2002:01/07, 0x2003, E6 */
     if (r != 0U) {
         return r;
+    }
+    if (!act) {
+        return e->index == 0x2002U ? check_param(dev, e->sub, data) : 0U;
     }
     if (e->index == 0x2003U) {
         publish(dev); /* a deleted item: status at once */
@@ -880,10 +897,6 @@ static uint32_t on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *d
         return 0U;
     }
     switch (e->sub) {
-    case 0x2F: {
-        static const uint8_t need[4] = {0U, G_SPEED, G_EFIELD, G_EXTBOX};
-        return (data[0] <= 3U && has(dev, need[data[0]])) ? 0U : CO_ABORT_INVALID_VALUE;
-    }
     case 0x31:
     case 0x36: {
         const unsigned s = e->sub == 0x36U ? 1U : 0U;
@@ -894,10 +907,7 @@ static uint32_t on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *d
         return 0U;
     }
     default:
-        if ((e->sub >= 0x32U && e->sub <= 0x35U) || (e->sub >= 0x37U && e->sub <= 0x3AU)) {
-            return check_efield(dev, e->sub, data);
-        }
-        return 0U;
+        return check_param(dev, e->sub, data);
     }
 }
 

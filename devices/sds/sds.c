@@ -425,13 +425,11 @@ static void sds_on_reset(device_t *dev, co_reset_t what)
         return;
     }
     advance(dev, dev->now);
-    /* D4: variant default where 0x1010 stored nothing; a stored distance outside the range is clamped. */
-    if (dev->variant == VARIANT_E && !m->eltex.params_stored) {
+    /* D4: variant default where 0x1010 stored nothing (a stored distance outside the variant's range was refused
+     * at the load: the parameters are then the defaults, reported as CO_NVM_REFUSED). */
+    if (dev->variant == VARIANT_E && (!m->eltex.params_stored || dev->node.nvm_status != CO_NVM_LOADED)) {
         v->x2002_09 = 40U;
     }
-    uint8_t lo, hi;
-    distance_range(dev, &lo, &hi);
-    v->x2002_08 = v->x2002_08 < lo ? lo : (v->x2002_08 > hi ? hi : v->x2002_08);
     /* The application restarts: HV off, momentary faults forgotten, persisting ones kept (E10, D12). */
     m->released = false;
     m->hv_on = false;
@@ -439,18 +437,23 @@ static void sds_on_reset(device_t *dev, co_reset_t what)
     refresh(dev);
 }
 
-static uint32_t write_param(device_t *dev, uint8_t sub, const uint8_t *data)
+/* act false: a stored value being loaded, only checked. */
+static uint32_t write_param(device_t *dev, uint8_t sub, const uint8_t *data, bool act)
 {
     const uint8_t u8 = data[0];
+    if (!act) {
+        if (sub == 0x08U) {
+            uint8_t lo, hi;
+            distance_range(dev, &lo, &hi);
+            return u8 > hi ? CO_ABORT_VALUE_HIGH : (u8 < lo ? CO_ABORT_VALUE_LOW : 0U);
+        }
+        return 0U;
+    }
     switch (sub) {
     case 0x08: {
-        uint8_t lo, hi;
-        distance_range(dev, &lo, &hi);
-        if (u8 > hi) {
-            return CO_ABORT_VALUE_HIGH;
-        }
-        if (u8 < lo) {
-            return CO_ABORT_VALUE_LOW;
+        const uint32_t r = write_param(dev, sub, data, false);
+        if (r != 0U) {
+            return r;
         }
         vals(dev)->x6000_05 = u8; /* read back at once; voltages follow at the next ticks */
         return 0U;
@@ -481,7 +484,8 @@ static uint32_t write_release(device_t *dev, uint8_t value)
 static uint32_t sds_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len,
                              co_od_origin_t origin)
 {
-    if (e->index == 0x2002U || e->index == 0x2003U || e->index == 0x6200U) {
+    const bool act = origin != CO_ORIGIN_NVM; /* a stored value being loaded is only checked */
+    if (act && (e->index == 0x2002U || e->index == 0x2003U || e->index == 0x6200U)) {
         advance(dev, dev->now); /* the model's state of now decides */
     }
     const uint32_t r = eltex_on_write(dev, e, data, len, origin); /* 0x1017, 0x2002:01/07, 0x2003, E6, E14 */
@@ -489,7 +493,10 @@ static uint32_t sds_on_write(device_t *dev, const co_od_entry_t *e, const uint8_
         return r;
     }
     if (e->index == 0x2002U) {
-        return write_param(dev, e->sub, data);
+        return write_param(dev, e->sub, data, act);
+    }
+    if (!act) {
+        return 0U;
     }
     if (e->index == 0x6200U && e->sub == 1U) {
         return write_release(dev, data[0]);

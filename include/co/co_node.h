@@ -50,7 +50,9 @@ typedef enum co_event_kind {
     CO_EV_LSS_ACTIVATE,       /**< value = kbit/s switched to. */
     CO_EV_HB_TIMEOUT,         /**< value = monitored node-ID whose heartbeat is missing. */
     CO_EV_GUARD_TIMEOUT,      /**< life guarding: no guard request within the node life time. */
-    CO_EV_TX_DROPPED          /**< a frame could not be queued or sent; value = CAN-ID. */
+    CO_EV_TX_DROPPED,         /**< a frame could not be queued or sent; value = CAN-ID. */
+    CO_EV_NVM_REFUSED         /**< a stored value an SDO write of it would be refused: index/sub of the object,
+                                   code = the abort code; the area then loads as CO_NVM_REFUSED (defaults). */
 } co_event_kind_t;
 
 typedef struct co_event {
@@ -132,7 +134,8 @@ typedef enum co_nvm_status {
     CO_NVM_NONE = 0,     /**< Nothing stored (or no storage): defaults used. */
     CO_NVM_LOADED = 1,   /**< Stored values loaded. */
     CO_NVM_CORRUPT = 2,  /**< A blob was there but its header, length or CRC is wrong: defaults used. */
-    CO_NVM_FOREIGN = 3   /**< A valid blob of another object dictionary: defaults used. */
+    CO_NVM_FOREIGN = 3,  /**< A valid blob of another object dictionary: defaults used. */
+    CO_NVM_REFUSED = 4   /**< A valid blob with a value its object refuses (CO_EV_NVM_REFUSED): defaults used. */
 } co_nvm_status_t;
 
 /* ---- Service state (read-only for the application) ------------------------------------------------ */

@@ -78,7 +78,11 @@ typedef struct co_od {
 typedef enum co_od_origin {
     CO_ORIGIN_SDO = 0,   /**< An SDO client: access rights, lengths, limits and protocol rules are checked. */
     CO_ORIGIN_RPDO = 1,  /**< An RPDO: the row must be RPDO-mappable; limits and the write hook apply. */
-    CO_ORIGIN_LOCAL = 2  /**< The device application: no access rights, only existence, length and CONST. */
+    CO_ORIGIN_LOCAL = 2, /**< The device application: no access rights, only existence, length and CONST. */
+    CO_ORIGIN_NVM = 3    /**< A stored value being loaded (0x1010 parameters, at power-on and resets): the checks
+                              of an SDO write except access rights and the rules about changing a value in a
+                              state (a valid PDO's COB-ID, mapping procedure); the write hook only checks it
+                              (it must not act: the model sees the loaded values in on_reset). */
 } co_od_origin_t;
 
 /** Finds a row, or NULL. O(log n). */

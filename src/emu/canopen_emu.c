@@ -95,6 +95,10 @@ static void device_event(void *ctx, const device_t *dev, const co_event_t *ev)
                     ev->value == CO_NVM_LOADED ? "loaded" : "none, defaults used");
         }
         break;
+    case CO_EV_NVM_REFUSED: /* then CO_EV_NVM_LOADED with CO_NVM_REFUSED, which needs no second line */
+        logline(LOG_QUIET, "node %u (%s): stored parameters refused: 0x%04X:%02X holds a value a write would be "
+                "refused for (%s); starting from defaults", id, name, ev->index, ev->sub, co_abort_text(ev->code));
+        break;
     case CO_EV_LSS_NODE_ID:
         logline(LOG_NORMAL, "node %u (%s): LSS pending node-ID %lu", id, name, (unsigned long)ev->value);
         break;

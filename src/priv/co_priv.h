@@ -55,6 +55,11 @@ void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *d
 size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap);
 /* Checks a value against the row's limits; 0 or VALUE_HIGH/VALUE_LOW. */
 uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t len);
+/* The checks a stored value of e passes before it is loaded (CO_ORIGIN_NVM): limits, the owner module's value
+ * rules, the write hook. 0 or the abort code an SDO write of it would get. */
+uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+/* Sets the values of [first, last] to their defaults (node-ID-relative rows with the node-ID added). */
+void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last);
 
 /* ---- node (co_node.c) ---- */
 /* Queues/sends a frame through the port; frames are retried when the port is busy. */
@@ -84,10 +89,14 @@ void co_guard_reset(co_node_t *node);
 void co_guard_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_guard_process(co_node_t *node);
 
+/* The modules' write checks take `stored`: true for a stored value being loaded (co_od_check_stored), which is
+ * judged as a value only, not as a change of the present configuration (CiA 301's procedures for changing a
+ * valid PDO or EMCY COB-ID do not apply to the values a store of the whole configuration brings back). */
+
 /* ---- EMCY (co_emcy.c) ---- */
 void co_emcy_reset(co_node_t *node);
 co_time_us_t co_emcy_process(co_node_t *node);
-uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
 uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e);
 bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 
@@ -100,7 +109,7 @@ co_time_us_t co_sdo_process(co_node_t *node);
 void co_sync_reset(co_node_t *node);
 bool co_sync_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_sync_process(co_node_t *node);
-uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len, bool stored);
 void co_sync_written(co_node_t *node, const co_od_entry_t *e);
 
 /* ---- PDO (co_pdo.c) ---- */
@@ -109,7 +118,7 @@ bool co_pdo_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_pdo_process(co_node_t *node);
 void co_pdo_on_sync(co_node_t *node, uint8_t counter);
 void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to);
-uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
+uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *e);
 co_status_t co_pdo_count(co_node_t *node);
 

@@ -621,17 +621,29 @@ static void variant_e_working_distance_15_to_30(void)
     TEST_ASSERT_EQUAL_INT32(9000, rd(0x2001U, 5U));
 }
 
-static void variant_change_with_the_same_nvm_clamps_the_stored_distance(void)
+/* D4: the parameters an SDS/E saved, loaded by an SDS/N: the working distance 25 is out of the N's range, which
+ * a write of it would be refused for (0x06090031), so the stored parameters are refused as a whole and reported
+ * (CO_NVM_REFUSED): the N starts from its defaults, not with a clamped or foreign value. The same file on the E
+ * again loads as saved. */
+static void variant_change_with_the_same_nvm_refuses_the_stored_distance(void)
 {
     start_variant(5U, "E");
     TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2002U, 8U, 25U, 1U));
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2002U, 9U, 44U, 1U));
     save();
     device_cfg_t cfg = S.dev.cfg; /* the same port and NVM, now as an SDS/N */
     cfg.variant = "N";
     TEST_ASSERT_EQUAL_INT(CO_OK, device_init(&S.dev, &sds_class, &S.values, S.model.bytes, &cfg, S.now));
     process();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_REFUSED, S.dev.node.nvm_status);
     TEST_ASSERT_EQUAL_INT32(15, rd(0x6000U, 5U));
-    TEST_ASSERT_EQUAL_INT32(40, rd(0x2001U, 9U)); /* saved with the parameters on the SDS/E */
+    TEST_ASSERT_EQUAL_INT32(48, rd(0x2001U, 9U)); /* the N's default, not the E's stored 44 */
+    cfg.variant = "E";
+    TEST_ASSERT_EQUAL_INT(CO_OK, device_init(&S.dev, &sds_class, &S.values, S.model.bytes, &cfg, S.now));
+    process();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, S.dev.node.nvm_status);
+    TEST_ASSERT_EQUAL_INT32(25, rd(0x6000U, 5U));
+    TEST_ASSERT_EQUAL_INT32(44, rd(0x2001U, 9U));
 }
 
 static void variant_pulse_frequency_defaults_48_and_40(void)
@@ -1012,7 +1024,7 @@ int main(void)
     RUN_TEST(power_cycle_keeps_the_inputs_and_restarts_the_bar);
     RUN_TEST(variant_n_working_distance_10_to_15);
     RUN_TEST(variant_e_working_distance_15_to_30);
-    RUN_TEST(variant_change_with_the_same_nvm_clamps_the_stored_distance);
+    RUN_TEST(variant_change_with_the_same_nvm_refuses_the_stored_distance);
     RUN_TEST(variant_pulse_frequency_defaults_48_and_40);
     RUN_TEST(tpdo1_tpdo2_every_transfer_time_only_in_operational);
     RUN_TEST(tpdo_grid_does_not_drift_with_late_calls);

@@ -703,3 +703,62 @@ def test_area_file_that_is_not_a_file(emulator, bus, tmp_path, kind):
     bus.wait_bootups(mark, [16])
     assert bus.read([(16, 0x1017, 0)])[(16, 0x1017, 0)] == 1000
     assert emu.stop() == 0
+
+
+# ---- stored values pass the checks of a write (docs/robustness.md) ---------------------------------------------
+
+def patch_params(path, index, sub, value):
+    """Rewrites the value of one record of a stored parameter file and its CRC: a file no CRC check tells from
+    one the emulator wrote, with a value an SDO write of it would be refused for."""
+    import zlib
+    blob = bytearray(path.read_bytes())
+    assert blob[:4] == b"COS1", blob[:4]
+    end = 16 + struct.unpack_from("<I", blob, 8)[0]
+    pos = 16
+    while pos < end:
+        idx, sb, size = struct.unpack_from("<HBB", blob, pos)
+        if (idx, sb) == (index, sub):
+            blob[pos + 4:pos + 4 + size] = value.to_bytes(size, "little")
+            struct.pack_into("<I", blob, 12, zlib.crc32(bytes(blob[16:end])))
+            path.write_bytes(bytes(blob))
+            return
+        pos += 4 + size
+    raise AssertionError(f"no record 0x{index:04X}:{sub:02X} in {path}")
+
+
+@pytest.mark.parametrize("device,node,writes,record,bad,abort", [
+    # PRO IONIZER: heartbeat 0 or 100..60000 ms in steps of 100 (rule E5, the device's check)
+    ("pro-ionizer", 16, [(0x1017, 0, u16(3000))], (0x1017, 0), 50, "value of parameter written too low"),
+    # Buerkert: TPDO1 on COB-ID 0x000 (the NMT identifier: restricted, CiA 301 7.3.5)
+    ("buerkert", 5, [(0x1800, 1, u32(0x800001A0)), (0x1800, 1, u32(0x000001A0))], (0x1800, 1), 0x000,
+     "invalid value for parameter"),
+])
+def test_stored_value_a_write_would_refuse_is_not_loaded(emulator, bus, tmp_path, device, node, writes, record,
+                                                         bad, abort):
+    """A CRC-valid parameter file holding a value SDO would refuse is not loaded as it is (it was: the Buerkert
+    node then sent TPDO1 on the NMT COB-ID every second): the node reports it with the object and starts from its
+    defaults."""
+    nvm = tmp_path / "nvm"
+    mark = bus.mark()
+    emu = emulator(f"{device}:{node}", nvm_dir=nvm, control=False)
+    bus.wait_bootups(mark, [node])
+    for w in writes + [(0x1010, 1, SAVE)]:  # one at a time: two writes of one object have one answer key
+        bus.write([(node,) + w])
+    assert emu.stop() == 0
+    patch_params(nvm / f"{device}-{node}.params", record[0], record[1], bad)
+    mark = bus.mark()
+    emu = emulator(f"{device}:{node}", nvm_dir=nvm, control=False)
+    bus.wait_bootups(mark, [node])
+    assert emu.log_contains(f"node {node} ({device}): stored parameters refused: 0x{record[0]:04X}:{record[1]:02X} "
+                            f"holds a value a write would be refused for ({abort})"), emu.err_lines
+    defaults = canopen.import_od(str(EDS[device]), node)
+    key = (node,) + record
+    default = defaults[record[0]][record[1]].default if record[0] != 0x1017 else defaults[0x1017].default
+    assert bus.read([key])[key] == default
+    # nothing goes out on COB-ID 0x000 in Operational, where a valid TPDO1 would be sent
+    mark = bus.mark()
+    bus.send(0x000, bytes([0x01, node]))
+    time.sleep(1.5)
+    others = [m.data.hex() for m in bus.since(mark, 0x000) if bytes(m.data) != bytes([0x01, node])]
+    assert not others, others
+    assert emu.stop() == 0

@@ -594,6 +594,74 @@ static void failed_store_leaves_every_area_old(bool fail_hook)
 static void failed_device_area_fails_the_store(void) { failed_store_leaves_every_area_old(true); }
 static void failed_last_commit_drops_the_device_area(void) { failed_store_leaves_every_area_old(false); }
 
+/* ---- stored values pass the checks of a write (issue 12, D12) ---------------------------------------------- */
+
+#define DEFAULTS ((const test_od_values_t *)test_od.defaults)
+
+/* Overwrites the value of a stored record (same length) and makes the blob's CRC right again: a blob no CRC
+ * check can tell from one the node wrote, holding a value a write would be refused for. */
+static void patch_record(uint16_t index, uint8_t sub, uint32_t value)
+{
+    uint8_t *r = (uint8_t *)find_record(index, sub);
+    TEST_ASSERT_NOT_NULL_MESSAGE(r, "no such stored record");
+    for (uint8_t i = 0U; i < r[3]; i++) {
+        r[4U + i] = (uint8_t)(value >> (8U * i));
+    }
+    uint8_t *b = params()->stored;
+    const uint32_t crc = crc32_ieee(&b[HDR], le32(&b[8]));
+    for (uint8_t i = 0U; i < 4U; i++) {
+        b[12U + i] = (uint8_t)(crc >> (8U * i));
+    }
+}
+
+static void refused_record(uint16_t index, uint8_t sub, uint32_t value, uint32_t abort_code)
+{
+    wr(0x2000, 0, 1000U, 2U);
+    wr(0x1017, 0, 300U, 2U);
+    wr(0x1800, 2, 1U, 1U);
+    save(1U);
+    patch_record(index, sub, value);
+    power_cycle();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_REFUSED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT32(CO_NVM_REFUSED, nvm_loaded_event());
+    const int e = find_event(CO_EV_NVM_REFUSED);
+    TEST_ASSERT_TRUE_MESSAGE(e >= 0, "no CO_EV_NVM_REFUSED event");
+    TEST_ASSERT_EQUAL_HEX16(index, fx.events[e].index);
+    TEST_ASSERT_EQUAL_HEX8(sub, fx.events[e].sub);
+    TEST_ASSERT_EQUAL_HEX32(abort_code, fx.events[e].code);
+    /* the whole blob is refused: every stored value is back at its default, in both areas */
+    TEST_ASSERT_EQUAL_UINT16(DEFAULTS->x2000_cycle_ms, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_UINT16(DEFAULTS->x1017_producer_hb, fx.values.x1017_producer_hb);
+    TEST_ASSERT_EQUAL_UINT8(DEFAULTS->tpdo_comm[0].type, fx.values.tpdo_comm[0].type);
+    /* ... also after a reset communication, which loads the communication area again */
+    fx_rx(0x000U, 2U, (const uint8_t[]){0x82, 0x05});
+    TEST_ASSERT_EQUAL_UINT16(DEFAULTS->x1017_producer_hb, fx.values.x1017_producer_hb);
+    /* a new save of valid values loads again */
+    wr(0x1017, 0, 400U, 2U);
+    save(1U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT16(400U, fx.values.x1017_producer_hb);
+}
+
+static void stored_value_above_its_limit_is_refused(void) { refused_record(0x2000, 0, 60001U, 0x06090031UL); }
+static void stored_reserved_transmission_type_is_refused(void) { refused_record(0x1800, 2, 245U, 0x06090030UL); }
+
+/* A TPDO whose COB-ID was changed by the CiA 301 procedure (invalid, new ID, valid again) is stored valid with its
+ * new COB-ID and inhibit time: loading it is not a change of a valid PDO, so it loads whole. */
+static void stored_valid_pdo_with_new_cob_id_loads(void)
+{
+    wr(0x1800, 1, 0x80000185UL, 4U);
+    wr(0x1800, 1, 0x800001A5UL, 4U);
+    wr(0x1800, 3, 50U, 2U);
+    wr(0x1800, 1, 0x000001A5UL, 4U);
+    save(1U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_HEX32(0x000001A5UL, fx.values.tpdo_comm[0].cob_id);
+    TEST_ASSERT_EQUAL_UINT16(50U, fx.values.tpdo_comm[0].inhibit);
+}
+
 static void store_write_failure(void) { store_failure(true); }
 static void store_commit_failure(void) { store_failure(false); }
 
@@ -894,6 +962,9 @@ int main(void)
     RUN_TEST(damaged_lss_blob_is_reported_and_ignored);
     RUN_TEST(empty_parameter_blob_is_damaged);
     RUN_TEST(save_stages_device_areas_first_and_commits_params_last);
+    RUN_TEST(stored_value_above_its_limit_is_refused);
+    RUN_TEST(stored_reserved_transmission_type_is_refused);
+    RUN_TEST(stored_valid_pdo_with_new_cob_id_loads);
     RUN_TEST(failed_device_area_fails_the_store);
     RUN_TEST(failed_last_commit_drops_the_device_area);
     return UNITY_END();
