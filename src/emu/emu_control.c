@@ -3,18 +3,18 @@
 #include "emu_control.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 #include "emu.h"
 #include "emu_commands.h"
+#include "emu_fd_flags.h"
 #include "emu_output.h"
 
 void control_start(emu_control_t *c)
 {
     line_reader_init(&c->lines);
     if (c->enabled) {
-        (void)fcntl(STDIN_FILENO, F_SETFL, fcntl(STDIN_FILENO, F_GETFL) | O_NONBLOCK);
+        (void)fd_flags_set_nonblock(STDIN_FILENO); /* cleared again at exit */
         c->open = true;
     }
 }

@@ -19,7 +19,7 @@ typedef struct emu_control {
     line_reader_t lines;
 } emu_control_t;
 
-/** Makes stdin non-blocking and starts reading it (when enabled). */
+/** Makes stdin non-blocking (until the program ends: emu_fd_flags.h) and starts reading it (when enabled). */
 void control_start(emu_control_t *c);
 
 /** Reads what stdin has (poll said so) and runs each complete line on emu; at its end, the last line too. */

@@ -1,5 +1,14 @@
-"""canopen-emu's own input and output (issue 12): command lines from stdin are taken whole or refused whole."""
-from conftest import Deadline
+"""canopen-emu's own input and output (issue 12): command lines from stdin are taken whole or refused whole; a
+terminal it reads is left as it was found."""
+import fcntl
+import os
+import pty
+import signal
+import subprocess
+
+import pytest
+
+from conftest import EMU, IFACE, Deadline
 
 NODE = 0x63  # 99, the sds default
 
@@ -38,3 +47,29 @@ def test_a_last_line_without_newline_runs_at_the_end_of_stdin(emulator, capture)
     emu.proc.stdin.write("quit")
     emu.proc.stdin.close()
     assert Deadline(5).until(lambda: emu.proc.poll() is not None) and emu.proc.returncode == 0
+
+
+@pytest.mark.parametrize("end", ["quit", "SIGINT", "SIGTERM"])
+def test_a_terminal_on_stdin_is_blocking_again_after_the_end(tmp_path, capture, end):
+    # The emulator reads commands from a terminal without blocking; the terminal's open file is the shell's too, whose
+    # next read failed with EAGAIN when the emulator left it non-blocking.
+    controller, terminal = pty.openpty()
+    proc = subprocess.Popen([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path), f"sds:{NODE}"], stdin=terminal,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        capture.wait_for(0x700 + NODE, data=b"\x00", timeout=3)
+        assert Deadline(3).until(lambda: fcntl.fcntl(terminal, fcntl.F_GETFL) & os.O_NONBLOCK), \
+            "the emulator did not make the terminal non-blocking: it does not read it"
+        if end == "quit":
+            os.write(controller, b"quit\n")
+        else:
+            proc.send_signal(getattr(signal, end))
+        proc.communicate(timeout=5)
+        assert proc.returncode == 0
+        assert fcntl.fcntl(terminal, fcntl.F_GETFL) & os.O_NONBLOCK == 0, f"the terminal stayed non-blocking ({end})"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+        os.close(controller)
+        os.close(terminal)
