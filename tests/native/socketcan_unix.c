@@ -1,0 +1,124 @@
+/*
+ * A test double of src/linux/socketcan.c for running canopen-emu where there is no CAN (and under ASan, which
+ * cannot run inside User-Mode Linux): the same API (socketcan.h), with the bus replaced by an AF_UNIX
+ * SOCK_SEQPACKET connection to a test, one struct can_frame (16 bytes) per packet in each direction. The test
+ * listens on the path in CO_FAKECAN_SOCKET; the interface name of -i is only kept for the log lines.
+ * Linked into canopen-emu-fakecan (tests/native/CMakeLists.txt) instead of socketcan.c; everything else of the
+ * program is the real one.
+ */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <fcntl.h>
+#include <linux/can.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "../../src/linux/socketcan.h"
+
+co_time_us_t socketcan_now_us(void)
+{
+    struct timespec ts;
+    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (co_time_us_t)ts.tv_sec * 1000000U + (co_time_us_t)ts.tv_nsec / 1000U;
+}
+
+int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, void *log_ctx, char *err, size_t errlen)
+{
+    memset(c, 0, sizeof *c);
+    c->fd = -1;
+    c->log = log;
+    c->log_ctx = log_ctx;
+    (void)snprintf(c->ifname, sizeof c->ifname, "%s", ifname);
+    const char *path = getenv("CO_FAKECAN_SOCKET");
+    struct sockaddr_un addr;
+    memset(&addr, 0, sizeof addr);
+    addr.sun_family = AF_UNIX;
+    if (path == NULL || strlen(path) >= sizeof addr.sun_path) {
+        (void)snprintf(err, errlen, "CO_FAKECAN_SOCKET must name the test's socket (at most %zu bytes)",
+                       sizeof addr.sun_path - 1U);
+        return EINVAL;
+    }
+    memcpy(addr.sun_path, path, strlen(path));
+    const int fd = socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
+    if (fd < 0 || connect(fd, (const struct sockaddr *)&addr, sizeof addr) != 0) {
+        const int e = errno;
+        if (fd >= 0) {
+            (void)close(fd);
+        }
+        (void)snprintf(err, errlen, "cannot connect to the fake bus %s: %s", path, strerror(e));
+        return e;
+    }
+    (void)fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
+    c->fd = fd;
+    return 0;
+}
+
+void socketcan_close(socketcan_t *c)
+{
+    if (c->fd >= 0) {
+        (void)close(c->fd);
+        c->fd = -1;
+    }
+}
+
+co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+{
+    socketcan_t *c = (socketcan_t *)ctx;
+    struct can_frame f;
+    memset(&f, 0, sizeof f);
+    f.can_id = frame->id & CAN_SFF_MASK;
+    f.can_dlc = frame->len;
+    memcpy(f.data, frame->data, frame->len);
+    if (c->fd < 0) {
+        return CO_ERR_IO;
+    }
+    if (send(c->fd, &f, sizeof f, MSG_NOSIGNAL) == (ssize_t)sizeof f) {
+        return CO_OK;
+    }
+    return (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS) ? CO_ERR_BUSY : CO_ERR_IO;
+}
+
+short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
+{
+    (void)c;
+    return (short)(POLLIN | (tx_pending ? POLLOUT : 0));
+}
+
+int socketcan_read(socketcan_t *c, co_frame_t *frame)
+{
+    struct can_frame f;
+    if (c->fd < 0) {
+        return 0;
+    }
+    const ssize_t n = recv(c->fd, &f, sizeof f, 0);
+    if (n == 0) {
+        (void)close(c->fd); /* the test closed the bus: nothing more arrives, sends fail */
+        c->fd = -1;
+        return 0;
+    }
+    if (n != (ssize_t)sizeof f || (f.can_id & CAN_ERR_FLAG) != 0U) {
+        return 0; /* EAGAIN, a packet of another size, or an error frame (the real channel logs those) */
+    }
+    memset(frame, 0, sizeof *frame);
+    frame->id = f.can_id & CAN_EFF_MASK;
+    frame->flags = (uint8_t)(((f.can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
+                             ((f.can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
+    frame->len = f.can_dlc > 8U ? 8U : f.can_dlc;
+    memcpy(frame->data, f.data, frame->len);
+    return 1;
+}
+
+void socketcan_flush_log(socketcan_t *c) { (void)c; }
+
+co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
+{
+    (void)c;
+    (void)now;
+    return CO_NEVER;
+}

@@ -1,0 +1,185 @@
+"""canopen-emu as a whole program without CAN: its CAN channel is a test double (socketcan_unix.c) that carries
+frames over a Unix socket to this test, every other part is the program's own (nodes, device models, NVM files,
+control commands, main loop). In the ASan+UBSan build this is how the program, not only the core, is checked by
+the sanitizers in CI (they cannot run inside User-Mode Linux, where the vcan suite runs).
+
+Environment (tests/native/CMakeLists.txt): CO_SOURCE_DIR, CO_EMU_FAKECAN (the program), CO_SANITIZED.
+"""
+
+import configparser
+import os
+import queue
+import random
+import socket
+import struct
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+SRC = Path(os.environ.get("CO_SOURCE_DIR") or Path(__file__).resolve().parents[2])
+EMU = os.environ.get("CO_EMU_FAKECAN")
+FRAME = struct.Struct("<IB3x8s")  # struct can_frame
+NODES = {16: "pro-ionizer", 17: "sds", 18: "buerkert"}
+EDS = {"pro-ionizer": "pro-ionizer.eds", "sds": "sds.eds", "buerkert": "buerkert-flow-controller.eds"}
+SANITIZER_MARKS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:", "SUMMARY: UndefinedBehaviorSanitizer")
+
+
+class FakeBus:
+    """The test's end of the fake bus: frames the emulator sends arrive in a queue with their arrival time."""
+
+    def __init__(self, path):
+        self.listener = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        self.listener.bind(str(path))
+        self.listener.listen(1)
+        self.conn = None
+        self.frames = queue.Queue()
+        self.reader = None
+        self.proc = None  # the emulator: a wait that fails says whether it died, and why
+
+    def accept(self, timeout=10.0):
+        self.listener.settimeout(timeout)
+        self.conn, _ = self.listener.accept()
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+
+    def _read(self):
+        while True:
+            try:
+                data = self.conn.recv(64)
+            except OSError:
+                return
+            if not data:
+                return
+            can_id, dlc, payload = FRAME.unpack(data)
+            self.frames.put((time.monotonic(), can_id, bytes(payload[:dlc])))
+
+    def send(self, can_id, data):
+        self.conn.send(FRAME.pack(can_id, len(data), bytes(data).ljust(8, b"\0")))
+
+    def expect(self, pred, timeout=5.0, what="frame"):
+        """The first frame for which pred(can_id, data) holds; frames before it are dropped."""
+        end = time.monotonic() + timeout
+        while True:
+            left = end - time.monotonic()
+            if left <= 0:
+                if self.proc is not None and self.proc.poll() is not None:
+                    raise AssertionError(f"no {what}: canopen-emu ended with status {self.proc.returncode}:\n"
+                                         + self.proc.stderr.read()[-6000:])
+                raise AssertionError(f"no {what} within {timeout} s")
+            try:
+                t, can_id, data = self.frames.get(timeout=left)
+            except queue.Empty:
+                continue
+            if pred(can_id, data):
+                return t, can_id, data
+
+    def sdo(self, node, request, timeout=5.0):
+        self.send(0x600 + node, request)
+        return self.expect(lambda i, d: i == 0x580 + node and d[1:4] == bytes(request[1:4]), timeout,
+                           f"SDO answer of node {node} to {bytes(request).hex()}")[2]
+
+    def close(self):
+        for s in (self.conn, self.listener):
+            if s is not None:
+                s.close()
+
+
+def vendor_id(device):
+    eds = configparser.ConfigParser(strict=False, interpolation=None)
+    eds.read(SRC / "od" / EDS[device], encoding="utf-8")
+    return int(eds["1018sub1"]["DefaultValue"], 0)
+
+
+def upload(index, sub):
+    return bytes([0x40, index & 0xFF, index >> 8, sub, 0, 0, 0, 0])
+
+
+def download(index, sub, value, size):
+    return bytes([0x23 | ((4 - size) << 2), index & 0xFF, index >> 8, sub]) + value.to_bytes(size, "little").ljust(4, b"\0")
+
+
+class Emulator:
+    def __init__(self, tmp_path, nvm):
+        if not EMU:
+            pytest.fail("CO_EMU_FAKECAN is not set (the test is run by ctest: tests/native/CMakeLists.txt)",
+                        pytrace=False)
+        self.bus = FakeBus(tmp_path / f"bus-{time.monotonic_ns()}")
+        env = dict(os.environ, CO_FAKECAN_SOCKET=self.bus.listener.getsockname(),
+                   ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1",
+                   UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1")
+        self.proc = subprocess.Popen([EMU, "-i", "fakecan0", "--nvm-dir", str(nvm), "--control", "-"]
+                                     + [f"{d}:{n}" for n, d in NODES.items()],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     text=True, env=env)
+        self.bus.proc = self.proc
+        self.bus.accept()
+
+    def command(self, line):
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
+
+    def quit(self, timeout=20.0):
+        """quit; returns (exit status, stderr); fails on any sanitizer report."""
+        self.command("quit")
+        try:
+            out, err = self.proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            out, err = self.proc.communicate()
+            raise AssertionError("canopen-emu did not end after quit:\n" + err[-3000:])
+        finally:
+            self.bus.close()
+        assert not any(mark in err for mark in SANITIZER_MARKS), err[-6000:]
+        return self.proc.returncode, err
+
+
+def test_whole_program_runs_clean(tmp_path):
+    """Three devices in one process: boot-ups, identity uploads answered with the EDS vendor IDs, a stored
+    heartbeat, NMT start, an EMCY raised by a control command, 3,000 random frames to every COB-ID, and quit
+    with status 0; then a second run loads the stored heartbeat. Under ASan+UBSan any report fails it."""
+    nvm = tmp_path / "nvm"
+    emu = Emulator(tmp_path, nvm)
+    bus = emu.bus
+    booted = set()
+    while booted != set(NODES):
+        _, can_id, data = bus.expect(lambda i, d: 0x700 < i <= 0x77F and d == b"\0", 10.0, "boot-up")
+        booted.add(can_id - 0x700)
+    for node, device in NODES.items():
+        assert bus.sdo(node, upload(0x1018, 1)) == bytes([0x43, 0x18, 0x10, 0x01]) + struct.pack("<I", vendor_id(device))
+    assert bus.sdo(16, download(0x1017, 0, 1500, 2))[0] == 0x60
+    assert bus.sdo(16, download(0x1010, 1, 0x65766173, 4))[0] == 0x60  # "save"
+    bus.send(0x000, bytes([0x01, 0x00]))  # NMT start all
+    t1, _, d1 = bus.expect(lambda i, d: i == 0x710 and d == b"\x05", 5.0, "heartbeat of node 16 in Operational")
+    t2, _, _ = bus.expect(lambda i, d: i == 0x710 and d == b"\x05", 5.0, "second heartbeat of node 16")
+    assert 1.0 <= t2 - t1 <= 3.0, t2 - t1  # 1500 ms by the stored value (not the 1000 ms default); loose bounds
+    emu.command("emcy 16 0x3210 0x05")
+    _, _, emcy = bus.expect(lambda i, d: i == 0x090, 5.0, "EMCY of node 16")
+    assert emcy[:3] == bytes([0x10, 0x32, 0x05]), emcy.hex()
+    rng = random.Random(1212)
+    for _ in range(3000):
+        can_id = rng.randrange(0x800)
+        if can_id == 0x000:
+            continue  # NMT: a reset would restart the nodes (tested elsewhere), not what this run looks at
+        bus.send(can_id, bytes(rng.randrange(256) for _ in range(rng.randrange(9))))
+    for node, device in NODES.items():  # still answering, correctly
+        assert bus.sdo(node, upload(0x1018, 1), 10.0)[4:] == struct.pack("<I", vendor_id(device))
+    status, err = emu.quit()
+    assert status == 0, err[-3000:]
+
+    emu = Emulator(tmp_path, nvm)
+    emu.bus.expect(lambda i, d: i == 0x710 and d == b"\0", 10.0, "boot-up of node 16 again")
+    assert emu.bus.sdo(16, upload(0x1017, 0))[4:6] == struct.pack("<H", 1500)
+    status, err = emu.quit()
+    assert status == 0, err[-3000:]
+
+
+def test_sanitizers_are_on_where_they_should_be():
+    """In the ASan+UBSan build the program must carry the sanitizer runtime, or the test above proves nothing."""
+    if os.environ.get("CO_SANITIZED") not in ("1", "ON", "TRUE", "true"):
+        pytest.skip("not the sanitizer build")
+    out = subprocess.run(["nm", "-D", "--undefined-only", EMU], capture_output=True, text=True).stdout + \
+        subprocess.run(["nm", EMU], capture_output=True, text=True).stdout
+    assert "__asan_init" in out or "__asan_report_load" in out, "canopen-emu-fakecan is not built with ASan"
