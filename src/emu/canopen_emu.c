@@ -174,13 +174,13 @@ static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint
 {
     emu_node_t *n = calloc(1U, sizeof *n);
     if (n == NULL) {
-        fprintf(stderr, "canopen-emu: out of memory\n");
+        output_error("out of memory");
         return NULL;
     }
     n->values = calloc(1U, cls->od->values_size);
     n->model = cls->model_size > 0U ? calloc(1U, cls->model_size) : NULL;
     if (n->values == NULL || (cls->model_size > 0U && n->model == NULL)) {
-        fprintf(stderr, "canopen-emu: out of memory\n");
+        output_error("out of memory");
         return NULL;
     }
     n->cmdline_id = id;
@@ -189,7 +189,7 @@ static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint
     char err[512];
     n->dev.cls = cls; /* for logs before device_init */
     if (nvm_file_open(&n->nvm, nvm_dir, n->key, err, sizeof err) != 0) {
-        fprintf(stderr, "canopen-emu: %s\n", err);
+        output_error("%s", err);
         return NULL;
     }
     n->port.send = port_send;
@@ -208,7 +208,7 @@ static emu_node_t *add_node(const device_class_t *cls, const char *variant, uint
     cfg.on_event = device_event;
     const co_status_t st = device_init(&n->dev, cls, n->values, n->model, &cfg, power_on);
     if (st != CO_OK) {
-        fprintf(stderr, "canopen-emu: %s:%u: the node could not start (%d)\n", cls->name, id, (int)st);
+        output_error("%s:%u: the node could not start (%d)", cls->name, id, (int)st);
         return NULL;
     }
     logline(LOG_NORMAL, "node %u (%s%s%s) on %s, NVM %s/%s.*", co_node_id(&n->dev.node), cls->name,
@@ -318,9 +318,9 @@ int main(int argc, char **argv)
     sa.sa_handler = on_signal;
     (void)sigaction(SIGINT, &sa, NULL);
     (void)sigaction(SIGTERM, &sa, NULL);
-    signal(SIGPIPE, SIG_IGN);
+    /* From here on the log and the replies go through emu_output.c, which never blocks (it ignores SIGPIPE). */
     if (socketcan_open(&emu.can, iface, can_log, NULL, err, sizeof err) != 0) {
-        fprintf(stderr, "canopen-emu: %s\n", err);
+        output_error("%s", err);
         return 1;
     }
     /* One power-on time for all nodes: their periodic deadlines (heartbeats, model ticks, cyclic TPDOs of
@@ -335,7 +335,7 @@ int main(int argc, char **argv)
     }
     control_start(&emu.control);
 
-    struct pollfd pfd[2];
+    struct pollfd pfd[4]; /* the CAN socket, stdin, stdout and stderr when output waits */
     while (!emu.quit && stop_signal == 0) {
         co_time_us_t now = socketcan_now_us();
         char line[COMMAND_LINE_MAX + 1];
@@ -376,17 +376,20 @@ int main(int argc, char **argv)
         if (script_at != CO_NEVER && emu.start + script_at < next) {
             next = emu.start + script_at;
         }
+        output_flush(); /* what this pass logged and replied, as far as the readers take it */
         nfds_t nfds = 0U;
         pfd[nfds].fd = emu.can.fd; /* -1 while the interface is gone: poll ignores it */
         pfd[nfds].events = socketcan_poll_events(&emu.can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
         pfd[nfds].revents = 0;
         nfds++;
+        const nfds_t stdin_index = emu.control.open ? nfds : 0U;
         if (emu.control.open) {
             pfd[nfds].fd = STDIN_FILENO;
             pfd[nfds].events = POLLIN;
             pfd[nfds].revents = 0;
             nfds++;
         }
+        nfds += output_poll_fds(&pfd[nfds]); /* POLLOUT wakes the loop to write more: the next pass does */
         now = socketcan_now_us();
         struct timespec ts;
         struct timespec *timeout = NULL;
@@ -401,7 +404,7 @@ int main(int argc, char **argv)
             if (errno == EINTR) {
                 continue;
             }
-            fprintf(stderr, "canopen-emu: poll: %s\n", strerror(errno));
+            output_error("poll: %s", strerror(errno));
             return 1;
         }
         if ((pfd[0].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
@@ -427,7 +430,7 @@ int main(int argc, char **argv)
                 }
             }
         }
-        if (emu.control.open && nfds > 1U && (pfd[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+        if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
             control_read(&emu);
         }
     }
