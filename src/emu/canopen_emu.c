@@ -236,9 +236,17 @@ int main(int argc, char **argv)
         switch (opt) {
         case 'i':
             iface = optarg;
+            if (iface[0] == '\0') {
+                fprintf(stderr, "canopen-emu: -i/--interface needs an interface name, not an empty one\n");
+                return 2;
+            }
             break;
         case 'n':
             nvm_dir = optarg;
+            if (nvm_dir[0] == '\0') { /* nvm_file_check_dir would read past the end of "" */
+                fprintf(stderr, "canopen-emu: --nvm-dir needs a directory name, not an empty one\n");
+                return 2;
+            }
             break;
         case 'c':
             if (strcmp(optarg, "-") != 0) {

@@ -6,16 +6,21 @@
 
 #include "emu_output.h"
 
+/* The words of a line into argv; -1 when there are more than MAX_ARGS (the rest was ignored and the command then
+ * met as "unknown", which hid the reason). */
 static int split(char *line, char **argv)
 {
     int argc = 0;
     char *p = line;
-    while (*p != '\0' && argc < MAX_ARGS) {
+    while (*p != '\0') {
         while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
             p++;
         }
         if (*p == '\0' || *p == '#') {
             break;
+        }
+        if (argc == MAX_ARGS) {
+            return -1;
         }
         if (*p == '"') {
             argv[argc++] = ++p;
@@ -53,6 +58,10 @@ void run_command(emu_t *emu, char *line)
 {
     char *argv[MAX_ARGS];
     const int argc = split(line, argv);
+    if (argc < 0) {
+        reply("error: too many words (at most %d)", MAX_ARGS);
+        return;
+    }
     if (argc == 0) {
         return;
     }

@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <linux/can.h>
+#include <linux/if_arp.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
 #include <linux/sock_diag.h>
@@ -67,6 +68,20 @@ static int open_socket(socketcan_t *c, char *err, size_t errlen)
             }
         }
         return e;
+    }
+    /* Binding a CAN socket to another kind of interface fails with ENODEV, "No such device", for one that is
+     * there (-i lo): its link type tells. */
+    struct ifreq hw;
+    memset(&hw, 0, sizeof hw);
+    (void)snprintf(hw.ifr_name, sizeof hw.ifr_name, "%s", c->ifname);
+    if (ioctl(fd, SIOCGIFHWADDR, &hw) == 0 && hw.ifr_hwaddr.sa_family != ARPHRD_CAN) {
+        (void)close(fd);
+        if (err != NULL) {
+            (void)snprintf(err, errlen, "interface %s is not a CAN interface (link type %u; CAN is %u); the CAN "
+                           "interfaces are those of: ip link show type can; ip link show type vcan",
+                           c->ifname, (unsigned)hw.ifr_hwaddr.sa_family, (unsigned)ARPHRD_CAN);
+        }
+        return ENODEV;
     }
     const can_err_mask_t errors = CAN_ERR_MASK;
     (void)setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors);

@@ -246,3 +246,19 @@ def test_node_ids_and_numbers_with_leading_zeros_are_decimal(emulator, capture):
     assert capture.matching(0x708) == [] and capture.matching(0x710) == []
     assert "sds node-ID 20" in emu.command("show 020", expect="node 20:")
     emu.command("set 010 0x1017 0100", expect="node 10: 0x1017:00 = 100")
+
+
+def test_an_empty_nvm_dir_or_interface_name_is_refused(tmp_path):
+    # --nvm-dir "" read past the end of the string (valgrind: an uninitialised value in make_dirs), then said
+    # "NVM directory  is not writable"
+    r = run_emu("--nvm-dir", "", "sds")
+    assert r.returncode == 2 and "--nvm-dir needs a directory name, not an empty one" in r.stderr, r.stderr
+    r = run_emu("-i", "", "--nvm-dir", str(tmp_path), "sds")
+    assert r.returncode == 2 and "-i/--interface needs an interface name, not an empty one" in r.stderr, r.stderr
+
+
+def test_an_interface_that_is_not_can_is_named_so(tmp_path):
+    # it said "cannot bind to lo: No such device"
+    r = run_emu("-i", "lo", "--nvm-dir", str(tmp_path), "sds")
+    assert r.returncode == 1 and "interface lo is not a CAN interface" in r.stderr, r.stderr
+    assert "ip link show type vcan" in r.stderr

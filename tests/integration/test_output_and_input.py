@@ -164,3 +164,14 @@ def test_a_terminal_on_stdin_is_blocking_again_after_the_end(tmp_path, capture, 
             proc.communicate()
         os.close(controller)
         os.close(terminal)
+
+
+def test_a_command_of_too_many_words_says_so(emulator, capture):
+    emu = started(emulator, capture)
+    bytes13 = " ".join(str(i) for i in range(1, 14))
+    # 16 words reach the command, whose own check refuses 13 bytes; 17 were cut to 16 and the command then
+    # called unknown, whatever it was
+    emu.command(f"emcy {NODE} 0x5000 {bytes13}", expect=f"node {NODE}: error: usage: emcy")
+    emu.command(f"emcy {NODE} 0x5000 {bytes13} 14", expect="error: too many words (at most 16)")
+    emu.command(f"show {NODE} " + "x " * 15, expect="error: too many words (at most 16)")
+    assert not any("unknown command" in line for line in emu.out_lines), emu.out_lines
