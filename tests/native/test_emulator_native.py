@@ -7,9 +7,11 @@ Environment (tests/native/CMakeLists.txt): CO_SOURCE_DIR, CO_EMU_FAKECAN (the pr
 """
 
 import configparser
+import fcntl
 import os
 import queue
 import random
+import select
 import socket
 import struct
 import subprocess
@@ -174,6 +176,62 @@ def test_whole_program_runs_clean(tmp_path):
     assert emu.bus.sdo(16, upload(0x1017, 0))[4:6] == struct.pack("<H", 1500)
     status, err = emu.quit()
     assert status == 0, err[-3000:]
+
+
+def test_blocked_output_and_refused_input_run_clean(tmp_path):
+    """The paths of the output buffers and the line reader under the sanitizers (the vcan suite holds their
+    behaviour, test_output_and_input.py): -v with stdout and stderr on one pipe of one page that is not read while
+    1,500 SDO requests and a help reply every 10 go through (lines dropped and counted), then read (written, and
+    the drops reported); an overlong stdin line, a NUL byte, too many words; quit with status 0."""
+    read_end, write_end = os.pipe()
+    fcntl.fcntl(write_end, fcntl.F_SETPIPE_SZ, 4096)
+    bus = FakeBus(tmp_path / "bus")
+    env = dict(os.environ, CO_FAKECAN_SOCKET=bus.listener.getsockname(),
+               ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1",
+               UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1")
+    proc = subprocess.Popen([EMU, "-v", "-i", "fakecan0", "--nvm-dir", str(tmp_path / "nvm"), "--control", "-",
+                             "sds:17"], stdin=subprocess.PIPE, stdout=write_end, stderr=write_end, env=env)
+    os.close(write_end)
+    chunks = []
+
+    def read_for(seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            ready, _, _ = select.select([read_end], [], [], 0.05)
+            if ready:
+                data = os.read(read_end, 1 << 16)
+                if not data:
+                    return
+                chunks.append(data)
+
+    try:
+        bus.accept()
+        bus.expect(lambda i, d: i == 0x711 and d == b"\0", 10.0, "boot-up of node 17")
+        for k in range(1500):
+            assert bus.sdo(17, upload(0x1018, 1))[4:] == struct.pack("<I", vendor_id("sds"))
+            if k % 10 == 0:
+                proc.stdin.write(b"help 17\n")
+                proc.stdin.flush()
+        read_for(1.0)  # the buffers drain: what follows is not dropped
+        proc.stdin.write(b"#" + b"x" * 3000 + b" quit\nshow 17\0 quit\n" + b"show 17" + b" x" * 16 + b"\n")
+        proc.stdin.flush()
+        assert bus.sdo(17, upload(0x1018, 1))[4:] == struct.pack("<I", vendor_id("sds"))  # still running
+        read_for(0.5)
+        proc.stdin.write(b"quit\n")
+        proc.stdin.flush()
+        read_for(20.0)
+        assert proc.wait(timeout=10) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        os.close(read_end)
+        bus.close()
+    text = b"".join(chunks).decode(errors="replace")
+    assert not any(mark in text for mark in SANITIZER_MARKS), text[-6000:]
+    for expected in ("dropped: output blocked (stderr was not read)", "dropped in all: output blocked",
+                     "error: stdin line", "holds a NUL byte: ignored", "error: too many words (at most 16)"):
+        assert expected in text, (expected, text[-3000:])
 
 
 def test_sanitizers_are_on_where_they_should_be():
