@@ -1,8 +1,9 @@
 /*
  * The canopen-emu program's state, shared by its modules: the nodes, the queue of frames between local nodes,
  * the control inputs. The program itself (main loop, ports of the nodes) is canopen_emu.c; the other modules are
- * emu_cmdline.c (the command line), emu_output.c (log and replies), emu_commands.c (the command language),
- * emu_control.c (command lines from stdin) and emu_script.c (--script).
+ * emu_cmdline.c (the command line), emu_output.c (log and replies, never blocking), emu_commands.c (the command
+ * language), emu_lines.c (command lines cut from a byte stream), emu_control.c (command lines from stdin),
+ * emu_script.c (--script) and emu_fd_flags.c (stdin's O_NONBLOCK, cleared at exit).
  */
 #ifndef EMU_H
 #define EMU_H
