@@ -175,3 +175,28 @@ def test_a_command_of_too_many_words_says_so(emulator, capture):
     emu.command(f"emcy {NODE} 0x5000 {bytes13} 14", expect="error: too many words (at most 16)")
     emu.command(f"show {NODE} " + "x " * 15, expect="error: too many words (at most 16)")
     assert not any("unknown command" in line for line in emu.out_lines), emu.out_lines
+
+
+def test_the_exit_waits_for_output_nobody_reads_a_bounded_time(tmp_path):
+    # Never read at all: the exit writes what it can and waits at most OUTPUT_EXIT_WAIT_MS (1 s) for the rest.
+    read_end, write_end = os.pipe()
+    fcntl.fcntl(write_end, fcntl.F_SETPIPE_SZ, 4096)
+    client = RawCan((0x700 + NODE, 0x580 + NODE))
+    proc = subprocess.Popen([EMU, "-v", "-i", IFACE, "--nvm-dir", str(tmp_path), f"sds:{NODE}"],
+                            stdin=subprocess.DEVNULL, stdout=write_end, stderr=write_end)
+    os.close(write_end)
+    try:
+        wait_bootups(client, [NODE])
+        request, answer = upload(0x1018, 1), upload_answer(0x1018, 1, odv("sds", 0x1018, 1), 4)
+        for _ in range(200):  # 400 lines of -v: the pipe is full, the buffer holds the rest
+            client.transact(NODE, request, answer)
+        start = time.monotonic()
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=10) == 0
+        assert time.monotonic() - start < 5.0  # 1 s of waiting, the rest is slack for a loaded machine
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        os.close(read_end)
+        client.close()
