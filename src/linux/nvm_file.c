@@ -15,6 +15,9 @@ static const char *const suffix[3] = {"params", "lss", "device"};
 static int make_dirs(const char *dir)
 {
     char path[PATH_MAX];
+    if (dir[0] == '\0') {
+        return ENOENT; /* "" names no directory (the loop below would start past its end) */
+    }
     if (snprintf(path, sizeof path, "%s", dir) >= (int)sizeof path) {
         return ENAMETOOLONG;
     }
