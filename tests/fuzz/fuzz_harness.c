@@ -217,7 +217,7 @@ void fz_note_reset(fz_t *h, co_reset_t what)
 
 void fz_note_event(fz_t *h, const co_event_t *ev)
 {
-    if (ev == NULL || ev->kind < CO_EV_NMT_STATE || ev->kind > CO_EV_TX_DROPPED) {
+    if (ev == NULL || ev->kind < CO_EV_NMT_STATE || ev->kind > CO_EV_NVM_REFUSED) {
         fz_fail(h, "on_event with an unknown event kind");
     }
     if (ev->kind == CO_EV_SDO_ABORT && ev->code == CO_ABORT_TIMEOUT) {

@@ -76,7 +76,8 @@ static uint32_t hk_write(void *ctx, co_node_t *node, const co_od_entry_t *e, con
 {
     core_ctx_t *c = (core_ctx_t *)ctx;
     check_entry(c, node, e, "on_write");
-    if (len > e->size || (!is_bytes(e) && len != e->size) || (len > 0U && data == NULL) || (unsigned)origin > 2U) {
+    if (len > e->size || (!is_bytes(e) && len != e->size) || (len > 0U && data == NULL) ||
+        (unsigned)origin > (unsigned)CO_ORIGIN_NVM) {
         fz_fail(c->h, "on_write of 0x%04X:%02X with %lu bytes (size %u), origin %d", e->index, e->sub,
                 (unsigned long)len, e->size, (int)origin);
     }
@@ -85,10 +86,15 @@ static uint32_t hk_write(void *ctx, co_node_t *node, const co_od_entry_t *e, con
         fz_fail(c->h, "on_write of 0x%04X:%02X (flags 0x%X) from origin %d passed the access check", e->index,
                 e->sub, e->flags, (int)origin);
     }
+    if (origin == CO_ORIGIN_NVM && (e->flags & CO_OD_STORE) == 0U) {
+        fz_fail(c->h, "on_write of 0x%04X:%02X (flags 0x%X) as a stored value, which it never is", e->index, e->sub,
+                e->flags);
+    }
     if (c->refuse_code != 0U && (c->refuse_index == 0U || c->refuse_index == e->index)) {
         return c->refuse_code;
     }
-    if ((c->actions & ACT_WRITE_EMCY) != 0U && c->depth == 0) {
+    /* A stored value being loaded is only checked (co_od.h: the hook must not act). */
+    if ((c->actions & ACT_WRITE_EMCY) != 0U && c->depth == 0 && origin != CO_ORIGIN_NVM) {
         c->depth++;
         if (e->index == 0x2003U) {
             (void)co_emcy_clear(node, 0xFF00U, NULL);
