@@ -147,7 +147,8 @@ static bool reader_seek(record_reader_t *r, uint16_t index, uint8_t sub)
  * a value SDO would refuse, e.g. a restricted PDO COB-ID, must not come back through a file). Checks that depend
  * on another stored value see it loaded when it precedes (an E-field type before its limits). One refused
  * record refuses the area: it returns to its defaults and the node reports it (CO_EV_NVM_REFUSED, then
- * CO_NVM_REFUSED), as for a damaged blob. */
+ * CO_NVM_REFUSED), as for a damaged blob. A record of a sub-index the node does not have (the device's hook
+ * answers 0x06090011: a variant without it) is skipped, as one of a row the OD lacks. */
 void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     record_reader_t local;
@@ -165,6 +166,12 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
             continue;
         }
         const uint32_t r = co_od_check_stored(node, e, local.value, local.len);
+        if (r == CO_ABORT_NO_SUBINDEX) {
+            /* The device says this node has no such sub-index (a PRO IONIZER variant hides rows of others): skipped
+             * like a row the OD lacks. A save writes every stored row, so refusing here refused every save of such
+             * a variant at the next power-on. Only a hook answers this for a row the OD has. */
+            continue;
+        }
         if (r != CO_ABORT_NONE) {
             co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 0U, r);
             co_od_defaults_area(node, first, last);
