@@ -221,7 +221,10 @@ static void writer_put(blob_writer_t *w, uint16_t index, uint8_t sub, const uint
     w->pos += RECORD_HEAD + (uint32_t)len;
 }
 
-/* True when a row holds its node-ID-relative default: not stored, so a new node-ID moves it along. */
+/* True when a row holds its node-ID-relative default: not stored, so a new node-ID moves it along. While the node-ID
+ * is unconfigured that default is the bare table value, as co_od_defaults_area leaves it: comparing with value +
+ * 0xFF stored it, e.g. TPDO1's COB-ID 0x180, which the next load refused as a restricted COB-ID (and with it every
+ * value of that save). */
 static bool at_relative_default(co_node_t *node, const co_od_entry_t *e)
 {
     if ((e->flags & CO_OD_NODEID) == 0U) {
@@ -229,7 +232,8 @@ static bool at_relative_default(co_node_t *node, const co_od_entry_t *e)
     }
     uint32_t def = 0U;
     memcpy(&def, (const uint8_t *)node->od->defaults + e->offset, e->size < 4U ? e->size : 4U);
-    return co_od_entry_u32(node, e) == def + node->node_id;
+    const uint32_t id = node->node_id != CO_NODE_ID_UNCONFIGURED ? node->node_id : 0U;
+    return co_od_entry_u32(node, e) == def + id;
 }
 
 /* A store is one transaction of the port (co_port_t.nvm_commit): the device's areas first, committed with

@@ -517,6 +517,33 @@ static void node_id_relative_row_changed_is_stored_as_value(void)
     TEST_ASSERT_NULL(find_record(0x1014, 0));
 }
 
+/* A save while the node-ID is unconfigured (a local 0x1010 write; SDO needs a node-ID) must not store the bare
+ * defaults of node-ID-relative rows: TPDO1's 0x180 is a restricted COB-ID, which refused the whole file at the next
+ * load (found by tests/fuzz/target_nvm_file.c). They follow the node-ID the node gets, as after any save. */
+static void save_while_unconfigured_keeps_relative_rows_relative(void)
+{
+    fx_start(0xFFU, 0U);
+    const uint16_t hb = 300U;
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x1017, 0, &hb, 2U, CO_ORIGIN_LOCAL));
+    const uint8_t sig[4] = {'s', 'a', 'v', 'e'};
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x1010, 1, sig, 4U, CO_ORIGIN_SDO));
+    TEST_ASSERT_NULL(find_record(0x1800, 1));
+    TEST_ASSERT_NULL(find_record(0x1014, 0));
+    power_cycle(); /* still unconfigured */
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    /* LSS: node-ID 0x0A, store, power cycle */
+    RX(0x7E5, 0x04, 0x01, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x11, 0x0A, 0, 0, 0, 0, 0, 0);
+    RX(0x7E5, 0x17, 0x00, 0, 0, 0, 0, 0, 0);
+    power_cycle();
+    TEST_ASSERT_EQUAL_HEX8(0x0A, co_node_id(&fx.node));
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT16(300U, fx.values.x1017_producer_hb);
+    uint32_t v = 0U;
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_read_u32(0x1800, 1, &v));
+    TEST_ASSERT_EQUAL_HEX32(0x18AU, v);
+}
+
 /* ---- storage failures ----------------------------------------------------------------------------- */
 
 static void store_failure(bool fail_write)
@@ -945,6 +972,7 @@ int main(void)
     RUN_TEST(restore_does_not_touch_lss_configuration);
     RUN_TEST(node_id_relative_defaults_follow_new_node_id);
     RUN_TEST(node_id_relative_row_changed_is_stored_as_value);
+    RUN_TEST(save_while_unconfigured_keeps_relative_rows_relative);
     RUN_TEST(store_write_failure);
     RUN_TEST(store_commit_failure);
     RUN_TEST(port_without_storage);
