@@ -353,8 +353,14 @@ co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bi
     if (memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
         return CO_NVM_CORRUPT;
     }
-    if (((b[4] < 1U || b[4] > 127U) && b[4] != CO_NODE_ID_UNCONFIGURED) || b[5] >= CO_LSS_BIT_TIMING_COUNT) {
-        return CO_NVM_CORRUPT; /* a valid CRC over values we never write: not ours */
+    /* A valid CRC over values this node never writes is not ours: a node-ID out of range, "unconfigured" where LSS
+     * may not unconfigure, a bit timing outside the table or not in the device's (co_lss_set_pending_bit_timing
+     * refuses it). Loaded, a Buerkert showed them in its stored 0x2001:01/02, and the next load of its parameters
+     * refused them, and so every value saved (found by tests/fuzz/target_nvm_file.c). */
+    const bool unconfigured_ok = (node->options & CO_OPT_LSS_NO_UNCONFIGURE) == 0U;
+    if (((b[4] < 1U || b[4] > 127U) && (b[4] != CO_NODE_ID_UNCONFIGURED || !unconfigured_ok)) ||
+        b[5] >= CO_LSS_BIT_TIMING_COUNT || node->bit_rates_kbit[b[5]] == 0U) {
+        return CO_NVM_CORRUPT;
     }
     *node_id = b[4];
     *bit_timing = b[5];

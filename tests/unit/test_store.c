@@ -920,17 +920,33 @@ static void damaged_lss_blob_is_reported_and_ignored(void)
         TEST_ASSERT_EQUAL_HEX8(0x05, co_node_id(&fx.node)); /* the configured node-ID */
         ASSERT_FRAME(0, 0x705U, 1, 0x00);
     }
-    /* A valid CRC over a node-ID the core never writes (0): damaged too. */
-    uint8_t forged[12] = {'C', 'O', 'L', '1', 0x00, 0x00, 0x00, 0x00};
-    const uint32_t crc = crc32_ieee(forged, 8U);
-    forged[8] = (uint8_t)crc;
-    forged[9] = (uint8_t)(crc >> 8);
-    forged[10] = (uint8_t)(crc >> 16);
-    forged[11] = (uint8_t)(crc >> 24);
-    memcpy(a->stored, forged, sizeof forged);
-    a->stored_len = 12U;
-    power_cycle();
-    TEST_ASSERT_EQUAL_UINT32(CO_NVM_CORRUPT, nvm_loaded_event_of(0x7E5U));
+    /* A valid CRC over values this node never writes: node-ID 0; bit timing 5, which the CiA 305 table of the test
+     * node lacks (an LSS configure bit timing of it is refused); "unconfigured" where LSS may not unconfigure. The
+     * last of each pair is the same blob with a value it does write, which loads. */
+    static const struct {
+        uint8_t id;
+        uint8_t bit_timing;
+        uint32_t options;
+        co_nvm_status_t status;
+    } forged[] = {{0x00, 0x00, 0U, CO_NVM_CORRUPT},
+                  {0x05, 0x05, 0U, CO_NVM_CORRUPT},
+                  {0x05, 0x04, 0U, CO_NVM_LOADED},
+                  {0xFF, 0x00, CO_OPT_LSS_NO_UNCONFIGURE, CO_NVM_CORRUPT},
+                  {0xFF, 0x00, 0U, CO_NVM_LOADED}};
+    for (size_t i = 0U; i < sizeof forged / sizeof forged[0]; i++) {
+        fx_start(5U, forged[i].options);
+        uint8_t *b = fx.port.nvm[CO_NVM_LSS].stored;
+        const uint8_t head[8] = {'C', 'O', 'L', '1', forged[i].id, forged[i].bit_timing, 0x00, 0x00};
+        memcpy(b, head, sizeof head);
+        const uint32_t crc = crc32_ieee(b, 8U);
+        for (unsigned k = 0U; k < 4U; k++) {
+            b[8U + k] = (uint8_t)(crc >> (8U * k));
+        }
+        fx.port.nvm[CO_NVM_LSS].stored_len = 12U;
+        power_cycle();
+        TEST_ASSERT_EQUAL_UINT32_MESSAGE(forged[i].status, nvm_loaded_event_of(0x7E5U), "forged LSS blob");
+        TEST_ASSERT_EQUAL_HEX8(forged[i].status == CO_NVM_LOADED ? forged[i].id : 0x05, co_node_id(&fx.node));
+    }
 }
 
 /* An empty parameter blob (an empty file) is a damaged one, not "nothing stored". */
