@@ -549,19 +549,35 @@ static uint32_t bk_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t
     }
     case 0x250001U:
         return CO_ABORT_LOCAL_CONTROL; /* a measured value: the device sets it */
-    case 0x200101U:
+    case 0x200101U: {
         /* The address and baud rate are the LSS configuration: pending at once, stored at once (the manual
-         * has no save step), active after the next communication (address) / device (baud) reset. */
+         * has no save step), active after the next communication (address) / device (baud) reset. A store that
+         * fails refuses the write (0x06060000), and a refused write changes nothing: the pending value and the
+         * configured rate go back (they stayed, showed in 0x2001:01/02 and took effect at the next reset). */
+        const uint8_t pending = dev->node.lss.pending_bit_timing;
+        const uint8_t cfg = m->baud_cfg;
         if (!co_lss_set_pending_bit_timing(&dev->node, data[0])) {
             return data[0] > 8U ? CO_ABORT_VALUE_HIGH : CO_ABORT_INVALID_VALUE;
         }
         m->baud_cfg = data[0];
-        return co_lss_store(&dev->node) == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
-    case 0x200102U:
+        if (co_lss_store(&dev->node) == CO_OK) {
+            return CO_ABORT_NONE;
+        }
+        (void)co_lss_set_pending_bit_timing(&dev->node, pending);
+        m->baud_cfg = cfg;
+        return CO_ABORT_HARDWARE;
+    }
+    case 0x200102U: {
+        const uint8_t pending = dev->node.lss.pending_node_id;
         if (!co_lss_set_pending_node_id(&dev->node, data[0])) {
             return CO_ABORT_INVALID_VALUE;
         }
-        return co_lss_store(&dev->node) == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
+        if (co_lss_store(&dev->node) == CO_OK) {
+            return CO_ABORT_NONE;
+        }
+        (void)co_lss_set_pending_node_id(&dev->node, pending);
+        return CO_ABORT_HARDWARE;
+    }
     case 0x200104U:
         if (data[0] > 2U) {
             return CO_ABORT_VALUE_HIGH;

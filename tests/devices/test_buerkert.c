@@ -823,6 +823,27 @@ static void stored_write_answers_only_what_was_stored(void)
     TEST_ASSERT_EQUAL_UINT32(130U, sdo_read(0x2004U, 5U));
 }
 
+/* 0x2001:01/02 are stored in the LSS area by the write itself: a failed store refuses the write (0x06060000) and
+ * changes nothing, neither the value read back nor what the next reset or power cycle uses (the refused baud
+ * rate and address stayed pending; found by tests/fuzz/target_nvm_file.c with a directory in place of .lss). */
+static void failed_store_of_address_or_baud_rate_changes_nothing(void)
+{
+    TEST_ASSERT_EQUAL_UINT32(2U, sdo_read(0x2001U, 1U)); /* 500 kbit/s */
+    port.nvm_fail_area_mask = 1U << CO_NVM_LSS;
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, sdo_write(0x2001U, 1U, 5U, 1U));
+    TEST_ASSERT_EQUAL_HEX32(0x06060000UL, sdo_write(0x2001U, 2U, 0x20U, 1U));
+    TEST_ASSERT_EQUAL_UINT32(2U, sdo_read(0x2001U, 1U));
+    TEST_ASSERT_EQUAL_UINT32(1U, sdo_read(0x2001U, 2U));
+    TEST_ASSERT_EQUAL_UINT8(2U, dev.node.lss.pending_bit_timing);
+    TEST_ASSERT_EQUAL_UINT8(1U, dev.node.lss.pending_node_id);
+    port.nvm_fail_area_mask = 0U;
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2001U, 4U, 2U, 1U)); /* device reset */
+    advance(10000U);
+    TEST_ASSERT_EQUAL_UINT8(1U, node_id());
+    TEST_ASSERT_EQUAL_UINT8(2U, dev.node.lss.active_bit_timing);
+    TEST_ASSERT_EQUAL_UINT32(2U, sdo_read(0x2001U, 1U));
+}
+
 static void power_cycle_keeps_the_supply_voltage_and_restarts_the_controller(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0U, sdo_write_f32(0x2540U, 1U, 50.0f));
@@ -945,6 +966,7 @@ int main(void)
     RUN_TEST(faults_set_namur_bits_and_send_emcy);
     RUN_TEST(stuck_valve_freezes_the_flow_and_is_raised_again_after_a_reset);
     RUN_TEST(error_commands_and_namur_mode);
+    RUN_TEST(failed_store_of_address_or_baud_rate_changes_nothing);
     RUN_TEST(power_cycle_keeps_the_supply_voltage_and_restarts_the_controller);
     RUN_TEST(min_max_tracking_persists);
     RUN_TEST(operating_time_counts_and_is_saved_every_minute);
