@@ -335,13 +335,23 @@ static void recover(nvm_file_t *n)
         tmp_path(n, a, tmp, sizeof tmp);
         if (listed[a]) {
             (void)rename(tmp, n->path[a]); /* ENOENT: renamed before the crash */
-        } else {
-            (void)unlink(tmp);
         }
+        /* Not listed: a leftover of an undecided store. Listed but still there: the rename failed (a directory has
+         * the area's name), and with the journal gone below nothing would ever use it. */
+        (void)unlink(tmp);
     }
+    /* The journal's own temporary file: a store that stopped before its journal existed decided nothing. It stayed
+     * until the next store of several areas. */
+    char jtmp[PATH_MAX + 16];
+    (void)snprintf(jtmp, sizeof jtmp, "%s.tmp", n->journal);
+    (void)unlink(jtmp);
     if (journal) {
         sync_dir(n); /* the renames are durable before the journal that decided them goes */
-        (void)unlink(n->journal);
+    }
+    /* The journal once carried out, or whatever else has its name (a FIFO, a link: never followed, decides
+     * nothing); a directory stays (unlink cannot remove it, and it may hold someone's files). */
+    (void)unlink(n->journal);
+    if (journal) {
         sync_dir(n);
     }
 }
