@@ -22,6 +22,11 @@ void control_start(emu_control_t *c)
 static void control_line(void *ctx, line_verdict_t verdict, char *text, unsigned long lineno)
 {
     emu_t *emu = (emu_t *)ctx;
+    if (emu->quit) {
+        /* The lines after `quit` that came in the same read: the program is stopping, and whether they arrived in
+         * that read or the next one is chance (a pipe may deliver both at once), so none of them runs. */
+        return;
+    }
     if (verdict == LINE_TOO_LONG) {
         reply("error: stdin line %lu is longer than %d bytes: ignored", lineno, COMMAND_LINE_MAX);
     } else if (verdict == LINE_HAS_NUL) {
