@@ -15,6 +15,7 @@
 typedef struct script_loader {
     emu_script_t *script;
     const char *path;
+    FILE *err;              /* where refusals go: stderr, or a test's stream */
     co_time_us_t at;        /* the previous line's time */
     size_t cap;
     bool failed;            /* a line was refused (reported): the rest of the file is not looked at */
@@ -47,9 +48,9 @@ static void script_line(void *ctx, line_verdict_t verdict, char *text, unsigned 
     }
     if (verdict != LINE_OK) {
         if (verdict == LINE_TOO_LONG) {
-            fprintf(stderr, "canopen-emu: %s:%lu: line longer than %d bytes\n", l->path, lineno, COMMAND_LINE_MAX);
+            fprintf(l->err, "canopen-emu: %s:%lu: line longer than %d bytes\n", l->path, lineno, COMMAND_LINE_MAX);
         } else {
-            fprintf(stderr, "canopen-emu: %s:%lu: a NUL byte in the line\n", l->path, lineno);
+            fprintf(l->err, "canopen-emu: %s:%lu: a NUL byte in the line\n", l->path, lineno);
         }
         l->failed = true;
         return;
@@ -65,13 +66,13 @@ static void script_line(void *ctx, line_verdict_t verdict, char *text, unsigned 
         char *end = NULL;
         unsigned long long ms = 0U;
         if (!parse_time(p, &end, l->at / 1000U, &ms)) {
-            fprintf(stderr, "canopen-emu: %s:%lu: bad time (use '@MS command' or '@+MS command', MS a whole number "
+            fprintf(l->err, "canopen-emu: %s:%lu: bad time (use '@MS command' or '@+MS command', MS a whole number "
                     "of milliseconds)\n", l->path, lineno);
             l->failed = true;
             return;
         }
         if (ms > SCRIPT_TIME_MAX_MS) {
-            fprintf(stderr, "canopen-emu: %s:%lu: time after the start beyond the limit of %llu ms (11.6 days)\n",
+            fprintf(l->err, "canopen-emu: %s:%lu: time after the start beyond the limit of %llu ms (11.6 days)\n",
                     l->path, lineno, SCRIPT_TIME_MAX_MS);
             l->failed = true;
             return;
@@ -84,7 +85,7 @@ static void script_line(void *ctx, line_verdict_t verdict, char *text, unsigned 
         const size_t cap = l->cap == 0U ? 32U : l->cap * 2U;
         script_line_t *grown = realloc(s->lines, cap * sizeof *grown);
         if (grown == NULL) {
-            fprintf(stderr, "canopen-emu: out of memory reading %s\n", l->path);
+            fprintf(l->err, "canopen-emu: out of memory reading %s\n", l->path);
             l->failed = true;
             return;
         }
@@ -93,7 +94,7 @@ static void script_line(void *ctx, line_verdict_t verdict, char *text, unsigned 
     }
     char *copy = strdup(p);
     if (copy == NULL) {
-        fprintf(stderr, "canopen-emu: out of memory reading %s\n", l->path);
+        fprintf(l->err, "canopen-emu: out of memory reading %s\n", l->path);
         l->failed = true;
         return;
     }
@@ -115,7 +116,14 @@ bool script_load(emu_script_t *s, const char *path)
         (void)close(fd);
         return false;
     }
-    script_loader_t loader = {s, path, 0U, 0U, false};
+    const bool ok = script_read(s, fd, path, stderr);
+    (void)close(fd);
+    return ok;
+}
+
+bool script_read(emu_script_t *s, int fd, const char *name, FILE *err)
+{
+    script_loader_t loader = {s, name, err, 0U, 0U, false};
     line_reader_t reader;
     line_reader_init(&reader);
     char chunk[4096];
@@ -125,8 +133,7 @@ bool script_load(emu_script_t *s, const char *path)
             if (errno == EINTR) {
                 continue;
             }
-            fprintf(stderr, "canopen-emu: cannot read script %s: %s\n", path, strerror(errno));
-            (void)close(fd);
+            fprintf(err, "canopen-emu: cannot read script %s: %s\n", name, strerror(errno));
             return false;
         }
         line_reader_feed(&reader, chunk, (size_t)got, script_line, &loader);
@@ -134,7 +141,6 @@ bool script_load(emu_script_t *s, const char *path)
     if (!loader.failed) {
         line_reader_finish(&reader, script_line, &loader);
     }
-    (void)close(fd);
     return !loader.failed;
 }
 

@@ -7,6 +7,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include "co/co.h"
 
@@ -28,6 +29,10 @@ typedef struct emu_script {
 /** Reads the script at path; false (and a message on stderr naming the line) if it cannot be read, is a directory,
  *  or has a bad line: a bad time, a line longer than COMMAND_LINE_MAX bytes, a NUL byte. */
 bool script_load(emu_script_t *s, const char *path);
+
+/** script_load's reading and checking of an open file (fd is read to its end, not closed), with name in the
+ *  messages and the messages on err: the seam of the fuzz target tests/fuzz/target_script.c. */
+bool script_read(emu_script_t *s, int fd, const char *name, FILE *err);
 
 /** When the next line is due (µs since the start), or CO_NEVER when none is left. */
 co_time_us_t script_next_at(const emu_script_t *s);
