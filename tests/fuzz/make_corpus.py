@@ -1,5 +1,7 @@
 #!/usr/bin/env python3
 """Writes the seed corpora of the fuzz targets (tests/fuzz/corpus/<target>/) in the harness's input format.
+The Linux-side targets (nvm_file, script, control) have their own formats: see the head of each target_*.c and
+nvm_file_seeds / script_seeds / control_seeds below.
 
 Seeds: the 79 test vectors of the facts sheet (../shared/docs/canopen-facts.md, section 11) for every target
 (node-ID 5, the vector's preconditions set up through the bus), plus device scenarios per device (HV release,
@@ -695,6 +697,158 @@ def buerkert_scenarios(hdr):
     return S
 
 
+# ---- The Linux side: NVM files, scripts, control lines (target_nvm_file.c, target_script.c, target_control.c) ----
+
+# target_nvm_file.c: names (low nibble of a file record) and kinds (bits 4-6).
+A_PARAMS, A_LSS, A_DEVICE, T_PARAMS, T_LSS, T_DEVICE, J_JOURNAL, J_TMP, F_OTHER, F_OLD = range(10)
+RAW, SEALED, PARAMS, EMPTY, DIR, DIR_FULL, FIFO, LINK = range(8)
+LINK_OTHER, LINK_OLD, LINK_MISSING, LINK_PARAMS = range(4)
+DEVICE_BLOB = {0: b"PIC2\x02" + bytes(15), 1: b"SDSM\x02" + bytes(15), 2: b"BKF1\x02" + bytes(31)}
+LSS_OK = {0: (0x20, 3), 1: (0x20, 3), 2: (0x20, 2)}   # node-ID 32 and a bit timing of each device's table
+
+
+class NvmSeq:
+    """One input of fuzz_nvm_file: header (class, node-ID), then file records and steps."""
+
+    def __init__(self, cls, node_id=0):
+        self.b = bytearray([cls, node_id])
+        self.cls = cls
+
+    def file(self, name, kind, data=b""):
+        self.b.append((kind << 4) | name)
+        if kind in (RAW, SEALED):
+            self.b += u16(len(data)) + data
+        return self
+
+    @staticmethod
+    def obj(index, sub, value):
+        """An object and value: explicit index/sub (selector bit 15), length, bytes."""
+        return u16(0x8000) + u16(index) + bytes([sub, len(value)]) + bytes(value)
+
+    def params(self, name, records):
+        """A parameter blob of (index, sub, value bytes) records."""
+        self.b.append((PARAMS << 4) | name)
+        self.b.append(len(records))
+        for index, sub, value in records:
+            self.b += self.obj(index, sub, value)
+        return self
+
+    def lss(self, name, node_id, bit_timing):
+        return self.file(name, SEALED, bytes([0, 0, 0, 0, node_id, bit_timing]))
+
+    def device(self, name):
+        return self.file(name, SEALED, DEVICE_BLOB[self.cls])
+
+    def journal(self, name, areas):
+        return self.file(name, SEALED, b"CONVJ1" + bytes(areas) + b"\n")
+
+    def link(self, name, target):
+        self.b += bytes([(LINK << 4) | name, target])
+        return self
+
+    def write(self, index, sub, value):
+        self.b += bytes([0x80]) + self.obj(index, sub, value)
+        return self
+
+    def save(self, sdo=False, edit=0, param=0, restart=False):
+        self.b += bytes([0xA0, (1 if sdo else 0) | (edit << 1) | (8 if restart else 0)]) + u16(param)
+        return self
+
+    def time(self, tens_of_seconds):
+        self.b += bytes([0xB0, tens_of_seconds - 1])
+        return self
+
+    def power(self, restart=False):
+        self.b.append(0xC1 if restart else 0xC0)
+        return self
+
+    def data(self):
+        return bytes(self.b)
+
+
+def nvm_file_seeds():
+    S = {}
+    # Heartbeat 1000 ms (every device), an Eltex TPDO period of 500 ms, an unknown object, a wrong length.
+    stored = [(0x1017, 0, u16(1000)), (0x2002, 1, u16(500)), (0x5FFF, 1, b"\x01"), (0x1017, 0, b"\x01")]
+    for c, name in ((0, "pi"), (1, "sds"), (2, "bk")):
+        bt = LSS_OK[c][1]
+        S[name + "-nothing-stored"] = NvmSeq(c).data()
+        S[name + "-stored-areas"] = (NvmSeq(c).params(A_PARAMS, stored).lss(A_LSS, 0x20, bt).device(A_DEVICE)
+                                     .save(sdo=True).data())
+        S[name + "-crash-after-journal"] = (NvmSeq(c).file(A_PARAMS, RAW, b"old")
+                                            .params(T_PARAMS, stored).lss(T_LSS, 0x21, bt).device(T_DEVICE)
+                                            .journal(J_JOURNAL, [1, 1, 1]).save().data())
+        S[name + "-crash-before-journal"] = (NvmSeq(c).params(T_PARAMS, stored).lss(T_LSS, 0x21, bt)
+                                             .journal(J_TMP, [1, 1, 0]).save(restart=True).data())
+        S[name + "-journal-byte-2"] = (NvmSeq(c).params(T_PARAMS, stored).lss(T_LSS, 0x23, bt)
+                                       .file(J_JOURNAL, RAW, b"CONVJ1\x02\x01\x00\n").save().data())
+        S[name + "-journal-partly-done"] = (NvmSeq(c).params(A_PARAMS, stored).lss(T_LSS, 0x22, bt).device(T_DEVICE)
+                                            .journal(J_JOURNAL, [1, 1, 0]).save().data())
+        S[name + "-directories"] = (NvmSeq(c).file(A_PARAMS, DIR).file(T_LSS, DIR_FULL).file(J_JOURNAL, DIR)
+                                    .save(sdo=True).power(restart=True).data())
+        S[name + "-fifos"] = (NvmSeq(c).file(A_PARAMS, FIFO).file(A_DEVICE, FIFO).file(J_JOURNAL, FIFO)
+                              .file(T_PARAMS, FIFO).save().data())
+        S[name + "-links"] = (NvmSeq(c).params(F_OTHER, stored).link(A_PARAMS, LINK_OTHER).link(T_PARAMS, LINK_OLD)
+                              .link(J_JOURNAL, LINK_MISSING).link(A_LSS, LINK_PARAMS).save(restart=True).data())
+        S[name + "-damaged"] = (NvmSeq(c).file(A_PARAMS, EMPTY).file(A_LSS, RAW, b"COL1\x20")
+                                .file(A_DEVICE, RAW, DEVICE_BLOB[c]).save().data())
+        S[name + "-writes-edits"] = (NvmSeq(c).write(0x1017, 0, u16(2000)).write(0x2002, 1, u16(300))
+                                     .save(sdo=True).save(edit=1).save(edit=2, param=20).save(edit=3, param=5)
+                                     .save(restart=True).data())
+        S[name + "-time-and-edits"] = (NvmSeq(c).save().time(7).file(A_DEVICE, SEALED, DEVICE_BLOB[c])
+                                       .file(T_PARAMS, RAW, b"x").power().time(13).power(restart=True).data())
+        S[name + "-forged-lss"] = NvmSeq(c).lss(A_LSS, 0xFF, 5).save().lss(A_LSS, 0x20, 9).power().data()
+    return S
+
+
+def text_seeds(pairs):
+    return {name: text.encode("latin-1") if isinstance(text, str) else text for name, text in pairs}
+
+
+def script_seeds():
+    return text_seeds([
+        ("faults-example", "# faults.script\n@1000 show 16\n@+500 emcy 16 0x3210 0x05 0x01 0x07\n"
+                           "@+2000 emcy-clear 16 0x3210 0x01 0x07\n@+100 quit\n"),
+        ("times-every-form", "@0 list\n@+500 show 16\nhelp\n  # comment\n\n\t@0010\tget 16 0x1017\r\n@+0 list\n"
+                             "@7\n@3 set 16 0x1017 500\n"),
+        ("limit-exactly", "@999999999 show 16\n@+1 quit\n@1000000000 list"),
+        ("limit-sum-beyond", "@600000000 show 16\n@+400000001 quit\n"),
+        ("limit-beyond", "@1000000001 quit\n"),
+        ("huge-time", "@99999999999999999999999 quit\n"),
+        ("bad-fraction", "@5 list\n@1.5 show 16\n"),
+        ("bad-forms", "@inf quit\n@0x10 show\n@-1 x\n@ 5 x\n@1e300 x\n@+ x\n@5x\n"),
+        ("no-newline", "@5 show 16"),
+        ("line-2047", "@1 " + "x" * 2044 + "\n@2 quit\n"),
+        ("line-2048", "@1 list\n@2 " + "x" * 2045 + "\n@3 quit\n"),
+        ("nul-byte", "@5 list\n@6 show\x0016\n"),
+        ("empty", ""),
+    ])
+
+
+def control_seeds():
+    return text_seeds([
+        ("common-commands", "list\nshow 16\nget 16 0x1017\nset 16 0x1017 500\nemcy 17 0x3210 0x05 1 2 3 4 5\n"
+                            "emcy-clear 17 0x3210 1 2 3 4 5\npower-cycle 18\nhelp\nhelp 16\nshow all\nget 18 2002:1\n"),
+        ("device-commands", "status 16\nload 16 1 2000\ntemperature 20 70\npollution 17 80\nfaults 21\nmodel 17\n"
+                            "setpoint 18 50.5\nmode 22 hand\nflow-fault 18 on\nerror 16 0x05\nclear-error 16 0x05\n"),
+        ("store-power-cycle", "set 16 0x1017 1000\nset 16 0x1010:01 0x65766173\npower-cycle 16\nget 16 0x1017\n"
+                              "set 18 0x2001:02 0x30\nset 18 0x2001:04 1\nlist\n"),
+        ("errors", "frobnicate 16\nshow 99\nshow\nshow 0x10\nshow 010\nset 16 0x1017 70000\nget 16 zz\n"
+                   "emcy 16 0\nshow \"16\"\n\"show\" 17\n# comment\n   \t\r\n"),
+        ("quit-in-the-middle", "show 16\nquit\nshow 17\n"),
+        ("quit-forms", "  quit   # bye\n"),
+        ("quit-quoted", "\"quit\" 16\nlist\n"),
+        ("exit", "exit\nlist\n"),
+        ("quit-too-many-words", "quit " + " ".join(["a"] * 16) + "\nlist\n"),
+        ("quit-without-newline", "list\nquit"),
+        ("long-line-ending-in-quit", "x" * 2100 + "quit\nshow 16\n"),
+        ("long-last-line-without-newline", "show 16\n" + "x" * 2100),
+        ("line-2047-then-2048", "#" + " " * 2046 + "\n#" + " " * 2047 + "\nlist\n"),
+        ("nul-then-quit", "show 16\x00quit\nlist\n\x00\nquit\n"),
+        ("crlf", "show 16\r\nquit\r\n"),
+    ])
+
+
 def targets():
     out = {}
     out["core"] = vector_seeds((0, OWN, 0, 0), (0, 0xFF, 0, 0))
@@ -704,6 +858,9 @@ def targets():
         seeds = vector_seeds((0, OWN, 0, 0), (0, 0xFF, 0, 0))
         seeds.update(fn((0, OWN, 0, 0)))
         out[t] = seeds
+    out["nvm_file"] = nvm_file_seeds()
+    out["script"] = script_seeds()
+    out["control"] = control_seeds()
     return out
 
 

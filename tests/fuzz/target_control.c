@@ -1,0 +1,400 @@
+/*
+ * Fuzz target "control": command lines on canopen-emu's stdin, through the program's own code: control_start /
+ * control_read (src/emu/emu_control.c), the line reader (src/emu/emu_lines.c) and the command language
+ * (src/emu/emu_commands.c, device_command of devices/device.c and the models), driving six emulated nodes, two of
+ * each device class, on fake ports (tests/support/fake_port.c: no socket; NVM in memory).
+ *
+ * Input: the bytes that arrive on stdin. They go through a non-blocking pipe in chunks whose sizes (1 byte to
+ * 8 KiB, from a hash of the input) put the ends of reads anywhere in a line; after each chunk the harness calls
+ * control_read until the pipe is empty and processes the nodes as the main loop does, and stops, like the main
+ * loop, once a command set emu.quit. At the end the pipe is closed (end of input).
+ *
+ * Replaced for the test: reply() (emu_output.c: the harness records the replies instead of writing them),
+ * socketcan_now_us() (a clock that advances 1 ms per call: runs are repeatable), and run_command() is wrapped
+ * (-Wl,--wrap=run_command) to see which lines the control path hands to the command language.
+ *
+ * Invariants (a violation prints "==fuzz== INVARIANT VIOLATION" and aborts), against a reference cutting of the
+ * input into lines by docs/emulator.md "Command language":
+ *  - each line of at most 2047 bytes without a NUL byte is run, once, with exactly its text, in input order; a last
+ *    line without a newline is run at the end of input;
+ *  - a longer line is refused whole with the reply "error: stdin line N is longer than 2047 bytes: ignored", a line
+ *    holding a NUL byte with "error: stdin line N holds a NUL byte: ignored" (N its number from 1), and no part of it
+ *    runs;
+ *  - emu.quit is set exactly when a line that was run has `quit` (or its alias `exit`) as its first word and at
+ *    most 16 words, and no line after that one is run or answered;
+ *  - replies and device lines are NUL-terminated, device lines shorter than 512 bytes; every node's NMT state is
+ *    a legal one; no crash, leak or undefined behaviour.
+ */
+#define _GNU_SOURCE
+#include <fcntl.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include "emu.h"
+#include "emu_commands.h"
+#include "emu_control.h"
+#include "emu_output.h"
+#include "fake_port.h"
+
+#define DOC_LINE_MAX 2047U
+#define N_NODES 6U
+
+typedef enum { L_RUN, L_TOO_LONG, L_NUL } verdict_t;
+
+typedef struct ref_line {
+    verdict_t verdict;
+    const char *text; /* into the input */
+    size_t len;
+    bool quits;
+} ref_line_t;
+
+static const struct {
+    const char *cls;
+    const char *variant;
+    uint8_t id;
+} specs[N_NODES] = {{"pro-ionizer", NULL, 16}, {"pro-ionizer", "basic", 20}, {"sds", NULL, 17},
+                    {"sds", "E", 21},          {"buerkert", NULL, 18},      {"buerkert", NULL, 22}};
+
+static emu_t g_emu;
+static emu_node_t g_nodes[N_NODES];
+static fake_port_t g_ports[N_NODES];
+static co_time_us_t g_now;
+
+/* What the reference expects next: the lines in order, and where the harness is in them. */
+static ref_line_t *g_ref;
+static size_t g_ref_n;
+static size_t g_next;     /* the next line the control path must hand over (run or refuse) */
+static size_t g_quit_at;  /* index of the first line that quits, or g_ref_n */
+static int g_in_command;  /* inside run_command: replies belong to the command */
+static char g_tmp[COMMAND_LINE_MAX + 1];
+
+#if defined(__GNUC__)
+__attribute__((noreturn, format(printf, 1, 2)))
+#endif
+static void fail(const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "\n==fuzz== INVARIANT VIOLATION [control] (line %zu of %zu):\n==fuzz==   ", g_next + 1U, g_ref_n);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "\n");
+    fflush(stderr);
+    abort();
+}
+
+static bool ws(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+/* True when a line would stop the emulator: its first word, as the command language splits words (blanks skipped,
+ * '#' before a word starts a comment, a word in double quotes runs to the next quote), is `quit` or its alias
+ * `exit`, and it has at most MAX_ARGS words (a longer line is refused whole). */
+static bool quits(const char *l, size_t len)
+{
+    size_t p = 0U;
+    size_t count = 0U;
+    bool first_quits = false;
+    for (;;) {
+        while (p < len && ws(l[p])) {
+            p++;
+        }
+        if (p == len || l[p] == '#') {
+            break;
+        }
+        if (count == MAX_ARGS) {
+            return false;
+        }
+        size_t start = p;
+        size_t end;
+        if (l[p] == '"') {
+            start = ++p;
+            while (p < len && l[p] != '"') {
+                p++;
+            }
+        } else {
+            while (p < len && !ws(l[p])) {
+                p++;
+            }
+        }
+        end = p;
+        p += p < len ? 1U : 0U; /* the quote or blank that ended the word */
+        if (count == 0U) {
+            first_quits = (end - start == 4U && (memcmp(l + start, "quit", 4U) == 0 || memcmp(l + start, "exit", 4U) == 0));
+        }
+        count++;
+    }
+    return first_quits;
+}
+
+static void reference(const char *d, size_t n)
+{
+    size_t start = 0U;
+    g_ref_n = 0U;
+    g_quit_at = SIZE_MAX;
+    for (size_t i = 0U; i <= n; i++) {
+        if (i < n && d[i] != '\n') {
+            continue;
+        }
+        if (i == n && start == n) {
+            break;
+        }
+        ref_line_t *r = &g_ref[g_ref_n];
+        r->text = d + start;
+        r->len = i - start;
+        r->verdict = r->len > DOC_LINE_MAX ? L_TOO_LONG : memchr(r->text, '\0', r->len) != NULL ? L_NUL : L_RUN;
+        r->quits = r->verdict == L_RUN && quits(r->text, r->len);
+        if (r->quits && g_quit_at == SIZE_MAX) {
+            g_quit_at = g_ref_n;
+        }
+        g_ref_n++;
+        start = i + 1U;
+    }
+    if (g_quit_at == SIZE_MAX) {
+        g_quit_at = g_ref_n;
+    }
+}
+
+/* ---- Replacements of the program's output and clock ---------------------------------------------------------- */
+
+co_time_us_t socketcan_now_us(void)
+{
+    g_now += 1000U;
+    return g_now;
+}
+
+void reply(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    const int n = vsnprintf(g_tmp, sizeof g_tmp, fmt, ap);
+    va_end(ap);
+    if (n < 0) {
+        fail("a reply could not be formatted (%s)", fmt);
+    }
+    if (g_in_command > 0) {
+        return; /* the command's own answer */
+    }
+    /* Outside a command only the control path answers: the refusal of the next line. */
+    if (g_next >= g_ref_n || g_next > g_quit_at) {
+        fail("reply '%s' with no line left to refuse (or after quit)", g_tmp);
+    }
+    const ref_line_t *r = &g_ref[g_next];
+    char want[128];
+    if (r->verdict == L_TOO_LONG) {
+        (void)snprintf(want, sizeof want, "error: stdin line %zu is longer than 2047 bytes: ignored", g_next + 1U);
+    } else if (r->verdict == L_NUL) {
+        (void)snprintf(want, sizeof want, "error: stdin line %zu holds a NUL byte: ignored", g_next + 1U);
+    } else {
+        fail("reply '%s' for line %zu, which must run ('%.60s')", g_tmp, g_next + 1U, r->text);
+    }
+    if (strcmp(g_tmp, want) != 0) {
+        fail("reply '%s', expected '%s'", g_tmp, want);
+    }
+    g_next++;
+}
+
+void __real_run_command(emu_t *emu, char *line);
+void __wrap_run_command(emu_t *emu, char *line);
+
+void __wrap_run_command(emu_t *emu, char *line)
+{
+    if (g_next >= g_ref_n || g_next > g_quit_at) {
+        fail("line '%.60s' run with no line left (or after quit)", line);
+    }
+    const ref_line_t *r = &g_ref[g_next];
+    if (r->verdict != L_RUN) {
+        fail("line %zu (%s) was run as '%.60s'", g_next + 1U, r->verdict == L_TOO_LONG ? "too long" : "with a NUL byte",
+             line);
+    }
+    if (strlen(line) != r->len || memcmp(line, r->text, r->len) != 0) {
+        fail("line %zu was run as '%.60s' (%zu bytes); the input has '%.60s' (%zu bytes)", g_next + 1U, line,
+             strlen(line), r->text, r->len);
+    }
+    g_next++;
+    g_in_command++;
+    __real_run_command(emu, line);
+    g_in_command--;
+}
+
+static void device_print(void *ctx, const device_t *dev, const char *line)
+{
+    (void)ctx;
+    (void)dev;
+    if (line == NULL || strnlen(line, 512U) >= 512U) {
+        fail("a device line is NULL or not shorter than 512 bytes");
+    }
+}
+
+/* ---- The emulated nodes -------------------------------------------------------------------------------------- */
+
+/* The nodes' state right after power-on, taken at the first run: every run starts from a copy of it. Powering six
+ * nodes on (tables, 127 heartbeat-consumer slots of the Buerkert) took 90 % of a run; the copy is the same state,
+ * since every pointer in it points into these static blocks and the clock restarts with it. */
+static struct {
+    emu_node_t node;
+    fake_port_t port;
+    uint8_t *values;
+    uint8_t *model;
+} g_pristine[N_NODES];
+static co_time_us_t g_pristine_now;
+
+static void nodes_power_on(void)
+{
+    g_emu.start = socketcan_now_us();
+    for (size_t i = 0U; i < N_NODES; i++) {
+        emu_node_t *n = &g_nodes[i];
+        const device_class_t *cls = device_find_class(specs[i].cls);
+        if (cls == NULL) {
+            fail("device class %s is not registered", specs[i].cls);
+        }
+        memset(n, 0, sizeof *n);
+        /* Of the exact sizes, so that ASan sees an overrun. */
+        n->values = malloc(cls->od->values_size);
+        n->model = malloc(cls->model_size > 0U ? cls->model_size : 1U);
+        g_pristine[i].values = malloc(cls->od->values_size);
+        g_pristine[i].model = malloc(cls->model_size > 0U ? cls->model_size : 1U);
+        if (n->values == NULL || n->model == NULL || g_pristine[i].values == NULL || g_pristine[i].model == NULL) {
+            abort();
+        }
+        n->cmdline_id = specs[i].id;
+        n->index = i;
+        (void)snprintf(n->key, sizeof n->key, "%s-%u", cls->name, specs[i].id);
+        fake_port_init(&g_ports[i], &g_now);
+        n->port = g_ports[i].port;
+        device_cfg_t cfg;
+        memset(&cfg, 0, sizeof cfg);
+        cfg.node_id = specs[i].id;
+        cfg.serial = device_default_serial(cls) + specs[i].id;
+        cfg.variant = specs[i].variant;
+        cfg.port = &n->port;
+        cfg.port_ctx = &g_ports[i];
+        cfg.print = device_print;
+        if (device_init(&n->dev, cls, n->values, n->model, &cfg, g_emu.start) != CO_OK) {
+            fail("node %s:%u could not start", specs[i].cls, specs[i].id);
+        }
+        n->deadline = g_emu.start;
+        g_emu.nodes[i] = n;
+        g_pristine[i].node = *n;
+        g_pristine[i].port = g_ports[i];
+        memcpy(g_pristine[i].values, n->values, cls->od->values_size);
+        memcpy(g_pristine[i].model, n->model, cls->model_size > 0U ? cls->model_size : 1U);
+    }
+    g_pristine_now = g_now;
+}
+
+static void nodes_start(void)
+{
+    /* Not memset: the frame queue between local nodes (100 KB) is not used here. */
+    g_emu.n_nodes = N_NODES;
+    g_emu.log_level = LOG_NORMAL;
+    g_emu.local_count = 0U;
+    g_emu.quit = false;
+    memset(&g_emu.control, 0, sizeof g_emu.control);
+    memset(&g_emu.script, 0, sizeof g_emu.script);
+    g_emu.control.enabled = true;
+    if (g_emu.nodes[0] == NULL) {
+        nodes_power_on();
+        return;
+    }
+    g_now = g_pristine_now;
+    for (size_t i = 0U; i < N_NODES; i++) {
+        emu_node_t *n = &g_nodes[i];
+        const device_class_t *cls = n->dev.cls;
+        *n = g_pristine[i].node;
+        g_ports[i] = g_pristine[i].port;
+        memcpy(n->values, g_pristine[i].values, cls->od->values_size);
+        memcpy(n->model, g_pristine[i].model, cls->model_size > 0U ? cls->model_size : 1U);
+    }
+}
+
+/* As the main loop: nodes concerned by a command, or due, run. */
+static void nodes_process(void)
+{
+    const co_time_us_t now = socketcan_now_us();
+    for (size_t i = 0U; i < N_NODES; i++) {
+        emu_node_t *n = &g_nodes[i];
+        if (n->dirty || now >= n->deadline) {
+            n->dirty = false;
+            n->deadline = device_process(&n->dev, now);
+            g_ports[i].n_sent = 0U; /* frames are not looked at here: keep the recorder from filling */
+        }
+        const co_nmt_state_t s = co_node_state(&n->dev.node);
+        if (s != CO_NMT_INITIALISING && s != CO_NMT_STOPPED && s != CO_NMT_OPERATIONAL && s != CO_NMT_PRE_OPERATIONAL) {
+            fail("node %zu is in NMT state 0x%02X", i, (unsigned)s);
+        }
+    }
+}
+
+/* ---- Entry point --------------------------------------------------------------------------------------------- */
+
+static const size_t chunk_sizes[] = {1U, 2U, 3U, 5U, 8U, 64U, 100U, 511U, 2047U, 2048U, 2049U, 4095U, 4096U, 8192U};
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    const char *in = (const char *)data;
+    g_ref = malloc((size + 1U) * sizeof *g_ref);
+    if (g_ref == NULL) {
+        abort();
+    }
+    reference(in, size);
+    g_next = 0U;
+    g_in_command = 0;
+
+    int fds[2];
+    if (pipe2(fds, O_NONBLOCK | O_CLOEXEC) != 0 || dup2(fds[0], STDIN_FILENO) != STDIN_FILENO) {
+        perror("stdin pipe");
+        abort();
+    }
+    (void)close(fds[0]);
+    nodes_start();
+    control_start(&g_emu.control); /* finds O_NONBLOCK set: leaves the flag alone */
+    nodes_process();
+
+    uint32_t h = 2166136261U;
+    for (size_t i = 0U; i < size; i++) {
+        h = (h ^ data[i]) * 16777619U;
+    }
+    for (size_t pos = 0U; pos < size && !g_emu.quit;) {
+        h ^= h << 13;
+        h ^= h >> 17;
+        h ^= h << 5;
+        size_t n = chunk_sizes[h % (sizeof chunk_sizes / sizeof chunk_sizes[0])];
+        n = n < size - pos ? n : size - pos;
+        if (write(fds[1], in + pos, n) != (ssize_t)n) {
+            perror("write to stdin pipe");
+            abort();
+        }
+        pos += n;
+        int waiting = 0;
+        while (!g_emu.quit && ioctl(STDIN_FILENO, FIONREAD, &waiting) == 0 && waiting > 0) {
+            control_read(&g_emu);
+            nodes_process();
+        }
+    }
+    (void)close(fds[1]);
+    if (!g_emu.quit) {
+        control_read(&g_emu); /* end of input: the last line without its newline */
+        if (g_emu.control.open) {
+            fail("stdin ended but the control input is still open");
+        }
+        nodes_process();
+    }
+
+    const bool want_quit = g_quit_at < g_ref_n;
+    if (g_emu.quit != want_quit) {
+        fail("emu.quit is %d; %s", (int)g_emu.quit,
+             want_quit ? "a line says quit" : "no whole line says quit or exit");
+    }
+    const size_t handled = want_quit ? g_quit_at + 1U : g_ref_n;
+    if (g_next != handled) {
+        fail("%zu lines were run or refused, expected %zu", g_next, handled);
+    }
+    free(g_ref);
+    g_ref = NULL;
+    return 0;
+}
