@@ -347,7 +347,8 @@ int main(int argc, char **argv)
     while (!emu.quit && stop_signal == 0) {
         co_time_us_t now = socketcan_now_us();
         char line[COMMAND_LINE_MAX + 1];
-        while (script_take_due(&emu.script, now - emu.start, line, sizeof line)) {
+        /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
+        while (!emu.quit && script_take_due(&emu.script, now - emu.start, line, sizeof line)) {
             run_command(&emu, line);
         }
         /* Frames local nodes sent are offered to the others (which may answer: loop until quiet). */

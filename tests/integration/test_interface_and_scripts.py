@@ -144,6 +144,13 @@ def test_script_times_add_up_to_at_most_the_documented_limit(tmp_path):
     assert rc == 0 and out == "", (rc, out, err)
 
 
+def test_nothing_runs_after_a_script_quit(tmp_path):
+    """quit ends the run: a line due at the same time after it does not run (a save there stored)."""
+    _, rc, out, err = run_script(tmp_path, "@0 quit\n@0 set 0x64 0x1010:01 0x65766173\n@0 show 0x64\n")
+    assert rc == 0 and "node 100" not in out, (rc, out, err)
+    assert not (tmp_path / "nvm" / "sds-100.params").exists(), list((tmp_path / "nvm").iterdir())
+
+
 def test_a_long_script_line_is_one_line(tmp_path):
     # fgets cut lines at 511 bytes: the tail of this comment ran as a command
     _, rc, out, err = run_script(tmp_path, "#" + "x" * 510 + "show 0x64\n@100 quit\n")
