@@ -24,6 +24,7 @@
 #include <stdarg.h>
 #include <string.h>
 
+#include "fuzz_abort.h"
 #include "fuzz.h"
 
 #define FZ_TIME_MAX (UINT64_C(1) << 60) /* 36,000 years: far below any overflow of now + period */
@@ -125,11 +126,7 @@ void fz_fail(const fz_t *h, const char *fmt, ...)
     }
     fprintf(stderr, ":\n==fuzz==   ");
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    fprintf(stderr, "\n");
-    fflush(stderr);
-    abort();
+    fz_vabort(fmt, ap);
 }
 
 /* ---- Helpers ------------------------------------------------------------------------------------------- */

@@ -34,6 +34,7 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include "fuzz_abort.h"
 #include "emu.h"
 #include "emu_commands.h"
 #include "emu_control.h"
@@ -80,11 +81,7 @@ static void fail(const char *fmt, ...)
     va_list ap;
     fprintf(stderr, "\n==fuzz== INVARIANT VIOLATION [control] (line %zu of %zu):\n==fuzz==   ", g_next + 1U, g_ref_n);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    fprintf(stderr, "\n");
-    fflush(stderr);
-    abort();
+    fz_vabort(fmt, ap);
 }
 
 static bool ws(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }

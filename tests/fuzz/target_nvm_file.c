@@ -61,6 +61,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "fuzz_abort.h"
 #include "device.h"
 #include "nvm_file.h"
 
@@ -166,14 +167,10 @@ __attribute__((noreturn, format(printf, 1, 2)))
 static void fail(const char *fmt, ...)
 {
     va_list ap;
-    fprintf(stderr, "\n==fuzz== INVARIANT VIOLATION [nvm_file %s:%u] step %u (%s):\n==fuzz==   ",
-            g.cls != NULL ? g.cls->name : "?", g.id, g.step, g.what != NULL ? g.what : "?");
+    fprintf(stderr, "\n==fuzz== INVARIANT VIOLATION [nvm_file %s:%u] step %u (%s), directory %s:\n==fuzz==   ",
+            g.cls != NULL ? g.cls->name : "?", g.id, g.step, g.what != NULL ? g.what : "?", g.dir);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    fprintf(stderr, "\n==fuzz==   directory %s\n", g.dir);
-    fflush(stderr);
-    abort();
+    fz_vabort(fmt, ap);
 }
 
 static uint32_t le32(const uint8_t *p)

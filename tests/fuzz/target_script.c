@@ -26,6 +26,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include "fuzz_abort.h"
 #include "emu_lines.h"
 #include "emu_script.h"
 
@@ -58,11 +59,7 @@ static void fail(const char *fmt, ...)
     va_list ap;
     fprintf(stderr, "\n==fuzz== INVARIANT VIOLATION [script]:\n==fuzz==   ");
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    fprintf(stderr, "\n");
-    fflush(stderr);
-    abort();
+    fz_vabort(fmt, ap);
 }
 
 static bool blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }

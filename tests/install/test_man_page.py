@@ -201,15 +201,16 @@ def describe(option):
     return f"{', '.join(sorted(names, key=lambda n: (n.startswith('--'), n)))} {argument}".strip()
 
 
+def first_columns(help_text, start=r"\S"):
+    """The first column of each indented line of a help text that starts with `start` (a regex): the text up to
+    the first run of two or more spaces."""
+    return [m.group(1) for m in (re.match(r"^\s+(%s.*?)(?:\s{2,}|$)" % start, line) for line in help_text.splitlines())
+            if m]
+
+
 def help_options(help_text):
-    """The options of --help: each line that starts (after indentation) with '-' is one, its option column
-    ending at the first run of two or more spaces."""
-    options = []
-    for line in help_text.splitlines():
-        m = re.match(r"^\s+(-\S.*?)(?:\s{2,}|$)", line)
-        if m:
-            options.append(parse_option_column(m.group(1)))
-    return options
+    """The options of --help: each indented line that starts with '-' is one."""
+    return [parse_option_column(column) for column in first_columns(help_text, r"-\S")]
 
 
 C_STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
@@ -224,12 +225,7 @@ def c_string_literals(source):
 
 def command_synopses(help_text):
     """'  get NODE INDEX[:SUB]         an object's value' -> 'get NODE INDEX[:SUB]' for each indented line."""
-    synopses = []
-    for line in help_text.splitlines():
-        m = re.match(r"^\s+(\S.*?)(?:\s{2,}|$)", line)
-        if m:
-            synopses.append(normalized(m.group(1)))
-    return synopses
+    return [normalized(column) for column in first_columns(help_text)]
 
 
 def emulator_help_commands(source_dir):

@@ -15,17 +15,17 @@ journal); both states a kill can leave between them load one whole generation.""
 import os
 import random
 import re
-import shutil
 import signal
 import subprocess
 import struct
 import time
+import zlib
 
 import can
 import canopen
 import pytest
 
-from conftest import EDS, IFACE, Capture, Deadline, Emulator, deep_receive_buffer
+from conftest import EDS, IFACE, Capture, Deadline, deep_receive_buffer
 
 SAVE = struct.pack("<I", 0x65766173)  # "save" for 0x1010:01
 
@@ -687,7 +687,7 @@ def test_area_file_that_is_not_a_file(emulator, bus, tmp_path, kind):
     else:
         os.mkfifo(params)
     mark = bus.mark()
-    emu = emulator(f"pro-ionizer:16", nvm_dir=nvm, control=False)
+    emu = emulator("pro-ionizer:16", nvm_dir=nvm, control=False)
     bus.wait_bootups(mark, [16])
     assert emu.log_contains("node 16 (pro-ionizer): stored parameters are damaged"), emu.err_lines
     bus.write([(16, 0x1017, 0, u16(3000)), (16, 0x2002, 0x06, u8(21))])
@@ -699,7 +699,7 @@ def test_area_file_that_is_not_a_file(emulator, bus, tmp_path, kind):
     assert emu.stop() == 0
     assert sorted(p.name for p in nvm.iterdir()) == ["pro-ionizer-16.params"]
     mark = bus.mark()
-    emu = emulator(f"pro-ionizer:16", nvm_dir=nvm, control=False)
+    emu = emulator("pro-ionizer:16", nvm_dir=nvm, control=False)
     bus.wait_bootups(mark, [16])
     assert bus.read([(16, 0x1017, 0)])[(16, 0x1017, 0)] == 1000
     assert emu.stop() == 0
@@ -710,7 +710,6 @@ def test_area_file_that_is_not_a_file(emulator, bus, tmp_path, kind):
 def patch_params(path, index, sub, value):
     """Rewrites the value of one record of a stored parameter file and its CRC: a file no CRC check tells from
     one the emulator wrote, with a value an SDO write of it would be refused for."""
-    import zlib
     blob = bytearray(path.read_bytes())
     assert blob[:4] == b"COS1", blob[:4]
     end = 16 + struct.unpack_from("<I", blob, 8)[0]
