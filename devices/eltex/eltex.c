@@ -207,7 +207,9 @@ static void publish_time(device_t *dev, uint8_t sub, uint64_t us)
 
 void eltex_counters_publish(device_t *dev)
 {
-    const eltex_t *x = eltex_of(dev);
+    eltex_t *x = eltex_of(dev);
+    x->shown_op_minute = x->op_us / MINUTE_US;
+    x->shown_hv_minute = x->hv_us / MINUTE_US;
     publish_time(dev, 0x01U, x->op_us);
     publish_time(dev, x->cls->hv_counter_sub, x->hv_us);
 }
@@ -222,7 +224,11 @@ void eltex_count(device_t *dev, co_time_us_t t, bool hv_on)
         }
         x->last = t;
     }
-    eltex_counters_publish(dev);
+    /* 0x2000 shows whole minutes and nothing else writes it (read-only, refused to `set`, re-published at every
+     * application reset): the eight OD writes are needed only when a minute is full. */
+    if (x->op_us / MINUTE_US != x->shown_op_minute || x->hv_us / MINUTE_US != x->shown_hv_minute) {
+        eltex_counters_publish(dev);
+    }
     if (save_minute(dev, x->op_us) != x->saved_minute) {
         nvm_save(dev); /* at least once per emulated minute of operating time, at the node's phase */
     }
@@ -288,8 +294,10 @@ bool eltex_fault_active(const device_t *dev, unsigned i) { return (eltex_const(d
 bool eltex_any_active(const device_t *dev, uint8_t type, uint8_t flags)
 {
     const eltex_class_t *c = ecls(dev);
-    for (unsigned i = 0U; i < c->n_faults; i++) {
-        if (eltex_fault_active(dev, i) && c->faults[i].type == type && (c->faults[i].flags & flags) == flags) {
+    /* Runs at every model tick: only the active entries are looked at (usually none). */
+    uint64_t a = eltex_const(dev)->active;
+    for (unsigned i = 0U; a != 0U; i++, a >>= 1) {
+        if ((a & 1U) != 0U && c->faults[i].type == type && (c->faults[i].flags & flags) == flags) {
             return true;
         }
     }

@@ -73,6 +73,8 @@ typedef struct eltex {
     uint64_t op_us;                 /* operating time including the stored part */
     uint64_t hv_us;                 /* HV-on time including the stored part */
     uint64_t saved_minute;          /* operating minute, counted from the save phase, last written to NVM */
+    uint64_t shown_op_minute;       /* op_us and hv_us in minutes as 0x2000 shows them (publish on change) */
+    uint64_t shown_hv_minute;
     bool nvm_error_logged;
     /* cyclic TPDOs (E12) */
     co_time_us_t tpdo_next;         /* next grid point, CO_NEVER outside Operational */
