@@ -54,6 +54,8 @@ typedef struct fz {
     /* Read-only rows: the rows checked, the values expected now and the power-on image. */
     uint16_t *ro_rows;
     uint16_t n_ro;
+    bool has_history;               /* the OD has 0x1003 */
+    uint8_t history_subs;           /* its sub-indices 1..n */
     uint8_t *expect;
     uint8_t *poweron;
     uint8_t poweron_id;
