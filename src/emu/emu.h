@@ -1,9 +1,14 @@
 /*
- * The canopen-emu program's state, shared by its modules: the nodes, the queue of frames between local nodes,
- * the control inputs. The program itself (main loop, ports of the nodes) is canopen_emu.c; the other modules are
- * emu_cmdline.c (the command line), emu_output.c (log and replies, never blocking), emu_commands.c (the command
- * language), emu_lines.c (command lines cut from a byte stream), emu_control.c (command lines from stdin),
- * emu_script.c (--script) and emu_fd_flags.c (stdin's O_NONBLOCK, cleared at exit).
+ * The canopen-emu runtime's state, shared by its modules. Where each concern lives:
+ *   canopen_emu.c   main: the options, then emu_runtime
+ *   emu_runtime.c   start (buses, nodes), the main loop (one poll for everything), the exit summary
+ *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing to its nodes
+ *   emu_node.c      one emulated node: the device, its port (CAN through its bus, NVM files)
+ *   emu_events.c    what the nodes report (NMT changes, EMCY, aborts, stores...) turned into log lines
+ *   emu_commands.c  the command language; emu_control.c (stdin) and emu_script.c (--script) feed it lines,
+ *                   cut by emu_lines.c
+ *   emu_cmdline.c   help, device list, DEVICE[/VARIANT][:NODE-ID][@IFACE] arguments
+ *   emu_output.c    log and replies, never blocking; emu_fd_flags.c stdin's O_NONBLOCK, cleared at exit
  */
 #ifndef EMU_H
 #define EMU_H
@@ -18,9 +23,16 @@
 #include "emu_control.h"
 #include "emu_script.h"
 
+/** Nodes on one bus: node-IDs 1..127. */
 #define MAX_NODES 127
+/** CAN interfaces one process serves. */
+#define MAX_BUSES 8
+/** Nodes of one process, all buses. */
+#define MAX_NODES_ALL (MAX_NODES * MAX_BUSES)
 
 #define LOCAL_QUEUE_LEN 4096U
+
+struct emu_bus;
 
 typedef struct emu_node {
     device_t dev;
@@ -28,27 +40,36 @@ typedef struct emu_node {
     void *model;
     co_port_t port;
     nvm_file_t nvm;
+    struct emu_bus *bus;
     uint8_t cmdline_id;
-    size_t index;           /* position in emu.nodes */
-    char key[64];
+    size_t index;           /* position in its bus's nodes */
+    char key[64];           /* NVM file name stem: DEVICE-ID, or DEVICE-ID@IFACE on every bus but the first */
     co_time_us_t deadline;  /* what device_process last returned */
     bool dirty;             /* a frame concerned the node or a command ran on it: process before sleeping */
 } emu_node_t;
 
-/* Frames sent by local nodes, waiting to be offered to the other local nodes. */
+/* Frames sent by local nodes, waiting to be offered to the other local nodes of the same bus. */
 typedef struct local_frame {
     co_frame_t frame;
     size_t sender;
 } local_frame_t;
 
-typedef struct emu {
+typedef struct emu_bus {
+    socketcan_t can;
     emu_node_t *nodes[MAX_NODES];
     size_t n_nodes;
-    socketcan_t can;
     local_frame_t local[LOCAL_QUEUE_LEN];
     size_t local_head;
     size_t local_count;
     unsigned long local_lost;
+    int log_level;
+} emu_bus_t;
+
+typedef struct emu {
+    emu_bus_t *buses[MAX_BUSES];
+    size_t n_buses;
+    emu_node_t *nodes[MAX_NODES_ALL]; /* every node, in command-line order */
+    size_t n_nodes;
     co_time_us_t start;
     int log_level;          /* as given on the command line; emu_output.c keeps the same for logline() */
     emu_script_t script;

@@ -8,9 +8,10 @@
 void usage(FILE *out)
 {
     fprintf(out,
-            "usage: canopen-emu [-i IFACE] [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID] ...\n"
-            "Emulates CANopen devices on a SocketCAN interface (default vcan0).\n\n"
-            "  -i, --interface IFACE   CAN interface (default vcan0)\n"
+            "usage: canopen-emu [-i IFACE]... [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID][@IFACE] ...\n"
+            "Emulates CANopen devices on SocketCAN interfaces (default vcan0).\n\n"
+            "  -i, --interface IFACE   CAN interface (default vcan0); repeat it for several buses: nodes\n"
+            "                          without @IFACE go to the first\n"
             "      --nvm-dir DIR       where stored parameters live (default $XDG_STATE_HOME/canopen-emu\n"
             "                          or ~/.local/state/canopen-emu)\n"
             "      --control -         read control commands from stdin even when it is not a terminal\n"
@@ -20,8 +21,9 @@ void usage(FILE *out)
             "  -q, --quiet             log only problems\n"
             "  -h, --help              this help\n"
             "      --version           the version (and the git revision it was built from) and exit\n\n"
-            "NODE-ID is 1..127, decimal or 0x-hex; default: the device's own (see --list-devices).\n"
-            "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12\n");
+            "NODE-ID is 1..127, decimal or 0x-hex; default: the device's own (see --list-devices); unique per bus.\n"
+            "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12\n"
+            "         canopen-emu -i vcan0 -i vcan1 sds:16 sds:16@vcan1\n");
 }
 
 void list_devices(FILE *out)
@@ -40,46 +42,61 @@ void list_devices(FILE *out)
     }
 }
 
-/* DEVICE[/VARIANT][:NODE-ID] */
-bool parse_spec(const char *spec, const device_class_t **cls, char *variant, size_t vlen, uint8_t *id)
+/* DEVICE[/VARIANT][:NODE-ID][@IFACE] */
+bool parse_spec(const char *arg, node_spec_t *spec)
 {
+    char text[128];
     char name[64];
-    const char *colon = strchr(spec, ':');
-    const size_t nlen = colon != NULL ? (size_t)(colon - spec) : strlen(spec);
-    if (nlen == 0U || nlen >= sizeof name) {
-        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID]\n", spec);
+    memset(spec, 0, sizeof *spec);
+    if (strlen(arg) >= sizeof text) {
+        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID][@IFACE]\n", arg);
         return false;
     }
-    memcpy(name, spec, nlen);
+    (void)snprintf(text, sizeof text, "%s", arg);
+    char *at = strchr(text, '@');
+    if (at != NULL) {
+        *at++ = '\0';
+        if (at[0] == '\0' || strlen(at) >= sizeof spec->iface || strchr(at, '/') != NULL) {
+            fprintf(stderr, "canopen-emu: bad interface '%s' in '%s'\n", at, arg);
+            return false;
+        }
+        (void)snprintf(spec->iface, sizeof spec->iface, "%s", at);
+    }
+    const char *colon = strchr(text, ':');
+    const size_t nlen = colon != NULL ? (size_t)(colon - text) : strlen(text);
+    if (nlen == 0U || nlen >= sizeof name) {
+        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID][@IFACE]\n", arg);
+        return false;
+    }
+    memcpy(name, text, nlen);
     name[nlen] = '\0';
-    variant[0] = '\0';
     char *slash = strchr(name, '/');
     if (slash != NULL) {
         *slash = '\0';
-        (void)snprintf(variant, vlen, "%s", slash + 1);
+        (void)snprintf(spec->variant, sizeof spec->variant, "%s", slash + 1);
     }
-    *cls = device_find_class(name);
-    if (*cls == NULL) {
+    spec->cls = device_find_class(name);
+    if (spec->cls == NULL) {
         fprintf(stderr, "canopen-emu: unknown device '%s'; known devices:\n", name);
         list_devices(stderr);
         return false;
     }
-    *id = (*cls)->default_node_id;
+    spec->id = spec->cls->default_node_id;
     if (colon != NULL) {
         long long v;
         if (!device_parse_int(colon + 1, 1, 127, &v)) {
-            fprintf(stderr, "canopen-emu: bad node-ID '%s' in '%s': use 1..127 (decimal or 0x-hex)\n", colon + 1, spec);
+            fprintf(stderr, "canopen-emu: bad node-ID '%s' in '%s': use 1..127 (decimal or 0x-hex)\n", colon + 1, arg);
             return false;
         }
-        *id = (uint8_t)v;
+        spec->id = (uint8_t)v;
     }
-    if (variant[0] != '\0') {
+    if (spec->variant[0] != '\0') {
         bool found = false;
-        for (size_t v = 0U; (*cls)->variants != NULL && (*cls)->variants[v] != NULL; v++) {
-            found = found || strcmp((*cls)->variants[v], variant) == 0;
+        for (size_t v = 0U; spec->cls->variants != NULL && spec->cls->variants[v] != NULL; v++) {
+            found = found || strcmp(spec->cls->variants[v], spec->variant) == 0;
         }
         if (!found) {
-            fprintf(stderr, "canopen-emu: device %s has no variant '%s' (see --list-devices)\n", name, variant);
+            fprintf(stderr, "canopen-emu: device %s has no variant '%s' (see --list-devices)\n", name, spec->variant);
             return false;
         }
     }

@@ -1,5 +1,5 @@
 /*
- * The command line of canopen-emu: its help, the device list, DEVICE[/VARIANT][:NODE-ID] arguments and the default
+ * The command line of canopen-emu: its help, the device list, DEVICE[/VARIANT][:NODE-ID][@IFACE] arguments and the default
  * NVM directory. Messages about a bad argument go to stderr.
  */
 #ifndef EMU_CMDLINE_H
@@ -11,15 +11,16 @@
 #include <stdio.h>
 
 #include "device.h"
+#include "emu_node.h"
 
 void usage(FILE *out);
 
 /** The device types, one a line (--list-devices). */
 void list_devices(FILE *out);
 
-/** DEVICE[/VARIANT][:NODE-ID]: the class, the variant ("" for the default) and the node-ID (the class's default
- *  when none is given). false, with a message, when the argument is not one. */
-bool parse_spec(const char *spec, const device_class_t **cls, char *variant, size_t vlen, uint8_t *id);
+/** DEVICE[/VARIANT][:NODE-ID][@IFACE]: the class, the variant ("" for the default), the node-ID (the class's default
+ *  when none is given) and the interface ("" for the first). false, with a message, when the argument is not one. */
+bool parse_spec(const char *arg, node_spec_t *spec);
 
 /** $XDG_STATE_HOME/canopen-emu, ~/.local/state/canopen-emu, or ./canopen-emu-nvm, written to buf. */
 const char *default_nvm_dir(char *buf, size_t len);

@@ -42,7 +42,7 @@ static int split(char *line, char **argv)
 
 static void help(void)
 {
-    reply("commands (NODE = node-ID, decimal or 0x-hex, or 'all'):\n"
+    reply("commands (NODE = node-ID, decimal or 0x-hex, or 'all'; NODE@IFACE on one bus of several):\n"
           "  list                         the nodes\n"
           "  show NODE                    NMT state, node-ID, active errors\n"
           "  get NODE INDEX[:SUB]         an object's value (hex index/sub: 0x2002:06 or 2002:6)\n"
@@ -52,6 +52,68 @@ static void help(void)
           "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
           "  help [NODE]                  this text, or the device commands of NODE\n"
           "  quit                         stop the emulator");
+}
+
+/* NODE of a command: ID, ID@IFACE, all or all@IFACE. */
+typedef struct node_selector {
+    bool all;
+    long long id;
+    const emu_bus_t *bus; /* NULL: any */
+} node_selector_t;
+
+/* The node answers to id: its node-ID, or, while it has none (LSS unconfigured), the one it was started with. */
+static bool has_id(const emu_node_t *n, long long id)
+{
+    const uint8_t now = co_node_id(&n->dev.node);
+    return now == id || (now == CO_NODE_ID_UNCONFIGURED && n->cmdline_id == id);
+}
+
+static bool selects(const node_selector_t *sel, const emu_node_t *n)
+{
+    return (sel->bus == NULL || n->bus == sel->bus) && (sel->all || has_id(n, sel->id));
+}
+
+static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel)
+{
+    sel->bus = NULL;
+    sel->id = -1;
+    char *at = strchr(word, '@');
+    if (at != NULL) {
+        *at = '\0';
+        for (size_t i = 0U; i < emu->n_buses; i++) {
+            if (strcmp(emu->buses[i]->can.ifname, at + 1) == 0) {
+                sel->bus = emu->buses[i];
+            }
+        }
+        if (sel->bus == NULL) {
+            reply("error: no interface '%s'", at + 1);
+            return false;
+        }
+    }
+    sel->all = strcmp(word, "all") == 0;
+    if (!sel->all && !device_parse_int(word, 0, 255, &sel->id)) {
+        reply("error: '%s' is not a node-ID", word);
+        return false;
+    }
+    if (!sel->all && sel->bus == NULL) {
+        /* The same node-ID on two buses: the command must say which. */
+        const emu_bus_t *found = NULL;
+        for (size_t i = 0U; i < emu->n_nodes; i++) {
+            const emu_node_t *n = emu->nodes[i];
+            if (has_id(n, sel->id)) {
+                if (found != NULL && found != n->bus) {
+                    reply("error: node %lld is on %s and on %s: say %lld@%s", sel->id, found->can.ifname,
+                          n->bus->can.ifname, sel->id, found->can.ifname);
+                    return false;
+                }
+                found = n->bus;
+            }
+        }
+    }
+    if (at != NULL) {
+        *at = '@'; /* "no node 16@vcan1" names what was asked for */
+    }
+    return true;
 }
 
 void run_command(emu_t *emu, char *line)
@@ -77,8 +139,9 @@ void run_command(emu_t *emu, char *line)
     if (strcmp(argv[0], "list") == 0) {
         for (size_t i = 0U; i < emu->n_nodes; i++) {
             const emu_node_t *n = emu->nodes[i];
-            reply("node %u: %s (started as %u) %s", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
-                  co_nmt_state_name(co_node_state(&n->dev.node)));
+            reply("node %u: %s (started as %u) %s%s%s", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
+                  co_nmt_state_name(co_node_state(&n->dev.node)), emu->n_buses > 1U ? " on " : "",
+                  emu->n_buses > 1U ? n->bus->can.ifname : "");
         }
         return;
     }
@@ -86,16 +149,14 @@ void run_command(emu_t *emu, char *line)
         reply("error: '%s' needs a NODE (try help)", argv[0]);
         return;
     }
-    long long id = -1;
-    const bool all = strcmp(argv[1], "all") == 0;
-    if (!all && !device_parse_int(argv[1], 0, 255, &id)) {
-        reply("error: '%s' is not a node-ID", argv[1]);
+    node_selector_t sel;
+    if (!parse_selector(emu, argv[1], &sel)) {
         return;
     }
     bool matched = false;
     for (size_t i = 0U; i < emu->n_nodes; i++) {
         emu_node_t *n = emu->nodes[i];
-        if (!all && co_node_id(&n->dev.node) != id && !(co_node_id(&n->dev.node) == CO_NODE_ID_UNCONFIGURED && n->cmdline_id == id)) {
+        if (!selects(&sel, n)) {
             continue;
         }
         matched = true;

@@ -61,6 +61,7 @@ static const struct {
                     {"sds", "E", 21},          {"buerkert", NULL, 18},      {"buerkert", NULL, 22}};
 
 static emu_t g_emu;
+static emu_bus_t g_buses[2]; /* named only: their sockets are never opened (frames go to the fake ports) */
 static emu_node_t g_nodes[N_NODES];
 static fake_port_t g_ports[N_NODES];
 static co_time_us_t g_now;
@@ -257,6 +258,7 @@ static void nodes_power_on(void)
             abort();
         }
         n->cmdline_id = specs[i].id;
+        n->bus = &g_buses[i < N_NODES / 2U ? 0U : 1U];
         n->index = i;
         (void)snprintf(n->key, sizeof n->key, "%s-%u", cls->name, specs[i].id);
         fake_port_init(&g_ports[i], &g_now);
@@ -284,10 +286,14 @@ static void nodes_power_on(void)
 
 static void nodes_start(void)
 {
-    /* Not memset: the frame queue between local nodes (100 KB) is not used here. */
+    /* Not memset: the node pointers stay. Two buses, so that NODE@IFACE is read as in a run with two. */
     g_emu.n_nodes = N_NODES;
+    g_emu.n_buses = 2U;
+    for (size_t b = 0U; b < 2U; b++) {
+        (void)snprintf(g_buses[b].can.ifname, sizeof g_buses[b].can.ifname, "vcan%zu", b);
+        g_emu.buses[b] = &g_buses[b];
+    }
     g_emu.log_level = LOG_NORMAL;
-    g_emu.local_count = 0U;
     g_emu.quit = false;
     memset(&g_emu.control, 0, sizeof g_emu.control);
     memset(&g_emu.script, 0, sizeof g_emu.script);

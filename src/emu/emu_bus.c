@@ -1,0 +1,132 @@
+/* One CAN interface and its nodes: see emu_bus.h. */
+#define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
+#include "emu_bus.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "emu_output.h"
+
+/* The port's lines are all problems or their end (interface down / up again, gone / back, error frames, frames
+ * lost, a failed send): shown with -q too, which keeps only problems. */
+static void can_log(void *ctx, const char *line)
+{
+    (void)ctx;
+    logline(LOG_QUIET, "%s", line);
+}
+
+int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t errlen)
+{
+    b->n_nodes = 0U;
+    b->local_head = 0U;
+    b->local_count = 0U;
+    b->local_lost = 0UL;
+    b->log_level = log_level;
+    return socketcan_open(&b->can, ifname, can_log, NULL, err, errlen);
+}
+
+void bus_add_node(emu_bus_t *b, emu_node_t *n)
+{
+    n->bus = b;
+    n->index = b->n_nodes;
+    b->nodes[b->n_nodes++] = n;
+}
+
+co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
+{
+    const co_status_t st = socketcan_send(&b->can, f);
+    if (st == CO_OK && b->n_nodes > 1U) {
+        if (b->local_count == LOCAL_QUEUE_LEN) {
+            b->local_lost++; /* the other local nodes miss this frame; counted, reported at exit */
+        } else {
+            local_frame_t *l = &b->local[(b->local_head + b->local_count) % LOCAL_QUEUE_LEN];
+            l->frame = *f;
+            l->sender = from->index;
+            b->local_count++;
+        }
+    }
+    if (st == CO_OK && b->log_level >= LOG_VERBOSE) {
+        char hex[24] = "";
+        for (uint8_t i = 0U; i < f->len; i++) {
+            (void)snprintf(hex + 2U * i, sizeof hex - 2U * i, "%02X", f->data[i]);
+        }
+        logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&from->dev.node), (unsigned)f->id, hex);
+    }
+    return st;
+}
+
+co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
+{
+    co_time_us_t next = CO_NEVER;
+    do {
+        while (b->local_count > 0U) {
+            const local_frame_t l = b->local[b->local_head];
+            b->local_head = (b->local_head + 1U) % LOCAL_QUEUE_LEN;
+            b->local_count--;
+            for (size_t i = 0U; i < b->n_nodes; i++) {
+                if (i != l.sender && device_rx(&b->nodes[i]->dev, &l.frame, now)) {
+                    b->nodes[i]->dirty = true;
+                }
+            }
+        }
+        /* Only nodes that are due or were concerned by a frame or a command run: with 127 nodes on one bus,
+         * processing every node at every wake-up cost O(nodes^2) per second (docs/performance.md). */
+        next = CO_NEVER;
+        *tx_pending = false;
+        for (size_t i = 0U; i < b->n_nodes; i++) {
+            emu_node_t *n = b->nodes[i];
+            if (n->dirty || now >= n->deadline) {
+                n->dirty = false;
+                n->deadline = device_process(&n->dev, now);
+            }
+            next = n->deadline < next ? n->deadline : next;
+            *tx_pending = *tx_pending || n->dev.node.txq.count > 0U;
+        }
+    } while (b->local_count > 0U); /* the others may have answered: loop until quiet */
+    const co_time_us_t r = socketcan_service(&b->can, now);
+    return r < next ? r : next;
+}
+
+void bus_receive(emu_bus_t *b, co_time_us_t now)
+{
+    co_frame_t f;
+    for (int k = 0; k < 1024 && socketcan_read(&b->can, &f) == 1; k++) {
+        if (b->log_level >= LOG_VERBOSE) {
+            logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
+        }
+        for (size_t i = 0U; i < b->n_nodes; i++) {
+            if (device_rx(&b->nodes[i]->dev, &f, now)) {
+                b->nodes[i]->dirty = true;
+            }
+        }
+    }
+}
+
+void bus_tx_ready(emu_bus_t *b)
+{
+    /* Without this the loop would poll again, get POLLOUT at once, and spin until the nodes' retry deadline. */
+    for (size_t i = 0U; i < b->n_nodes; i++) {
+        if (b->nodes[i]->dev.node.txq.count > 0U) {
+            b->nodes[i]->dirty = true;
+        }
+    }
+}
+
+void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost)
+{
+    if (b->local_lost > 0U) {
+        logline(LOG_QUIET, "%s: %lu frame(s) between local nodes were lost (queue full)", b->can.ifname, b->local_lost);
+    }
+    for (size_t i = 0U; i < b->n_nodes; i++) {
+        const co_node_stats_t *st = &b->nodes[i]->dev.node.stats;
+        *sent += st->tx_frames;
+        *dropped += st->tx_dropped;
+        if (st->tx_dropped > 0U) {
+            logline(LOG_QUIET, "node %u (%s): %lu frame(s) could not be sent", co_node_id(&b->nodes[i]->dev.node),
+                    b->nodes[i]->dev.cls->name, (unsigned long)st->tx_dropped);
+        }
+    }
+    socketcan_flush_log(&b->can);
+    *rx_lost += b->can.rx_dropped;
+    socketcan_close(&b->can);
+}

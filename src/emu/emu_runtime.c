@@ -1,0 +1,151 @@
+/* The runtime's start, main loop and stop: see emu_runtime.h. */
+#define _GNU_SOURCE /* ppoll, PATH_MAX and POSIX calls, as in every file of the Linux program */
+#include "emu_runtime.h"
+
+#include <errno.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "emu_bus.h"
+#include "emu_commands.h"
+#include "emu_control.h"
+#include "emu_output.h"
+#include "emu_script.h"
+
+static volatile sig_atomic_t stop_signal;
+
+static void on_signal(int sig) { stop_signal = sig; }
+
+int runtime_start(emu_t *emu, const emu_config_t *cfg)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    (void)sigaction(SIGINT, &sa, NULL);
+    (void)sigaction(SIGTERM, &sa, NULL);
+    char err[512];
+    /* From here on the log and the replies go through emu_output.c, which never blocks (it ignores SIGPIPE). */
+    for (size_t i = 0U; i < cfg->n_ifaces; i++) {
+        emu_bus_t *b = calloc(1U, sizeof *b);
+        if (b == NULL) {
+            output_error("out of memory");
+            return 1;
+        }
+        emu->buses[emu->n_buses++] = b;
+        if (bus_open(b, cfg->ifaces[i], emu->log_level, err, sizeof err) != 0) {
+            output_error("%s", err);
+            return 1;
+        }
+    }
+    /* One power-on time for all nodes: their periodic deadlines (heartbeats, model ticks, cyclic TPDOs of
+     * equal periods) then fall on the same instants and one wake-up serves them all. */
+    const co_time_us_t power_on = socketcan_now_us();
+    for (size_t i = 0U; i < cfg->n_specs; i++) {
+        const node_spec_t *s = &cfg->specs[i];
+        size_t bus = 0U;
+        for (size_t k = 0U; k < emu->n_buses; k++) {
+            if (s->iface[0] != '\0' && strcmp(cfg->ifaces[k], s->iface) == 0) {
+                bus = k;
+            }
+        }
+        emu_node_t *n = node_create(emu->buses[bus], bus == 0U, s, cfg->nvm_dir, power_on);
+        if (n == NULL) {
+            return 1;
+        }
+        emu->nodes[emu->n_nodes++] = n;
+    }
+    control_start(&emu->control);
+    return 0;
+}
+
+int runtime_loop(emu_t *emu)
+{
+    /* each bus's socket, stdin, stdout and stderr when output waits */
+    struct pollfd pfd[MAX_BUSES + 3];
+    while (!emu->quit && stop_signal == 0) {
+        co_time_us_t now = socketcan_now_us();
+        char line[COMMAND_LINE_MAX + 1];
+        /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
+        while (!emu->quit && script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
+            run_command(emu, line);
+        }
+        co_time_us_t next = CO_NEVER;
+        nfds_t nfds = 0U;
+        for (size_t i = 0U; i < emu->n_buses; i++) {
+            emu_bus_t *b = emu->buses[i];
+            bool tx_pending = false;
+            const co_time_us_t t = bus_run(b, now, &tx_pending);
+            next = t < next ? t : next;
+            pfd[nfds].fd = b->can.fd; /* -1 while the interface is gone: poll ignores it */
+            pfd[nfds].events = socketcan_poll_events(&b->can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
+            pfd[nfds].revents = 0;
+            nfds++;
+        }
+        const co_time_us_t script_at = script_next_at(&emu->script);
+        if (script_at != CO_NEVER && emu->start + script_at < next) {
+            next = emu->start + script_at;
+        }
+        output_flush(); /* what this pass logged and replied, as far as the readers take it */
+        const nfds_t stdin_index = emu->control.open ? nfds : 0U;
+        if (emu->control.open) {
+            pfd[nfds].fd = STDIN_FILENO;
+            pfd[nfds].events = POLLIN;
+            pfd[nfds].revents = 0;
+            nfds++;
+        }
+        nfds += output_poll_fds(&pfd[nfds]); /* POLLOUT wakes the loop to write more: the next pass does */
+        now = socketcan_now_us();
+        struct timespec ts;
+        struct timespec *timeout = NULL;
+        if (next != CO_NEVER) {
+            const co_time_us_t wait = next > now ? next - now : 0U;
+            ts.tv_sec = (time_t)(wait / 1000000U);
+            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
+            timeout = &ts;
+        }
+        const int ready = ppoll(pfd, nfds, timeout, NULL);
+        if (ready < 0) {
+            if (errno == EINTR) {
+                continue;
+            }
+            output_error("poll: %s", strerror(errno));
+            return 1;
+        }
+        now = socketcan_now_us();
+        for (size_t i = 0U; i < emu->n_buses; i++) {
+            if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
+                bus_receive(emu->buses[i], now);
+            }
+            if ((pfd[i].revents & POLLOUT) != 0) {
+                bus_tx_ready(emu->buses[i]); /* room in the socket's buffer: nodes with queued frames retry now */
+            }
+        }
+        if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+            control_read(emu);
+        }
+    }
+    return 0;
+}
+
+void runtime_stop(emu_t *emu)
+{
+    logline(LOG_NORMAL, "stopping%s", stop_signal != 0 ? " (signal)" : "");
+    unsigned long sent = 0UL, dropped = 0UL, rx_lost = 0UL;
+    for (size_t i = 0U; i < emu->n_buses; i++) {
+        bus_close(emu->buses[i], &sent, &dropped, &rx_lost);
+    }
+    /* Shown also with -q when frames were lost either way: a quiet run must not hide a loss. */
+    logline(dropped > 0UL || rx_lost > 0UL ? LOG_QUIET : LOG_NORMAL,
+            "%lu frame(s) sent, %lu dropped; %lu received frame(s) lost (receive buffer full)", sent, dropped, rx_lost);
+    for (size_t i = 0U; i < emu->n_nodes; i++) {
+        node_destroy(emu->nodes[i]);
+    }
+    for (size_t i = 0U; i < emu->n_buses; i++) {
+        free(emu->buses[i]);
+    }
+    script_free(&emu->script);
+}

@@ -1,0 +1,33 @@
+/*
+ * The canopen-emu runtime: what the command line asked for (emu_config_t) started, then one loop that sleeps in a
+ * single poll until the earliest deadline of any node, a frame on any bus, a control line, room in a blocked
+ * output or a signal, and runs whatever is due.
+ */
+#ifndef EMU_RUNTIME_H
+#define EMU_RUNTIME_H
+
+#include "emu.h"
+#include "emu_node.h"
+
+typedef struct emu_config {
+    const char *ifaces[MAX_BUSES];   /* the first is where nodes without @IFACE go */
+    size_t n_ifaces;
+    node_spec_t specs[MAX_NODES_ALL];
+    size_t n_specs;
+    const char *nvm_dir;
+    const char *script;              /* NULL: none */
+    bool control;                    /* commands from stdin */
+    int log_level;
+} emu_config_t;
+
+/** Opens the buses, powers the nodes on (one power-on time for all) and starts the control inputs. Returns 0, or
+ *  the exit status (1) after a message. The script must be loaded already (emu->script). */
+int runtime_start(emu_t *emu, const emu_config_t *cfg);
+
+/** Runs until `quit`, SIGINT or SIGTERM; returns the exit status. */
+int runtime_loop(emu_t *emu);
+
+/** The exit summary; closes the buses and frees the nodes. */
+void runtime_stop(emu_t *emu);
+
+#endif /* EMU_RUNTIME_H */
