@@ -259,8 +259,7 @@ static bool parse_hex(const char *text, size_t n, unsigned long max, unsigned lo
     return true;
 }
 
-/* INDEX[:SUB], both hex with or without 0x: "0x2002:06", "1017", "2002:0x3B". */
-static bool parse_address(const char *text, uint16_t *index, uint8_t *sub)
+bool device_parse_address(const char *text, uint16_t *index, uint8_t *sub)
 {
     const char *colon = strchr(text, ':');
     const size_t ilen = colon != NULL ? (size_t)(colon - text) : strlen(text);
@@ -317,7 +316,7 @@ static void print_value(device_t *dev, uint16_t index, uint8_t sub)
     }
 }
 
-static const char *type_name(uint8_t type)
+const char *device_type_name(uint8_t type)
 {
     switch (type) {
     case CO_T_BOOLEAN: return "BOOLEAN";
@@ -330,6 +329,8 @@ static const char *type_name(uint8_t type)
     case CO_T_UNSIGNED32: return "UNSIGNED32";
     case CO_T_UNSIGNED64: return "UNSIGNED64";
     case CO_T_REAL32: return "REAL32";
+    case CO_T_REAL64: return "REAL64";
+    case CO_T_VISIBLE_STRING: return "VISIBLE_STRING";
     case CO_T_OCTET_STRING: return "OCTET_STRING";
     case CO_T_DOMAIN: return "DOMAIN";
     default: return "type";
@@ -363,7 +364,7 @@ static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *
     uint16_t index;
     uint8_t sub;
     const co_od_entry_t *e;
-    if (!parse_address(addr, &index, &sub) || (e = co_od_find(dev->cls->od, index, sub)) == NULL) {
+    if (!device_parse_address(addr, &index, &sub) || (e = co_od_find(dev->cls->od, index, sub)) == NULL) {
         device_printf(dev, "error: no object %s", addr);
         return DEVICE_CMD_ERROR;
     }
@@ -406,10 +407,10 @@ static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *
         if (negative ? magnitude > range.most_negative : magnitude > range.highest) {
             if (range.is_signed) {
                 device_printf(dev, "error: %s is out of range: 0x%04X:%02X (%s) holds -%llu..%llu", text, index, sub,
-                              type_name(e->type), range.most_negative, range.highest);
+                              device_type_name(e->type), range.most_negative, range.highest);
             } else {
                 device_printf(dev, "error: %s is out of range: 0x%04X:%02X (%s) holds 0..%llu", text, index, sub,
-                              type_name(e->type), range.highest);
+                              device_type_name(e->type), range.highest);
             }
             return DEVICE_CMD_ERROR;
         }
@@ -460,7 +461,7 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
     if (strcmp(cmd, "get") == 0 && argc == 2) {
         uint16_t index;
         uint8_t sub;
-        if (!parse_address(argv[1], &index, &sub)) {
+        if (!device_parse_address(argv[1], &index, &sub)) {
             device_printf(dev, "error: '%s' is not INDEX[:SUB]", argv[1]);
             return DEVICE_CMD_ERROR;
         }
@@ -503,6 +504,14 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
         return DEVICE_CMD_OK;
     }
     return DEVICE_CMD_UNKNOWN;
+}
+
+const char *device_object_name(const device_class_t *cls, const co_od_entry_t *e)
+{
+    if (cls->od_names == NULL || e < cls->od->entries || e >= cls->od->entries + cls->od->count) {
+        return NULL;
+    }
+    return cls->od_names[e - cls->od->entries];
 }
 
 co_time_us_t device_save_phase_us(const device_t *dev)

@@ -42,6 +42,7 @@ typedef struct device_class {
     const char *name;              /**< Command-line name, e.g. "pro-ionizer". */
     const char *summary;           /**< One line for --list-devices. */
     const co_od_t *od;             /**< Generated object dictionary. */
+    const char *const *od_names;   /**< Its rows' EDS names, in table order (generated with it), or NULL. */
     uint8_t default_node_id;       /**< Node-ID when the user gives none (the manual's factory setting). */
     uint8_t default_bit_timing;    /**< LSS bit-timing index at the factory setting. */
     uint32_t core_options;         /**< CO_OPT_* for co_node_init. */
@@ -142,6 +143,15 @@ void device_printf(const device_t *dev, const char *fmt, ...)
 /** Parses a number: an optional sign, then decimal digits or 0x and hex digits ("010" is ten: never octal). Returns
  *  false if the text is anything else (blanks included), overflows, or is out of [lo, hi]. */
 bool device_parse_int(const char *text, long long lo, long long hi, long long *out);
+
+/** INDEX[:SUB] as the commands take it, both hex with or without 0x ("0x2002:06", "1017", "2002:0x3B"). */
+bool device_parse_address(const char *text, uint16_t *index, uint8_t *sub);
+
+/** The CiA 301 name of a co_od_type_t ("UNSIGNED16", "VISIBLE_STRING"...). */
+const char *device_type_name(uint8_t type);
+
+/** The EDS name of an object of the device, or NULL. */
+const char *device_object_name(const device_class_t *cls, const co_od_entry_t *e);
 
 /**
  * When a node's periodic NVM writes fall within each minute: (configured node-ID mod 60) seconds past it.

@@ -510,7 +510,10 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
         h.append(f"    {ctype} {r.member}{arr}; /* 0x{r.index:04X}:{r.sub:02X} {c_string(r.name)} */\n")
     h.append(f"}} {c_name}_od_values_t;\n\n")
     h.append(f"/** The object dictionary of {od.name}: {len(od.rows)} rows. */\n")
-    h.append(f"extern const co_od_t {c_name}_od;\n\n")
+    h.append(f"extern const co_od_t {c_name}_od;\n")
+    h.append(f"/** The EDS ParameterName of each row, in the order of the table (for tools; a firmware that does not\n"
+             f" * use them links none of them). */\n")
+    h.append(f"extern const char *const {c_name}_od_names[{len(od.rows)}];\n\n")
     h.append(f"#define {upper}_OD_ROWS {len(od.rows)}U\n")
     h.append(f"#define {upper}_OD_SIGNATURE 0x{signature(od, c_name):08X}UL\n\n#endif\n")
 
@@ -541,7 +544,11 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
             c.append(f"    .{r.member} = {c_number(r.value, r.dtype)},{' /* + node-ID */' if r.nodeid else ''}\n")
     c.append("};\n\n")
     c.append(f"const co_od_t {c_name}_od = {{\n    \"{od.name}\", rows, {len(od.rows)}U, &defaults,\n"
-             f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n}};\n")
+             f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n}};\n\n")
+    c.append(f"const char *const {c_name}_od_names[{len(od.rows)}] = {{\n")
+    for r in od.rows:
+        c.append(f"    \"{c_string(r.name)}\",\n")
+    c.append("};\n")
     return "".join(h), "".join(c)
 
 

@@ -94,7 +94,8 @@ int main(int argc, char **argv)
         {"control", required_argument, NULL, 'c'},   {"script", required_argument, NULL, 's'},
         {"list-devices", no_argument, NULL, 'l'},    {"verbose", no_argument, NULL, 'v'},
         {"quiet", no_argument, NULL, 'q'},           {"help", no_argument, NULL, 'h'},
-        {"version", no_argument, NULL, 'V'},         {NULL, 0, NULL, 0}};
+        {"version", no_argument, NULL, 'V'},         {"control-socket", required_argument, NULL, 'u'},
+        {"control-tcp", required_argument, NULL, 't'}, {NULL, 0, NULL, 0}};
     int opt;
     while ((opt = getopt_long(argc, argv, "i:vqh", opts, NULL)) != -1) {
         switch (opt) {
@@ -120,6 +121,20 @@ int main(int argc, char **argv)
         case 's':
             config.script = optarg;
             break;
+        case 'u':
+            config.control_socket = optarg;
+            break;
+        case 't': {
+            const char *colon = strrchr(optarg, ':');
+            long long port;
+            if (colon == NULL || colon == optarg || !device_parse_int(colon + 1, 0, 65535, &port)) {
+                fprintf(stderr, "canopen-emu: --control-tcp takes HOST:PORT (127.0.0.1:5020, [::1]:5020, localhost:0; "
+                        "port 0: any free one), not '%s'\n", optarg);
+                return 2;
+            }
+            config.control_tcp = optarg;
+            break;
+        }
         case 'l':
             list_devices(stdout);
             return 0;
@@ -170,6 +185,7 @@ int main(int argc, char **argv)
     config.log_level = emu.log_level;
     int status = runtime_start(&emu, &config);
     if (status != 0) {
+        sockets_close(&emu, &emu.sockets); /* a socket file made before the failure goes */
         return status;
     }
     status = runtime_loop(&emu);

@@ -5,8 +5,10 @@
  *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing to its nodes
  *   emu_node.c      one emulated node: the device, its port (CAN through its bus, NVM files)
  *   emu_events.c    what the nodes report (NMT changes, EMCY, aborts, stores...) turned into log lines
- *   emu_commands.c  the command language; emu_control.c (stdin) and emu_script.c (--script) feed it lines,
- *                   cut by emu_lines.c
+ *   emu_session.c   the control protocol: a session's lines (the command language or JSON: emu_json.c),
+ *                   its answers and its event subscriptions; emu_control.c (stdin) and emu_socket.c (the
+ *                   control sockets) are its transports
+ *   emu_commands.c  the command language; emu_script.c (--script) feeds it lines too; emu_lines.c cuts lines
  *   emu_cmdline.c   help, device list, DEVICE[/VARIANT][:NODE-ID][@IFACE] arguments
  *   emu_output.c    log and replies, never blocking; emu_fd_flags.c stdin's O_NONBLOCK, cleared at exit
  */
@@ -22,6 +24,8 @@
 #include "device.h"
 #include "emu_control.h"
 #include "emu_script.h"
+#include "emu_session.h"
+#include "emu_socket.h"
 
 /** Nodes on one bus: node-IDs 1..127. */
 #define MAX_NODES 127
@@ -31,8 +35,11 @@
 #define MAX_NODES_ALL (MAX_NODES * MAX_BUSES)
 
 #define LOCAL_QUEUE_LEN 4096U
+/** Control sessions: stdin and the clients of the control sockets. */
+#define MAX_SESSIONS 65
 
 struct emu_bus;
+struct emu;
 
 typedef struct emu_node {
     device_t dev;
@@ -55,6 +62,7 @@ typedef struct local_frame {
 } local_frame_t;
 
 typedef struct emu_bus {
+    struct emu *emu;
     socketcan_t can;
     emu_node_t *nodes[MAX_NODES];
     size_t n_nodes;
@@ -74,6 +82,10 @@ typedef struct emu {
     int log_level;          /* as given on the command line; emu_output.c keeps the same for logline() */
     emu_script_t script;
     emu_control_t control;
+    emu_sockets_t sockets;
+    emu_session_t *sessions[MAX_SESSIONS]; /* those that may subscribe to events */
+    size_t n_sessions;
+    bool in_command;        /* a command runs: a device's messages are its reply, not events */
     bool quit;
 } emu_t;
 

@@ -5,14 +5,15 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "emu_events.h"
 #include "emu_output.h"
 
 /* The port's lines are all problems or their end (interface down / up again, gone / back, error frames, frames
  * lost, a failed send): shown with -q too, which keeps only problems. */
 static void can_log(void *ctx, const char *line)
 {
-    (void)ctx;
     logline(LOG_QUIET, "%s", line);
+    events_interface((emu_bus_t *)ctx, line);
 }
 
 int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t errlen)
@@ -22,7 +23,7 @@ int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t 
     b->local_count = 0U;
     b->local_lost = 0UL;
     b->log_level = log_level;
-    return socketcan_open(&b->can, ifname, can_log, NULL, err, errlen);
+    return socketcan_open(&b->can, ifname, can_log, b, err, errlen);
 }
 
 void bus_add_node(emu_bus_t *b, emu_node_t *n)
@@ -35,6 +36,9 @@ void bus_add_node(emu_bus_t *b, emu_node_t *n)
 co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
 {
     const co_status_t st = socketcan_send(&b->can, f);
+    if (st == CO_OK) {
+        events_frame(b, from, f);
+    }
     if (st == CO_OK && b->n_nodes > 1U) {
         if (b->local_count == LOCAL_QUEUE_LEN) {
             b->local_lost++; /* the other local nodes miss this frame; counted, reported at exit */
@@ -94,6 +98,7 @@ void bus_receive(emu_bus_t *b, co_time_us_t now)
         if (b->log_level >= LOG_VERBOSE) {
             logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
         }
+        events_frame(b, NULL, &f);
         for (size_t i = 0U; i < b->n_nodes; i++) {
             if (device_rx(&b->nodes[i]->dev, &f, now)) {
                 b->nodes[i]->dirty = true;

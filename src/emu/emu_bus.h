@@ -11,7 +11,7 @@
 
 #include "emu.h"
 
-/** Opens the interface; 0, or an errno with a message in err. */
+/** Opens the interface (b->emu set by the caller); 0, or an errno with a message in err. */
 int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t errlen);
 
 /** Adds a node (at most MAX_NODES); sets its bus and index. */

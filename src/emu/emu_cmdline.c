@@ -15,6 +15,8 @@ void usage(FILE *out)
             "      --nvm-dir DIR       where stored parameters live (default $XDG_STATE_HOME/canopen-emu\n"
             "                          or ~/.local/state/canopen-emu)\n"
             "      --control -         read control commands from stdin even when it is not a terminal\n"
+            "      --control-socket PATH  accept control clients on a Unix socket (mode 0600)\n"
+            "      --control-tcp HOST:PORT  accept control clients on TCP (127.0.0.1:5020; port 0: any free one)\n"
             "      --script FILE       run control commands from FILE ('@MS command' lines, see canopen-emu(1))\n"
             "      --list-devices      list the device types and exit\n"
             "  -v, --verbose           log every frame sent and received as well\n"

@@ -51,6 +51,9 @@ static void help(void)
           "  emcy NODE CODE [REG [B0..B4]]  raise a raw CiA error (EMCY, 0x1001, 0x1003)\n"
           "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
           "  help [NODE]                  this text, or the device commands of NODE\n"
+          "  subscribe KIND[,KIND...] [NODE...]  events of these kinds (or all) to this session\n"
+          "  subscribe frame COB-ID[/MASK]  the frames whose identifier matches, as events\n"
+          "  unsubscribe [KIND[,KIND...]]  stop them\n"
           "  quit                         stop the emulator");
 }
 
@@ -116,25 +119,45 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel)
     return true;
 }
 
-void run_command(emu_t *emu, char *line)
+int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max)
+{
+    node_selector_t sel;
+    if (!parse_selector(emu, word, &sel)) {
+        return -1;
+    }
+    size_t n = 0U;
+    for (size_t i = 0U; i < emu->n_nodes && n < max; i++) {
+        if (selects(&sel, emu->nodes[i])) {
+            out[n++] = emu->nodes[i];
+        }
+    }
+    return (int)n;
+}
+
+command_result_t run_command(emu_t *emu, char *line)
 {
     char *argv[MAX_ARGS];
     const int argc = split(line, argv);
     if (argc < 0) {
         reply("error: too many words (at most %d)", MAX_ARGS);
-        return;
+        return COMMAND_ERROR;
     }
     if (argc == 0) {
-        return;
+        return COMMAND_OK;
     }
+    return run_command_words(emu, argc, argv);
+}
+
+command_result_t run_command_words(emu_t *emu, int argc, char **argv)
+{
     const co_time_us_t now = socketcan_now_us();
     if (strcmp(argv[0], "quit") == 0 || strcmp(argv[0], "exit") == 0) {
         emu->quit = true;
-        return;
+        return COMMAND_OK;
     }
     if (strcmp(argv[0], "help") == 0 && argc == 1) {
         help();
-        return;
+        return COMMAND_OK;
     }
     if (strcmp(argv[0], "list") == 0) {
         for (size_t i = 0U; i < emu->n_nodes; i++) {
@@ -143,38 +166,44 @@ void run_command(emu_t *emu, char *line)
                   co_nmt_state_name(co_node_state(&n->dev.node)), emu->n_buses > 1U ? " on " : "",
                   emu->n_buses > 1U ? n->bus->can.ifname : "");
         }
-        return;
+        return COMMAND_OK;
     }
     if (argc < 2) {
         reply("error: '%s' needs a NODE (try help)", argv[0]);
-        return;
+        return COMMAND_ERROR;
     }
-    node_selector_t sel;
-    if (!parse_selector(emu, argv[1], &sel)) {
-        return;
+    emu_node_t *nodes[MAX_NODES_ALL];
+    const int n_sel = select_nodes(emu, argv[1], nodes, MAX_NODES_ALL);
+    if (n_sel < 0) {
+        return COMMAND_ERROR;
     }
-    bool matched = false;
-    for (size_t i = 0U; i < emu->n_nodes; i++) {
-        emu_node_t *n = emu->nodes[i];
-        if (!selects(&sel, n)) {
-            continue;
-        }
-        matched = true;
-        if (strcmp(argv[0], "help") == 0) {
+    if (n_sel == 0) {
+        reply("error: no node %s", argv[1]);
+        return COMMAND_ERROR;
+    }
+    command_result_t result = COMMAND_OK;
+    const char *const cmd = argv[0];
+    for (int i = 0; i < n_sel; i++) {
+        emu_node_t *n = nodes[i];
+        if (strcmp(cmd, "help") == 0) {
             reply("node %u (%s) commands:\n%s", co_node_id(&n->dev.node), n->dev.cls->name,
                   n->dev.cls->commands_help != NULL ? n->dev.cls->commands_help : "  (only the common ones)");
             continue;
         }
+        char *saved = argv[1];
         argv[1] = argv[0];
+        emu->in_command = true;
         const device_cmd_result_t r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
+        emu->in_command = false;
+        argv[1] = saved;
         n->dirty = true;
-        argv[1] = argv[0];
         if (r == DEVICE_CMD_UNKNOWN) {
-            reply("node %u: error: unknown command '%s' (try help %u)", co_node_id(&n->dev.node), argv[0],
+            reply("node %u: error: unknown command '%s' (try help %u)", co_node_id(&n->dev.node), cmd,
                   co_node_id(&n->dev.node));
         }
+        if (r != DEVICE_CMD_OK) {
+            result = COMMAND_ERROR;
+        }
     }
-    if (!matched) {
-        reply("error: no node %s", argv[1]);
-    }
+    return result;
 }

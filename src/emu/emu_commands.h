@@ -10,7 +10,21 @@
 /** Most words a command line may have (the longest command, emcy, has 8). */
 #define MAX_ARGS 16
 
-/** Runs one command line (without its newline; it is split in place). `quit` sets emu->quit. */
-void run_command(emu_t *emu, char *line);
+typedef enum command_result {
+    COMMAND_OK = 0,
+    COMMAND_ERROR = 1        /**< refused or failed: a reply says why */
+} command_result_t;
+
+/** Runs one command line (without its newline; it is split in place). `quit` sets emu->quit. Replies go through
+ *  reply() (emu_output.h). */
+command_result_t run_command(emu_t *emu, char *line);
+
+/** The same for a line already split into words (argv[0] the command; the words may be changed). */
+command_result_t run_command_words(emu_t *emu, int argc, char **argv);
+
+/** The nodes NODE names (ID, ID@IFACE, all, all@IFACE; word may be changed and is restored): up to max of them
+ *  into out, their count returned; -1 after a reply saying why none can be (no such interface, not a node-ID,
+ *  an ID on several buses). 0 matches are not an error here. */
+int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max);
 
 #endif /* EMU_COMMANDS_H */

@@ -6,33 +6,24 @@
 #include <unistd.h>
 
 #include "emu.h"
-#include "emu_commands.h"
+#include "emu_events.h"
 #include "emu_fd_flags.h"
 #include "emu_output.h"
 
-void control_start(emu_control_t *c)
+static void write_stdout(void *ctx, const char *line, size_t len)
 {
-    line_reader_init(&c->lines);
+    (void)ctx;
+    output_reply_line(line, len);
+}
+
+void control_start(struct emu *emu)
+{
+    emu_control_t *c = &emu->control;
+    session_init(&c->session, "stdin", write_stdout, NULL);
     if (c->enabled) {
         (void)fd_flags_set_nonblock(STDIN_FILENO); /* cleared again at exit */
         c->open = true;
-    }
-}
-
-static void control_line(void *ctx, line_verdict_t verdict, char *text, unsigned long lineno)
-{
-    emu_t *emu = (emu_t *)ctx;
-    if (emu->quit) {
-        /* The lines after `quit` that came in the same read: the program is stopping, and whether they arrived in
-         * that read or the next one is chance (a pipe may deliver both at once), so none of them runs. */
-        return;
-    }
-    if (verdict == LINE_TOO_LONG) {
-        reply("error: stdin line %lu is longer than %d bytes: ignored", lineno, COMMAND_LINE_MAX);
-    } else if (verdict == LINE_HAS_NUL) {
-        reply("error: stdin line %lu holds a NUL byte: ignored", lineno);
-    } else {
-        run_command(emu, text);
+        events_add_session(emu, &c->session);
     }
 }
 
@@ -42,9 +33,9 @@ void control_read(struct emu *emu)
     char chunk[4096];
     const ssize_t r = read(STDIN_FILENO, chunk, sizeof chunk);
     if (r > 0) {
-        line_reader_feed(&c->lines, chunk, (size_t)r, control_line, emu);
+        session_feed(emu, &c->session, chunk, (size_t)r);
     } else if (r == 0 || (errno != EAGAIN && errno != EINTR)) {
-        line_reader_finish(&c->lines, control_line, emu);
-        c->open = false; /* end of input: keep running (stop with a signal or 'quit') */
+        session_finish(emu, &c->session);
+        c->open = false; /* end of input: keep running (stop with a signal or 'quit'); events still go to stdout */
     }
 }

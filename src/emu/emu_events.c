@@ -2,82 +2,284 @@
 #define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
 #include "emu_events.h"
 
+#include <jansson.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
 #include "emu_output.h"
+
+void events_add_session(emu_t *emu, emu_session_t *s)
+{
+    if (emu->n_sessions < MAX_SESSIONS) {
+        emu->sessions[emu->n_sessions++] = s;
+    }
+}
+
+void events_remove_session(emu_t *emu, emu_session_t *s)
+{
+    for (size_t i = 0U; i < emu->n_sessions; i++) {
+        if (emu->sessions[i] == s) {
+            emu->sessions[i] = emu->sessions[--emu->n_sessions];
+            return;
+        }
+    }
+}
+
+static bool anyone_wants(const emu_t *emu, event_kind_t kind, uint8_t id, const emu_bus_t *bus)
+{
+    for (size_t i = 0U; i < emu->n_sessions; i++) {
+        if (session_wants(emu->sessions[i], kind, id, bus)) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* One event to every session that wants it: JSON built once, text formatted once. fields is consumed. */
+static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const emu_bus_t *bus, const char *text,
+                    json_t *fields)
+{
+    const uint8_t id = n != NULL ? co_node_id(&n->dev.node) : 0U;
+    char *json_line = NULL;
+    char text_line[1024];
+    text_line[0] = '\0';
+    const co_time_us_t t = socketcan_now_us() - emu->start;
+    for (size_t i = 0U; i < emu->n_sessions; i++) {
+        emu_session_t *s = emu->sessions[i];
+        if (!session_wants(s, kind, id, bus) ||
+            (kind == EVENT_FRAME && fields != NULL && (json_integer_value(json_object_get(fields, "id")) & s->frame_mask) != s->frame_id)) {
+            continue;
+        }
+        if (s->events_json) {
+            if (json_line == NULL) {
+                json_t *o = json_object();
+                (void)json_object_set_new(o, "event", json_string(event_kind_name(kind)));
+                (void)json_object_set_new(o, "time_us", json_integer((json_int_t)t));
+                if (bus != NULL) {
+                    (void)json_object_set_new(o, "bus", json_string(bus->can.ifname));
+                }
+                if (n != NULL) {
+                    (void)json_object_set_new(o, "node", json_integer(id));
+                    (void)json_object_set_new(o, "device", json_string(n->dev.cls->name));
+                }
+                if (fields != NULL) {
+                    (void)json_object_update(o, fields);
+                }
+                if (text != NULL) {
+                    json_t *jt = json_string(text);
+                    (void)json_object_set_new(o, "text", jt != NULL ? jt : json_string("?"));
+                }
+                json_line = json_dumps(o, JSON_COMPACT);
+                json_decref(o);
+                if (json_line == NULL) {
+                    continue;
+                }
+                const size_t len = strlen(json_line);
+                json_line[len] = '\n'; /* the NUL's room: written with its length below */
+            }
+            s->write(s->ctx, json_line, strcspn(json_line, "\n") + 1U);
+        } else {
+            if (text_line[0] == '\0') {
+                if (n != NULL) {
+                    (void)snprintf(text_line, sizeof text_line, "event %s %.6f node %u@%s (%s): %s\n", event_kind_name(kind),
+                                   (double)t / 1e6, id, bus->can.ifname, n->dev.cls->name, text != NULL ? text : "");
+                } else {
+                    (void)snprintf(text_line, sizeof text_line, "event %s %.6f %s: %s\n", event_kind_name(kind),
+                                   (double)t / 1e6, bus != NULL ? bus->can.ifname : "-", text != NULL ? text : "");
+                }
+                if (strchr(text_line, '\n') == NULL || text_line[strlen(text_line) - 1U] != '\n') {
+                    text_line[sizeof text_line - 2U] = '\n';
+                    text_line[sizeof text_line - 1U] = '\0';
+                }
+            }
+            s->write(s->ctx, text_line, strlen(text_line));
+        }
+    }
+    free(json_line);
+    json_decref(fields);
+}
+
+/* The log line and the event of one report. fmt gives the text after "node N (device): ". */
+static void report(emu_node_t *n, event_kind_t kind, int level, json_t *fields, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static void report(emu_node_t *n, event_kind_t kind, int level, json_t *fields, const char *fmt, ...)
+{
+    char text[512];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    if (level >= 0) {
+        logline(level, "node %u (%s): %s", co_node_id(&n->dev.node), n->dev.cls->name, text);
+    }
+    emu_t *emu = n->bus != NULL ? n->bus->emu : NULL;
+    if (emu != NULL && anyone_wants(emu, kind, co_node_id(&n->dev.node), n->bus)) {
+        publish(emu, kind, n, n->bus, text, fields);
+    } else {
+        json_decref(fields);
+    }
+}
 
 void events_device_print(void *ctx, const device_t *dev, const char *line)
 {
-    (void)ctx;
+    emu_node_t *n = (emu_node_t *)ctx;
     /* Before co_node_init (a model loading its own NVM at power-on) the node has no ID yet: the configured one. */
     const unsigned id = co_node_id(&dev->node) != 0U ? co_node_id(&dev->node) : dev->cfg.node_id;
     reply("node %u: %s", id, line);
+    emu_t *emu = n != NULL && n->bus != NULL ? n->bus->emu : NULL;
+    if (emu != NULL && !emu->in_command && anyone_wants(emu, EVENT_MESSAGE, (uint8_t)id, n->bus)) {
+        publish(emu, EVENT_MESSAGE, n, n->bus, line, NULL); /* a model's own message (a fault raised...) */
+    }
+}
+
+static json_t *pack_state(const char *key1, uint32_t v1, const char *key2, uint32_t v2)
+{
+    json_t *o = json_object();
+    (void)json_object_set_new(o, key1, json_integer(v1));
+    if (key2 != NULL) {
+        (void)json_object_set_new(o, key2, json_integer(v2));
+    }
+    return o;
+}
+
+static void store_report(emu_node_t *n, const co_event_t *ev)
+{
+    const int level = ev->code == 0U ? LOG_NORMAL : LOG_QUIET; /* a failed store is a problem: shown with -q */
+    json_t *f = json_object();
+    (void)json_object_set_new(f, "what", json_string(ev->index == 0x7E5U ? "lss-store" : ev->kind == CO_EV_STORE ? "store" : "restore"));
+    (void)json_object_set_new(f, "index", json_integer(ev->index));
+    (void)json_object_set_new(f, "sub", json_integer(ev->sub));
+    (void)json_object_set_new(f, "ok", json_boolean(ev->code == 0U));
+    (void)json_object_set_new(f, "abort_code", json_integer(ev->code));
+    if (ev->index == 0x7E5U) {
+        report(n, EVENT_STORE, level, f, "LSS store configuration (node-ID %lu): %s", (unsigned long)ev->value,
+               ev->code == 0U ? "stored" : "failed");
+    } else {
+        report(n, EVENT_STORE, level, f, "%s 0x%04X:%02X: %s", ev->kind == CO_EV_STORE ? "store" : "restore", ev->index,
+               ev->sub, ev->code == 0U ? "done" : co_abort_text(ev->code));
+    }
+}
+
+static void nvm_report(emu_node_t *n, const co_event_t *ev)
+{
+    static const char *const status[] = {"none", "loaded", "damaged", "foreign", "refused"};
+    json_t *f = json_object();
+    (void)json_object_set_new(f, "area", json_string(ev->index == 0x7E5U ? "lss" : "parameters"));
+    (void)json_object_set_new(f, "status", json_string(ev->value < 5U ? status[ev->value] : "?"));
+    if (ev->index == 0x7E5U) {
+        if (ev->value == CO_NVM_CORRUPT) {
+            report(n, EVENT_NVM, LOG_QUIET, f, "stored LSS configuration is damaged; using the command-line node-ID and "
+                   "the default bit timing");
+        } else {
+            report(n, EVENT_NVM, -1, f, "stored LSS configuration %s", ev->value == CO_NVM_LOADED ? "loaded" : "none");
+        }
+    } else if (ev->value == CO_NVM_CORRUPT || ev->value == CO_NVM_FOREIGN) {
+        report(n, EVENT_NVM, LOG_QUIET, f, "stored parameters %s; starting from defaults",
+               ev->value == CO_NVM_CORRUPT ? "are damaged (bad header, length or CRC)" : "belong to another device");
+    } else if (ev->value == CO_NVM_REFUSED) {
+        report(n, EVENT_NVM, -1, f, "stored parameters refused; defaults used"); /* CO_EV_NVM_REFUSED logged it */
+    } else {
+        report(n, EVENT_NVM, LOG_VERBOSE, f, "stored parameters %s", ev->value == CO_NVM_LOADED ? "loaded" : "none, defaults used");
+    }
 }
 
 void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
 {
-    (void)ctx;
-    const unsigned id = co_node_id(&dev->node);
-    const char *name = dev->cls->name;
+    emu_node_t *n = (emu_node_t *)ctx;
     switch (ev->kind) {
-    case CO_EV_NMT_STATE:
-        logline(LOG_NORMAL, "node %u (%s): NMT %s -> %s", id, name, co_nmt_state_name((co_nmt_state_t)ev->code), co_nmt_state_name((co_nmt_state_t)ev->value));
-        break;
-    case CO_EV_SDO_ABORT:
-        logline(LOG_NORMAL, "node %u (%s): SDO abort 0x%08lX on 0x%04X:%02X (%s)", id, name, (unsigned long)ev->code,
-                ev->index, ev->sub, co_abort_text(ev->code));
-        break;
-    case CO_EV_EMCY:
-        logline(LOG_NORMAL, "node %u (%s): EMCY 0x%04lX, error register 0x%02lX", id, name, (unsigned long)ev->value,
-                (unsigned long)ev->code);
-        break;
-    case CO_EV_STORE:
-    case CO_EV_RESTORE: {
-        const int level = ev->code == 0U ? LOG_NORMAL : LOG_QUIET; /* a failed store is a problem: shown with -q */
-        if (ev->index == 0x7E5U) {
-            logline(level, "node %u (%s): LSS store configuration (node-ID %lu): %s", id, name,
-                    (unsigned long)ev->value, ev->code == 0U ? "stored" : "failed");
-        } else {
-            logline(level, "node %u (%s): %s 0x%04X:%02X: %s", id, name, ev->kind == CO_EV_STORE ? "store" : "restore",
-                    ev->index, ev->sub, ev->code == 0U ? "done" : co_abort_text(ev->code));
+    case CO_EV_NMT_STATE: {
+        const char *from = co_nmt_state_name((co_nmt_state_t)ev->code), *to = co_nmt_state_name((co_nmt_state_t)ev->value);
+        json_t *f = json_object();
+        (void)json_object_set_new(f, "from", json_string(from));
+        (void)json_object_set_new(f, "to", json_string(to));
+        report(n, EVENT_NMT, LOG_NORMAL, f, "NMT %s -> %s", from, to);
+        if (ev->code == CO_NMT_INITIALISING && ev->value == CO_NMT_PRE_OPERATIONAL) {
+            report(n, EVENT_BOOT_UP, -1, NULL, "boot-up"); /* the core sends it on this transition */
         }
         break;
     }
-    case CO_EV_NVM_LOADED:
-        if (ev->index == 0x7E5U) {
-            if (ev->value == CO_NVM_CORRUPT) {
-                logline(LOG_QUIET, "node %u (%s): stored LSS configuration is damaged; using the command-line "
-                        "node-ID and the default bit timing", id, name);
-            }
-        } else if (ev->value == CO_NVM_CORRUPT || ev->value == CO_NVM_FOREIGN) {
-            logline(LOG_QUIET, "node %u (%s): stored parameters %s; starting from defaults", id, name,
-                    ev->value == CO_NVM_CORRUPT ? "are damaged (bad header, length or CRC)" : "belong to another device");
-        } else {
-            logline(LOG_VERBOSE, "node %u (%s): stored parameters %s", id, name,
-                    ev->value == CO_NVM_LOADED ? "loaded" : "none, defaults used");
-        }
+    case CO_EV_SDO_ABORT: {
+        json_t *f = pack_state("index", ev->index, "sub", ev->sub);
+        (void)json_object_set_new(f, "abort_code", json_integer(ev->code));
+        report(n, EVENT_SDO_ABORT, LOG_NORMAL, f, "SDO abort 0x%08lX on 0x%04X:%02X (%s)", (unsigned long)ev->code,
+               ev->index, ev->sub, co_abort_text(ev->code));
         break;
-    case CO_EV_NVM_REFUSED: /* then CO_EV_NVM_LOADED with CO_NVM_REFUSED, which needs no second line */
-        logline(LOG_QUIET, "node %u (%s): stored parameters refused: 0x%04X:%02X holds a value a write would be "
-                "refused for (%s); starting from defaults", id, name, ev->index, ev->sub, co_abort_text(ev->code));
+    }
+    case CO_EV_EMCY:
+        report(n, EVENT_EMCY, LOG_NORMAL, pack_state("code", ev->value, "register", ev->code),
+               "EMCY 0x%04lX, error register 0x%02lX", (unsigned long)ev->value, (unsigned long)ev->code);
+        break;
+    case CO_EV_STORE:
+    case CO_EV_RESTORE:
+        store_report(n, ev);
+        break;
+    case CO_EV_NVM_LOADED:
+        nvm_report(n, ev);
+        break;
+    case CO_EV_NVM_REFUSED: /* then CO_EV_NVM_LOADED with CO_NVM_REFUSED */
+        report(n, EVENT_NVM, LOG_QUIET, pack_state("index", ev->index, "sub", ev->sub),
+               "stored parameters refused: 0x%04X:%02X holds a value a write would be refused for (%s); starting from "
+               "defaults", ev->index, ev->sub, co_abort_text(ev->code));
         break;
     case CO_EV_LSS_NODE_ID:
-        logline(LOG_NORMAL, "node %u (%s): LSS pending node-ID %lu", id, name, (unsigned long)ev->value);
+        report(n, EVENT_LSS, LOG_NORMAL, pack_state("pending_node_id", ev->value, NULL, 0U), "LSS pending node-ID %lu",
+               (unsigned long)ev->value);
         break;
     case CO_EV_LSS_BIT_TIMING:
-        logline(LOG_NORMAL, "node %u (%s): LSS pending bit timing %lu", id, name, (unsigned long)ev->value);
+        report(n, EVENT_LSS, LOG_NORMAL, pack_state("pending_bit_timing", ev->value, NULL, 0U),
+               "LSS pending bit timing %lu", (unsigned long)ev->value);
         break;
     case CO_EV_LSS_ACTIVATE:
-        logline(LOG_NORMAL, "node %u (%s): LSS activated %lu kbit/s", id, name, (unsigned long)ev->value);
+        report(n, EVENT_LSS, LOG_NORMAL, pack_state("kbit_s", ev->value, NULL, 0U), "LSS activated %lu kbit/s",
+               (unsigned long)ev->value);
         break;
     case CO_EV_HB_TIMEOUT:
-        logline(LOG_NORMAL, "node %u (%s): heartbeat of node %lu missing", id, name, (unsigned long)ev->value);
+        report(n, EVENT_HEARTBEAT, LOG_NORMAL, pack_state("producer", ev->value, NULL, 0U), "heartbeat of node %lu missing",
+               (unsigned long)ev->value);
         break;
     case CO_EV_GUARD_TIMEOUT:
-        logline(LOG_NORMAL, "node %u (%s): life guarding: no guard request in time", id, name);
+        report(n, EVENT_GUARDING, LOG_NORMAL, NULL, "life guarding: no guard request in time");
         break;
     case CO_EV_TX_DROPPED:
-        logline(LOG_VERBOSE, "node %u (%s): frame 0x%03lX not sent", id, name, (unsigned long)ev->value);
+        if (dev->cls != NULL) {
+            logline(LOG_VERBOSE, "node %u (%s): frame 0x%03lX not sent", co_node_id(&dev->node), dev->cls->name,
+                    (unsigned long)ev->value);
+        }
         break;
     default:
         break;
     }
+}
+
+void events_interface(emu_bus_t *bus, const char *line)
+{
+    emu_t *emu = bus->emu;
+    if (emu != NULL && anyone_wants(emu, EVENT_INTERFACE, 0U, bus)) {
+        publish(emu, EVENT_INTERFACE, NULL, bus, line, NULL);
+    }
+}
+
+void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f)
+{
+    emu_t *emu = bus->emu;
+    if (emu == NULL || emu->n_sessions == 0U || !anyone_wants(emu, EVENT_FRAME, 0U, bus)) {
+        return; /* the common case: one comparison per frame */
+    }
+    json_t *fields = json_object();
+    char hex[17] = "";
+    for (uint8_t i = 0U; i < f->len && i < 8U; i++) {
+        (void)snprintf(hex + 2U * i, 3U, "%02X", f->data[i]);
+    }
+    (void)json_object_set_new(fields, "dir", json_string(from != NULL ? "tx" : "rx"));
+    (void)json_object_set_new(fields, "id", json_integer(f->id));
+    (void)json_object_set_new(fields, "data", json_string(hex));
+    if ((f->flags & CO_FRAME_RTR) != 0U) {
+        (void)json_object_set_new(fields, "rtr", json_true());
+    }
+    char text[64];
+    (void)snprintf(text, sizeof text, "%s %03X#%s%s", from != NULL ? "tx" : "rx", (unsigned)f->id, hex,
+                   (f->flags & CO_FRAME_RTR) != 0U ? "R" : "");
+    publish(emu, EVENT_FRAME, from, bus, text, fields);
 }

@@ -81,7 +81,9 @@ emu_node_t *node_create(emu_bus_t *bus, bool first_bus, const node_spec_t *spec,
     cfg.port = &n->port;
     cfg.port_ctx = n;
     cfg.print = events_device_print;
+    cfg.print_ctx = n;
     cfg.on_event = events_device_event;
+    cfg.event_ctx = n;
     bus_add_node(bus, n); /* before the power-on: its boot-up goes to the bus's other nodes too */
     const co_status_t st = device_init(&n->dev, cls, n->values, n->model, &cfg, power_on);
     if (st != CO_OK) {

@@ -196,11 +196,35 @@ void output_error(const char *fmt, ...)
     va_end(ap);
 }
 
+void output_reply_line(const char *line, size_t len)
+{
+    if (!output_ready) {
+        (void)fwrite(line, 1U, len, stdout);
+        return;
+    }
+    append(STREAM_REPLY, line, len);
+}
+
+static reply_sink_fn reply_sink;
+static void *reply_sink_ctx;
+
+void output_set_reply_sink(reply_sink_fn fn, void *ctx)
+{
+    reply_sink = fn;
+    reply_sink_ctx = ctx;
+}
+
 void reply(const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    append_formatted(STREAM_REPLY, "", fmt, ap);
+    if (reply_sink != NULL) {
+        char text[LINE_BYTES];
+        const int n = vsnprintf(text, sizeof text, fmt, ap);
+        reply_sink(reply_sink_ctx, text, n < 0 ? 0U : (size_t)n < sizeof text ? (size_t)n : sizeof text - 1U);
+    } else {
+        append_formatted(STREAM_REPLY, "", fmt, ap);
+    }
     va_end(ap);
 }
 

@@ -43,6 +43,14 @@ void output_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /** One reply line on stdout (no newline in fmt; a multi-line reply is one line with newlines inside). */
 void reply(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
+/** Where reply() lines go instead of stdout while a control session runs a command (emu_session.h): each reply
+ *  as one call, without its newline (a multi-line reply has newlines inside). NULL: stdout again. */
+typedef void (*reply_sink_fn)(void *ctx, const char *text, size_t len);
+void output_set_reply_sink(reply_sink_fn fn, void *ctx);
+
+/** One whole line (newline included) on stdout as it is, whatever the reply sink: the stdin session's output. */
+void output_reply_line(const char *line, size_t len);
+
 /** Writes what the streams can take now, without blocking. Call once per pass of the main loop. */
 void output_flush(void);
 

@@ -15,6 +15,7 @@
 #include "emu_control.h"
 #include "emu_output.h"
 #include "emu_script.h"
+#include "emu_socket.h"
 
 static volatile sig_atomic_t stop_signal;
 
@@ -29,6 +30,26 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
     (void)sigaction(SIGTERM, &sa, NULL);
     char err[512];
     /* From here on the log and the replies go through emu_output.c, which never blocks (it ignores SIGPIPE). */
+    sockets_init(&emu->sockets);
+    if (cfg->control_socket != NULL) {
+        if (sockets_listen_unix(&emu->sockets, cfg->control_socket, err, sizeof err) != 0) {
+            output_error("%s", err);
+            return 1;
+        }
+        logline(LOG_NORMAL, "control: listening on unix %s", cfg->control_socket);
+    }
+    if (cfg->control_tcp != NULL) {
+        bool remote = false;
+        if (sockets_listen_tcp(&emu->sockets, cfg->control_tcp, &remote, err, sizeof err) != 0) {
+            output_error("%s", err);
+            return 1;
+        }
+        logline(LOG_NORMAL, "control: listening on tcp %s", emu->sockets.tcp_name);
+        if (remote) {
+            logline(LOG_QUIET, "control: warning: tcp %s is not a loopback address: whoever can reach it controls the "
+                    "emulated nodes (no authentication)", emu->sockets.tcp_name);
+        }
+    }
     for (size_t i = 0U; i < cfg->n_ifaces; i++) {
         emu_bus_t *b = calloc(1U, sizeof *b);
         if (b == NULL) {
@@ -36,6 +57,7 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
             return 1;
         }
         emu->buses[emu->n_buses++] = b;
+        b->emu = emu;
         if (bus_open(b, cfg->ifaces[i], emu->log_level, err, sizeof err) != 0) {
             output_error("%s", err);
             return 1;
@@ -58,14 +80,14 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
         }
         emu->nodes[emu->n_nodes++] = n;
     }
-    control_start(&emu->control);
+    control_start(emu);
     return 0;
 }
 
 int runtime_loop(emu_t *emu)
 {
-    /* each bus's socket, stdin, stdout and stderr when output waits */
-    struct pollfd pfd[MAX_BUSES + 3];
+    /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients */
+    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS];
     while (!emu->quit && stop_signal == 0) {
         co_time_us_t now = socketcan_now_us();
         char line[COMMAND_LINE_MAX + 1];
@@ -90,6 +112,7 @@ int runtime_loop(emu_t *emu)
             next = emu->start + script_at;
         }
         output_flush(); /* what this pass logged and replied, as far as the readers take it */
+        sockets_flush(&emu->sockets);
         const nfds_t stdin_index = emu->control.open ? nfds : 0U;
         if (emu->control.open) {
             pfd[nfds].fd = STDIN_FILENO;
@@ -98,6 +121,8 @@ int runtime_loop(emu_t *emu)
             nfds++;
         }
         nfds += output_poll_fds(&pfd[nfds]); /* POLLOUT wakes the loop to write more: the next pass does */
+        const nfds_t sockets_index = nfds;
+        nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds);
         now = socketcan_now_us();
         struct timespec ts;
         struct timespec *timeout = NULL;
@@ -127,6 +152,7 @@ int runtime_loop(emu_t *emu)
         if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
             control_read(emu);
         }
+        sockets_service(emu, &emu->sockets, &pfd[sockets_index], nfds - sockets_index);
     }
     return 0;
 }
@@ -134,6 +160,7 @@ int runtime_loop(emu_t *emu)
 void runtime_stop(emu_t *emu)
 {
     logline(LOG_NORMAL, "stopping%s", stop_signal != 0 ? " (signal)" : "");
+    sockets_close(emu, &emu->sockets);
     unsigned long sent = 0UL, dropped = 0UL, rx_lost = 0UL;
     for (size_t i = 0U; i < emu->n_buses; i++) {
         bus_close(emu->buses[i], &sent, &dropped, &rx_lost);

@@ -17,10 +17,13 @@ typedef struct emu_config {
     const char *nvm_dir;
     const char *script;              /* NULL: none */
     bool control;                    /* commands from stdin */
+    const char *control_socket;      /* Unix socket path, or NULL */
+    const char *control_tcp;         /* HOST:PORT, or NULL */
     int log_level;
 } emu_config_t;
 
-/** Opens the buses, powers the nodes on (one power-on time for all) and starts the control inputs. Returns 0, or
+/** Opens the control sockets and the buses, powers the nodes on (one power-on time for all) and starts the
+ *  control inputs. Returns 0, or
  *  the exit status (1) after a message. The script must be loaded already (emu->script). */
 int runtime_start(emu_t *emu, const emu_config_t *cfg);
 

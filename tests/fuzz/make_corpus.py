@@ -846,6 +846,23 @@ def control_seeds():
         ("line-2047-then-2048", "#" + " " * 2046 + "\n#" + " " * 2047 + "\nlist\n"),
         ("nul-then-quit", "show 16\x00quit\nlist\n\x00\nquit\n"),
         ("crlf", "show 16\r\nquit\r\n"),
+        # the JSON framing (docs/control-protocol.md) and the subscriptions
+        ("json-requests", '{"id":1,"cmd":"hello"}\n{"id":2,"cmd":"list"}\n{"id":3,"cmd":"get","node":16,"object":"0x1018:04"}\n'
+                          '{"id":"a","cmd":"set","node":"16","object":"0x1017","value":700}\n'
+                          '{"id":4,"cmd":"set","node":20,"object":4119,"sub":0,"value":70000}\n'
+                          '{"id":5,"cmd":"show","node":"all@vcan1"}\n{"id":6,"cmd":"power-cycle","node":17}\n'
+                          '{"id":7,"cmd":"status","node":16}\n{"id":8,"cmd":"emcy","node":18,"args":["0x3210",5,1,2,3,4,5]}\n'
+                          '{"id":9,"cmd":"help"}\n{"id":10,"cmd":"get","node":"16@vcan1","object":"1017"}\n'),
+        ("json-subscribe", '{"id":1,"cmd":"subscribe","events":"all","nodes":[16,"18@vcan1"]}\npower-cycle 16\n'
+                           'set 16 0x1010:01 0x65766173\n{"id":2,"cmd":"subscribe","events":["frame"],"frames":"0x700/0x780"}\n'
+                           '{"id":3,"cmd":"unsubscribe","events":["nmt"]}\nsubscribe nmt,boot-up,store 17 21@vcan1\n'
+                           'power-cycle 17\nunsubscribe\n'),
+        ("json-errors", '{bad\n[1,2]\n{"id":1.5,"cmd":"list"}\n{"cmd":3}\n{"cmd":"get","node":16}\n'
+                        '{"cmd":"get","node":16,"object":"0x1017","nod":1}\n{"cmd":"list","cmd":"quit"}\n'
+                        '{"cmd":"set","node":"all","object":"0x1017","value":1}\n{"cmd":"quit","node":16}\nlist\n'),
+        ("json-quit", '{"id":"q","cmd":"quit"}\nlist\n'),
+        ("json-exit-in-blanks", ' \t {"cmd":"exit","id":null}  \nlist\n'),
+        ("json-long-line", '{"cmd":"list","x":"' + "y" * 2100 + '"}\n{"cmd":"quit"}\n'),
     ])
 
 

@@ -1,17 +1,20 @@
 /*
- * Fuzz target "control": command lines on canopen-emu's stdin, through the program's own code: control_start /
- * control_read (src/emu/emu_control.c), the line reader (src/emu/emu_lines.c) and the command language
- * (src/emu/emu_commands.c, device_command of devices/device.c and the models), driving six emulated nodes, two of
- * each device class, on fake ports (tests/support/fake_port.c: no socket; NVM in memory).
+ * Fuzz target "control": control lines on canopen-emu's stdin, through the program's own code: control_start /
+ * control_read (src/emu/emu_control.c), the session (src/emu/emu_session.c: text or JSON framing, subscriptions),
+ * the line reader (src/emu/emu_lines.c), the JSON requests (src/emu/emu_json.c), the events (src/emu/emu_events.c)
+ * and the command language (src/emu/emu_commands.c, device_command of devices/device.c and the models), driving
+ * six emulated nodes, two of each device class, on fake ports (tests/support/fake_port.c: no socket; NVM in memory)
+ * and two named buses.
  *
  * Input: the bytes that arrive on stdin. They go through a non-blocking pipe in chunks whose sizes (1 byte to
  * 8 KiB, from a hash of the input) put the ends of reads anywhere in a line; after each chunk the harness calls
  * control_read until the pipe is empty and processes the nodes as the main loop does, and stops, like the main
  * loop, once a command set emu.quit. At the end the pipe is closed (end of input).
  *
- * Replaced for the test: reply() (emu_output.c: the harness records the replies instead of writing them),
- * socketcan_now_us() (a clock that advances 1 ms per call: runs are repeatable), and run_command() is wrapped
- * (-Wl,--wrap=run_command) to see which lines the control path hands to the command language.
+ * Replaced for the test: the output of emu_output.c (reply(), output_reply_line(), output_set_reply_sink(),
+ * logline(): the harness records the lines instead of writing them), socketcan_now_us() (a clock that advances
+ * 1 ms per call: runs are repeatable), and session_run_line() is wrapped (-Wl,--wrap=session_run_line) to see
+ * which lines the control path hands on.
  *
  * Invariants (a violation prints "==fuzz== INVARIANT VIOLATION" and aborts), against a reference cutting of the
  * input into lines by docs/emulator.md "Command language":
@@ -19,9 +22,13 @@
  *    line without a newline is run at the end of input;
  *  - a longer line is refused whole with the reply "error: stdin line N is longer than 2047 bytes: ignored", a line
  *    holding a NUL byte with "error: stdin line N holds a NUL byte: ignored" (N its number from 1), and no part of it
- *    runs;
+ *    runs; when what was kept of it starts with '{' (blanks skipped), the refusal is the JSON
+ *    {"id":null,"ok":false,"error":"line N is longer than 2047 bytes: ignored"} (or "holds a NUL byte");
  *  - emu.quit is set exactly when a line that was run has `quit` (or its alias `exit`) as its first word and at
- *    most 16 words, and no line after that one is run or answered;
+ *    most 16 words, or is the JSON request {"cmd":"quit"} (or "exit"; with at most an "id" that is a string, an
+ *    integer or null besides), and no line after that one is run or answered;
+ *  - every JSON line (first byte '{' after blanks) is answered by exactly one JSON object with "ok" true or false;
+ *    event lines ("event ..." or {"event":...}) may come at any time;
  *  - replies and device lines are NUL-terminated, device lines shorter than 512 bytes; every node's NMT state is
  *    a legal one; no crash, leak or undefined behaviour.
  */
@@ -34,11 +41,15 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <jansson.h>
+
 #include "fuzz_abort.h"
 #include "emu.h"
 #include "emu_commands.h"
 #include "emu_control.h"
+#include "emu_events.h"
 #include "emu_output.h"
+#include "emu_session.h"
 #include "fake_port.h"
 
 #define DOC_LINE_MAX 2047U
@@ -51,6 +62,7 @@ typedef struct ref_line {
     const char *text; /* into the input */
     size_t len;
     bool quits;
+    bool json;        /* a JSON request (what a refusal kept of it starts with '{') */
 } ref_line_t;
 
 static const struct {
@@ -71,8 +83,12 @@ static ref_line_t *g_ref;
 static size_t g_ref_n;
 static size_t g_next;     /* the next line the control path must hand over (run or refuse) */
 static size_t g_quit_at;  /* index of the first line that quits, or g_ref_n */
-static int g_in_command;  /* inside run_command: replies belong to the command */
+static int g_in_command;  /* inside session_run_line: replies belong to the line */
+static int g_json_answers; /* JSON objects answered to the line being run */
+static reply_sink_fn g_sink;
+static void *g_sink_ctx;
 static char g_tmp[COMMAND_LINE_MAX + 1];
+static char g_out[1U << 20]; /* one line written to stdout (a JSON answer with a device's help is long) */
 
 #if defined(__GNUC__)
 __attribute__((noreturn, format(printf, 1, 2)))
@@ -127,6 +143,43 @@ static bool quits(const char *l, size_t len)
     return first_quits;
 }
 
+/* A JSON request line that stops the emulator: one object, "cmd" "quit" or "exit", nothing else but an "id" that
+ * is a string, an integer or null (docs/control-protocol.md). The line has no NUL byte. */
+static bool json_quits(const char *l, size_t len)
+{
+    char *text = malloc(len + 1U);
+    if (text == NULL) {
+        abort();
+    }
+    memcpy(text, l, len);
+    text[len] = '\0';
+    const char *p = text + strspn(text, " \t\r");
+    bool q = false;
+    json_error_t err;
+    json_t *req = json_loads(p, JSON_REJECT_DUPLICATES, &err);
+    if (json_is_object(req)) {
+        json_t *cmd = json_object_get(req, "cmd");
+        json_t *id = json_object_get(req, "id");
+        const bool id_ok = id == NULL || json_is_string(id) || json_is_integer(id) || json_is_null(id);
+        q = id_ok && json_is_string(cmd) && (strcmp(json_string_value(cmd), "quit") == 0 ||
+                                             strcmp(json_string_value(cmd), "exit") == 0) &&
+            json_object_size(req) == (id != NULL ? 2U : 1U);
+    }
+    json_decref(req);
+    free(text);
+    return q;
+}
+
+/* The line (or what a refusal kept of it: the first 2047 bytes, or up to the NUL) is a JSON request. */
+static bool is_json(const char *l, size_t len)
+{
+    size_t p = 0U;
+    while (p < len && (l[p] == ' ' || l[p] == '\t' || l[p] == '\r')) {
+        p++;
+    }
+    return p < len && l[p] == '{';
+}
+
 static void reference(const char *d, size_t n)
 {
     size_t start = 0U;
@@ -143,7 +196,11 @@ static void reference(const char *d, size_t n)
         r->text = d + start;
         r->len = i - start;
         r->verdict = r->len > DOC_LINE_MAX ? L_TOO_LONG : memchr(r->text, '\0', r->len) != NULL ? L_NUL : L_RUN;
-        r->quits = r->verdict == L_RUN && quits(r->text, r->len);
+        const size_t kept = r->verdict == L_TOO_LONG ? DOC_LINE_MAX
+                          : r->verdict == L_NUL      ? (size_t)((const char *)memchr(r->text, '\0', r->len) - r->text)
+                                                     : r->len;
+        r->json = is_json(r->text, kept);
+        r->quits = r->verdict == L_RUN && (r->json ? json_quits(r->text, r->len) : quits(r->text, r->len));
         if (r->quits && g_quit_at == SIZE_MAX) {
             g_quit_at = g_ref_n;
         }
@@ -163,6 +220,31 @@ co_time_us_t socketcan_now_us(void)
     return g_now;
 }
 
+/* A line the control path wrote outside a line's run: the refusal of the next line (or an event). */
+static void control_path_line(const char *text)
+{
+    if (strncmp(text, "event ", 6U) == 0 || strncmp(text, "{\"event\":", 9U) == 0) {
+        return; /* an event of a subscription, at any time */
+    }
+    if (g_next >= g_ref_n || g_next > g_quit_at) {
+        fail("reply '%s' with no line left to refuse (or after quit)", text);
+    }
+    const ref_line_t *r = &g_ref[g_next];
+    char want[160];
+    const char *what = r->verdict == L_TOO_LONG ? "is longer than 2047 bytes" : "holds a NUL byte";
+    if (r->verdict == L_RUN) {
+        fail("reply '%s' for line %zu, which must run ('%.60s')", text, g_next + 1U, r->text);
+    } else if (r->json) {
+        (void)snprintf(want, sizeof want, "{\"id\":null,\"ok\":false,\"error\":\"line %zu %s: ignored\"}", g_next + 1U, what);
+    } else {
+        (void)snprintf(want, sizeof want, "error: stdin line %zu %s: ignored", g_next + 1U, what);
+    }
+    if (strcmp(text, want) != 0) {
+        fail("reply '%s', expected '%s'", text, want);
+    }
+    g_next++;
+}
+
 void reply(const char *fmt, ...)
 {
     va_list ap;
@@ -172,32 +254,59 @@ void reply(const char *fmt, ...)
     if (n < 0) {
         fail("a reply could not be formatted (%s)", fmt);
     }
-    if (g_in_command > 0) {
-        return; /* the command's own answer */
+    if (g_in_command == 0) {
+        fail("reply '%s' from the command language outside a line's run", g_tmp);
     }
-    /* Outside a command only the control path answers: the refusal of the next line. */
-    if (g_next >= g_ref_n || g_next > g_quit_at) {
-        fail("reply '%s' with no line left to refuse (or after quit)", g_tmp);
+    if (g_sink != NULL) {
+        g_sink(g_sink_ctx, g_tmp, strlen(g_tmp)); /* as emu_output.c: to the session, or captured for JSON */
     }
-    const ref_line_t *r = &g_ref[g_next];
-    char want[128];
-    if (r->verdict == L_TOO_LONG) {
-        (void)snprintf(want, sizeof want, "error: stdin line %zu is longer than 2047 bytes: ignored", g_next + 1U);
-    } else if (r->verdict == L_NUL) {
-        (void)snprintf(want, sizeof want, "error: stdin line %zu holds a NUL byte: ignored", g_next + 1U);
-    } else {
-        fail("reply '%s' for line %zu, which must run ('%.60s')", g_tmp, g_next + 1U, r->text);
-    }
-    if (strcmp(g_tmp, want) != 0) {
-        fail("reply '%s', expected '%s'", g_tmp, want);
-    }
-    g_next++;
 }
 
-void __real_run_command(emu_t *emu, char *line);
-void __wrap_run_command(emu_t *emu, char *line);
+void output_set_reply_sink(reply_sink_fn fn, void *ctx)
+{
+    g_sink = fn;
+    g_sink_ctx = ctx;
+}
 
-void __wrap_run_command(emu_t *emu, char *line)
+void output_reply_line(const char *line, size_t len)
+{
+    if (len == 0U || line[len - 1U] != '\n' || memchr(line, '\0', len) != NULL) {
+        fail("a line to stdout without its newline, or with a NUL byte (%zu bytes)", len);
+    }
+    if (len > sizeof g_out) {
+        len = sizeof g_out;
+    }
+    memcpy(g_out, line, len - 1U);
+    g_out[len - 1U] = '\0';
+    if (g_in_command > 0) {
+        if (g_out[0] == '{' && strncmp(g_out, "{\"event\":", 9U) != 0) {
+            json_error_t err;
+            json_t *answer = json_loads(g_out, 0, &err);
+            if (!json_is_object(answer) || !json_is_boolean(json_object_get(answer, "ok"))) {
+                fail("the JSON answer '%.80s' is not an object with \"ok\" true or false", g_out);
+            }
+            json_decref(answer);
+            g_json_answers++;
+        }
+        return; /* the line's own answer */
+    }
+    control_path_line(g_out);
+}
+
+void logline(int level, const char *fmt, ...)
+{
+    (void)level;
+    char text[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+}
+
+void __real_session_run_line(emu_t *emu, emu_session_t *s, char *line);
+void __wrap_session_run_line(emu_t *emu, emu_session_t *s, char *line);
+
+void __wrap_session_run_line(emu_t *emu, emu_session_t *s, char *line)
 {
     if (g_next >= g_ref_n || g_next > g_quit_at) {
         fail("line '%.60s' run with no line left (or after quit)", line);
@@ -213,8 +322,15 @@ void __wrap_run_command(emu_t *emu, char *line)
     }
     g_next++;
     g_in_command++;
-    __real_run_command(emu, line);
+    g_json_answers = 0;
+    __real_session_run_line(emu, s, line);
     g_in_command--;
+    if (r->json && g_json_answers != 1) {
+        fail("the JSON line %zu got %d answers, not one ('%.60s')", g_next, g_json_answers, r->text);
+    }
+    if (g_sink != NULL) {
+        fail("the reply sink is still set after line %zu", g_next);
+    }
 }
 
 static void device_print(void *ctx, const device_t *dev, const char *line)
@@ -271,6 +387,8 @@ static void nodes_power_on(void)
         cfg.port = &n->port;
         cfg.port_ctx = &g_ports[i];
         cfg.print = device_print;
+        cfg.on_event = events_device_event; /* the program's: the events of a subscription are fuzzed too */
+        cfg.event_ctx = n;
         if (device_init(&n->dev, cls, n->values, n->model, &cfg, g_emu.start) != CO_OK) {
             fail("node %s:%u could not start", specs[i].cls, specs[i].id);
         }
@@ -291,6 +409,7 @@ static void nodes_start(void)
     g_emu.n_buses = 2U;
     for (size_t b = 0U; b < 2U; b++) {
         (void)snprintf(g_buses[b].can.ifname, sizeof g_buses[b].can.ifname, "vcan%zu", b);
+        g_buses[b].emu = &g_emu;
         g_emu.buses[b] = &g_buses[b];
     }
     g_emu.log_level = LOG_NORMAL;
@@ -355,7 +474,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     (void)close(fds[0]);
     nodes_start();
-    control_start(&g_emu.control); /* finds O_NONBLOCK set: leaves the flag alone */
+    g_emu.n_sessions = 0U;
+    control_start(&g_emu); /* finds O_NONBLOCK set: leaves the flag alone */
     nodes_process();
 
     uint32_t h = 2166136261U;

@@ -1,10 +1,14 @@
 # Shared by tools/run-tests and tools/demo (sourced, POSIX sh): Debian packages and the Python venv.
 
-# need_tools "cmd:package ..." installs the packages whose command is missing (as root, with apt-get).
+# need_tools "cmd:package ..." installs the packages whose command is missing (as root, with apt-get); an
+# absolute path instead of a command is a file the package gives (a library's header).
 need_tools() {
   _need=""
   for _t in $1; do
-    command -v "${_t%%:*}" >/dev/null 2>&1 || _need="$_need ${_t#*:}"
+    case ${_t%%:*} in
+      /*) [ -e "${_t%%:*}" ] || _need="$_need ${_t#*:}" ;;
+      *) command -v "${_t%%:*}" >/dev/null 2>&1 || _need="$_need ${_t#*:}" ;;
+    esac
   done
   [ -z "$_need" ] && return 0
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

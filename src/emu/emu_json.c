@@ -1,0 +1,739 @@
+/* The JSON framing of the control protocol: see emu_json.h and docs/control-protocol.md. */
+#define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
+#include "emu_json.h"
+
+#include <jansson.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "emu.h"
+#include "emu_commands.h"
+#include "emu_output.h"
+#include "emu_version.h" /* generated: EMU_VERSION (cmake/version.cmake) */
+
+/* ---- Writing ---------------------------------------------------------------------------------------------- */
+
+/* A JSON string of text; bytes that are not UTF-8 (a device name never has them, but a reply may echo input)
+ * become '?', so that nothing is lost silently by a NULL from json_string(). */
+static json_t *jstr(const char *text)
+{
+    json_t *j = json_string(text);
+    if (j != NULL) {
+        return j;
+    }
+    char clean[4096];
+    size_t n = 0U;
+    for (; text[n] != '\0' && n < sizeof clean - 1U; n++) {
+        clean[n] = (unsigned char)text[n] < 0x80U ? text[n] : '?';
+    }
+    clean[n] = '\0';
+    return json_string(clean);
+}
+
+static void send_response(emu_session_t *s, json_t *obj)
+{
+    char *text = json_dumps(obj, JSON_COMPACT);
+    json_decref(obj);
+    if (text == NULL) {
+        static const char oom[] = "{\"id\":null,\"ok\":false,\"error\":\"out of memory\"}\n";
+        s->write(s->ctx, oom, sizeof oom - 1U);
+        return;
+    }
+    const size_t len = strlen(text);
+    text[len] = '\n'; /* json_dumps leaves room for its NUL: the newline takes it */
+    s->write(s->ctx, text, len + 1U);
+    free(text);
+}
+
+static json_t *response(json_t *id, bool ok)
+{
+    json_t *r = json_object();
+    (void)json_object_set(r, "id", id != NULL ? id : json_null());
+    (void)json_object_set_new(r, "ok", json_boolean(ok));
+    return r;
+}
+
+static void fail(emu_session_t *s, json_t *id, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void fail(emu_session_t *s, json_t *id, const char *fmt, ...)
+{
+    char text[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    json_t *r = response(id, false);
+    (void)json_object_set_new(r, "error", jstr(text));
+    send_response(s, r);
+}
+
+void json_error(emu_session_t *s, const char *fmt, ...)
+{
+    char text[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    json_t *r = response(NULL, false);
+    (void)json_object_set_new(r, "error", jstr(text));
+    send_response(s, r);
+}
+
+/* ---- Reply lines of the command language, captured ---------------------------------------------------------- */
+
+typedef struct capture {
+    json_t *lines;
+    char error[1024]; /* the first error line, without "node N: " and "error: " */
+} capture_t;
+
+static void capture_sink(void *ctx, const char *text, size_t len)
+{
+    capture_t *c = (capture_t *)ctx;
+    char line[4096];
+    if (len > sizeof line - 1U) {
+        len = sizeof line - 1U;
+    }
+    memcpy(line, text, len);
+    line[len] = '\0';
+    /* A multi-line reply (help) is one reply with newlines inside: one array element per line. */
+    char *save = NULL;
+    for (char *l = strtok_r(line, "\n", &save); l != NULL; l = strtok_r(NULL, "\n", &save)) {
+        (void)json_array_append_new(c->lines, jstr(l));
+        const char *e = l;
+        if (strncmp(e, "node ", 5) == 0 && strstr(e, ": ") != NULL) {
+            e = strstr(e, ": ") + 2;
+        }
+        if (c->error[0] == '\0' && strncmp(e, "error: ", 7) == 0) {
+            (void)snprintf(c->error, sizeof c->error, "%s", e + 7);
+        }
+    }
+}
+
+/* Runs words as the command language does, the reply lines captured; result and lines into r (stolen). */
+static command_result_t run_captured(emu_t *emu, int argc, char **argv, capture_t *c)
+{
+    c->lines = json_array();
+    c->error[0] = '\0';
+    output_set_reply_sink(capture_sink, c);
+    const command_result_t r = run_command_words(emu, argc, argv);
+    output_set_reply_sink(NULL, NULL);
+    return r;
+}
+
+/* ---- Request fields ------------------------------------------------------------------------------------------ */
+
+typedef struct request {
+    emu_t *emu;
+    emu_session_t *s;
+    json_t *req;
+    json_t *id;
+    const char *cmd;
+} request_t;
+
+/* Every field of the request must be one the command takes: a typo ("nod") is an error, not a default. */
+static bool only_fields(const request_t *q, const char *const *allowed)
+{
+    const char *key;
+    json_t *value;
+    json_object_foreach(q->req, key, value) {
+        bool ok = strcmp(key, "id") == 0 || strcmp(key, "cmd") == 0;
+        for (size_t i = 0U; !ok && allowed[i] != NULL; i++) {
+            ok = strcmp(key, allowed[i]) == 0;
+        }
+        if (!ok) {
+            fail(q->s, q->id, "%s: unknown field '%s'", q->cmd, key);
+            return false;
+        }
+    }
+    return true;
+}
+
+/* "node": 16, "16", "0x10", "16@vcan1", "all", "all@vcan1" as a word of the command language. */
+static bool node_word(const request_t *q, char *word, size_t size, bool required)
+{
+    json_t *node = json_object_get(q->req, "node");
+    if (node == NULL) {
+        if (required) {
+            fail(q->s, q->id, "%s: needs \"node\"", q->cmd);
+        }
+        return false;
+    }
+    if (json_is_integer(node)) {
+        (void)snprintf(word, size, "%" JSON_INTEGER_FORMAT, json_integer_value(node));
+    } else if (json_is_string(node) && json_string_length(node) < size) {
+        (void)snprintf(word, size, "%s", json_string_value(node));
+    } else {
+        fail(q->s, q->id, "%s: \"node\" must be a node-ID (1..127) or a string such as \"16@vcan1\" or \"all\"", q->cmd);
+        return false;
+    }
+    if (strchr(word, ' ') != NULL || word[0] == '\0') {
+        fail(q->s, q->id, "%s: '%s' is not a node-ID", q->cmd, word);
+        return false;
+    }
+    return true;
+}
+
+/* Exactly one node for get and set. */
+static emu_node_t *one_node(const request_t *q)
+{
+    char word[64];
+    if (!node_word(q, word, sizeof word, true)) {
+        return NULL;
+    }
+    emu_node_t *nodes[2];
+    capture_t c = {json_array(), ""};
+    output_set_reply_sink(capture_sink, &c);
+    const int n = select_nodes(q->emu, word, nodes, 2U);
+    output_set_reply_sink(NULL, NULL);
+    json_decref(c.lines);
+    if (n < 0) {
+        fail(q->s, q->id, "%s", c.error);
+        return NULL;
+    }
+    if (n == 0) {
+        fail(q->s, q->id, "no node %s", word);
+        return NULL;
+    }
+    if (n > 1 || strncmp(word, "all", 3) == 0) {
+        fail(q->s, q->id, "%s needs one node, not %s", q->cmd, word);
+        return NULL;
+    }
+    return nodes[0];
+}
+
+/* "object": "0x6401:01" (hex, as the command language), or an index number with an optional "sub". */
+static bool object_address(const request_t *q, uint16_t *index, uint8_t *sub, char *text, size_t size)
+{
+    json_t *o = json_object_get(q->req, "object");
+    json_t *js = json_object_get(q->req, "sub");
+    if (json_is_string(o) && js == NULL && device_parse_address(json_string_value(o), index, sub)) {
+        (void)snprintf(text, size, "0x%04X:%02X", *index, *sub);
+        return true;
+    }
+    if (json_is_integer(o) && json_integer_value(o) >= 0 && json_integer_value(o) <= 0xFFFF &&
+        (js == NULL || (json_is_integer(js) && json_integer_value(js) >= 0 && json_integer_value(js) <= 0xFF))) {
+        *index = (uint16_t)json_integer_value(o);
+        *sub = js != NULL ? (uint8_t)json_integer_value(js) : 0U;
+        (void)snprintf(text, size, "0x%04X:%02X", *index, *sub);
+        return true;
+    }
+    fail(q->s, q->id, "%s: \"object\" must be \"INDEX[:SUB]\" in hex (\"0x6401:01\") or an index number with an "
+                      "optional \"sub\"", q->cmd);
+    return false;
+}
+
+/* ---- Typed values ------------------------------------------------------------------------------------------ */
+
+static json_t *hex_string(const uint8_t *b, size_t len)
+{
+    char text[2U * 256U + 1U];
+    for (size_t i = 0U; i < len && i < 256U; i++) {
+        (void)snprintf(text + 2U * i, 3U, "%02X", b[i]);
+    }
+    text[2U * (len < 256U ? len : 256U)] = '\0';
+    return json_string(text);
+}
+
+/* The value as JSON: integers as numbers (an UNSIGNED64 above 2^63-1 as a decimal string), BOOLEAN as true/false,
+ * REAL32 as a number (NaN and infinities, which JSON lacks, as "nan", "inf", "-inf"), VISIBLE_STRING as a string,
+ * OCTET_STRING and DOMAIN as hex. */
+static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len)
+{
+    uint64_t u = 0U;
+    for (size_t i = len < 8U ? len : 8U; i > 0U; i--) {
+        u = (u << 8) | buf[i - 1U];
+    }
+    switch (e->type) {
+    case CO_T_BOOLEAN:
+        return json_boolean(u != 0U);
+    case CO_T_INTEGER8:
+    case CO_T_INTEGER16:
+    case CO_T_INTEGER32:
+    case CO_T_INTEGER64: {
+        const unsigned bits = (unsigned)len * 8U;
+        if (bits > 0U && bits < 64U && (u >> (bits - 1U)) != 0U) {
+            u |= ~((UINT64_C(1) << bits) - 1U);
+        }
+        return json_integer((json_int_t)(int64_t)u);
+    }
+    case CO_T_REAL32:
+    case CO_T_REAL64: {
+        double d;
+        if (e->type == CO_T_REAL32) {
+            float f;
+            const uint32_t u32 = (uint32_t)u;
+            memcpy(&f, &u32, sizeof f);
+            d = (double)f;
+        } else {
+            memcpy(&d, &u, sizeof d);
+        }
+        if (isnan(d)) {
+            return json_string("nan");
+        }
+        if (isinf(d)) {
+            return json_string(d > 0.0 ? "inf" : "-inf");
+        }
+        return json_real(d);
+    }
+    case CO_T_VISIBLE_STRING: {
+        char text[257];
+        const size_t n = len < 256U ? len : 256U;
+        memcpy(text, buf, n);
+        text[n] = '\0';
+        return jstr(text);
+    }
+    case CO_T_OCTET_STRING:
+    case CO_T_DOMAIN:
+        return hex_string(buf, len);
+    default:
+        if (u > (uint64_t)LLONG_MAX) {
+            char text[24];
+            (void)snprintf(text, sizeof text, "%llu", (unsigned long long)u);
+            return json_string(text);
+        }
+        return json_integer((json_int_t)u);
+    }
+}
+
+/* {"node", "object", "value", "type", "name"} of one object of n, or false after a failure response. */
+static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, uint8_t sub, json_t *r)
+{
+    const co_od_entry_t *e = co_od_find(n->dev.cls->od, index, sub);
+    if (e == NULL) {
+        fail(q->s, q->id, "node %u has no object 0x%04X:%02X", co_node_id(&n->dev.node), index, sub);
+        return false;
+    }
+    uint8_t buf[256];
+    size_t len = 0U;
+    n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
+    q->emu->in_command = true;
+    const uint32_t abort_code = co_od_read(&n->dev.node, index, sub, buf, sizeof buf, &len, CO_ORIGIN_LOCAL);
+    q->emu->in_command = false;
+    n->dirty = true;
+    if (abort_code != 0U) {
+        fail(q->s, q->id, "0x%04X:%02X: %s (0x%08lX)", index, sub, co_abort_text(abort_code), (unsigned long)abort_code);
+        return false;
+    }
+    char object[16];
+    (void)snprintf(object, sizeof object, "0x%04X:%02X", index, sub);
+    (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
+    (void)json_object_set_new(r, "object", json_string(object));
+    (void)json_object_set_new(r, "value", value_json(e, buf, len));
+    (void)json_object_set_new(r, "type", json_string(device_type_name(e->type)));
+    const char *name = device_object_name(n->dev.cls, e);
+    if (name != NULL) {
+        (void)json_object_set_new(r, "name", jstr(name));
+    }
+    return true;
+}
+
+/* ---- Commands ---------------------------------------------------------------------------------------------- */
+
+static json_t *node_summary(const emu_t *emu, const emu_node_t *n)
+{
+    json_t *o = json_object();
+    (void)json_object_set_new(o, "node", json_integer(co_node_id(&n->dev.node)));
+    (void)json_object_set_new(o, "device", json_string(n->dev.cls->name));
+    (void)json_object_set_new(o, "variant", n->dev.cls->variants != NULL ? json_string(n->dev.cls->variants[n->dev.variant])
+                                                                          : json_null());
+    (void)json_object_set_new(o, "started_as", json_integer(n->cmdline_id));
+    (void)json_object_set_new(o, "state", json_string(co_nmt_state_name(co_node_state(&n->dev.node))));
+    (void)json_object_set_new(o, "bus", json_string(n->bus != NULL ? n->bus->can.ifname : ""));
+    (void)emu;
+    return o;
+}
+
+static void cmd_hello(const request_t *q)
+{
+    static const char *const fields[] = {NULL};
+    if (!only_fields(q, fields)) {
+        return;
+    }
+    json_t *r = response(q->id, true);
+    (void)json_object_set_new(r, "program", json_string("canopen-emu"));
+    (void)json_object_set_new(r, "version", json_string(EMU_VERSION));
+    (void)json_object_set_new(r, "protocol", json_integer(CONTROL_PROTOCOL_VERSION));
+    json_t *kinds = json_array();
+    for (int k = 0; k < (int)EVENT_KIND_COUNT; k++) {
+        (void)json_array_append_new(kinds, json_string(event_kind_name((event_kind_t)k)));
+    }
+    (void)json_object_set_new(r, "events", kinds);
+    json_t *buses = json_array();
+    for (size_t i = 0U; i < q->emu->n_buses; i++) {
+        (void)json_array_append_new(buses, json_string(q->emu->buses[i]->can.ifname));
+    }
+    (void)json_object_set_new(r, "buses", buses);
+    send_response(q->s, r);
+}
+
+static void cmd_list(const request_t *q)
+{
+    static const char *const fields[] = {NULL};
+    if (!only_fields(q, fields)) {
+        return;
+    }
+    json_t *nodes = json_array();
+    for (size_t i = 0U; i < q->emu->n_nodes; i++) {
+        (void)json_array_append_new(nodes, node_summary(q->emu, q->emu->nodes[i]));
+    }
+    json_t *r = response(q->id, true);
+    (void)json_object_set_new(r, "nodes", nodes);
+    send_response(q->s, r);
+}
+
+static void cmd_show(const request_t *q)
+{
+    static const char *const fields[] = {"node", NULL};
+    char word[64];
+    if (!only_fields(q, fields) || !node_word(q, word, sizeof word, true)) {
+        return;
+    }
+    emu_node_t *sel[MAX_NODES_ALL];
+    capture_t c = {json_array(), ""};
+    output_set_reply_sink(capture_sink, &c);
+    const int n = select_nodes(q->emu, word, sel, MAX_NODES_ALL);
+    output_set_reply_sink(NULL, NULL);
+    json_decref(c.lines);
+    if (n <= 0) {
+        fail(q->s, q->id, "%s", n < 0 ? c.error : "no such node");
+        return;
+    }
+    json_t *nodes = json_array();
+    for (int i = 0; i < n; i++) {
+        const co_node_t *node = &sel[i]->dev.node;
+        json_t *o = node_summary(q->emu, sel[i]);
+        (void)json_object_set_new(o, "error_register", json_integer(co_od_get_u8(&sel[i]->dev.node, 0x1001U, 0U)));
+        json_t *errors = json_array();
+        for (uint8_t k = 0U; k < node->emcy.n_active; k++) {
+            const co_emcy_error_t *er = &node->emcy.active[k];
+            json_t *e = json_object();
+            (void)json_object_set_new(e, "code", json_integer(er->code));
+            (void)json_object_set_new(e, "register", json_integer(er->reg));
+            (void)json_object_set_new(e, "info", hex_string(er->msef, sizeof er->msef));
+            (void)json_array_append_new(errors, e);
+        }
+        (void)json_object_set_new(o, "errors", errors);
+        (void)json_object_set_new(o, "tx_frames", json_integer((json_int_t)node->stats.tx_frames));
+        (void)json_object_set_new(o, "rx_frames", json_integer((json_int_t)node->stats.rx_frames));
+        (void)json_object_set_new(o, "tx_dropped", json_integer((json_int_t)node->stats.tx_dropped));
+        (void)json_array_append_new(nodes, o);
+    }
+    json_t *r = response(q->id, true);
+    (void)json_object_set_new(r, "nodes", nodes);
+    send_response(q->s, r);
+}
+
+static void cmd_get(const request_t *q)
+{
+    static const char *const fields[] = {"node", "object", "sub", NULL};
+    uint16_t index;
+    uint8_t sub;
+    char object[16];
+    emu_node_t *n;
+    if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object)) {
+        return;
+    }
+    json_t *r = response(q->id, true);
+    if (!describe_value(q, n, index, sub, r)) {
+        json_decref(r);
+        return;
+    }
+    send_response(q->s, r);
+}
+
+/* The value as a word of `set`: numbers in decimal, true/false as 1/0, strings as they are. */
+static bool value_word(const request_t *q, char *word, size_t size)
+{
+    json_t *v = json_object_get(q->req, "value");
+    if (json_is_integer(v)) {
+        (void)snprintf(word, size, "%" JSON_INTEGER_FORMAT, json_integer_value(v));
+    } else if (json_is_real(v)) {
+        (void)snprintf(word, size, "%.9g", json_real_value(v));
+    } else if (json_is_boolean(v)) {
+        (void)snprintf(word, size, "%d", json_is_true(v) ? 1 : 0);
+    } else if (json_is_string(v) && json_string_length(v) < size && strlen(json_string_value(v)) == json_string_length(v)) {
+        (void)snprintf(word, size, "%s", json_string_value(v));
+    } else {
+        fail(q->s, q->id, "set: \"value\" must be a number, true/false or a string (without NUL, under %zu bytes)", size);
+        return false;
+    }
+    return true;
+}
+
+static void cmd_set(const request_t *q)
+{
+    static const char *const fields[] = {"node", "object", "sub", "value", NULL};
+    uint16_t index;
+    uint8_t sub;
+    char object[16], value[512], node[8];
+    emu_node_t *n;
+    if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object) ||
+        !value_word(q, value, sizeof value)) {
+        return;
+    }
+    /* Written as `set` writes it (its checks and messages), on the one node, addressed by its position. */
+    (void)snprintf(node, sizeof node, "%u", co_node_id(&n->dev.node));
+    char *argv[3] = {(char *)"set", object, value};
+    capture_t c;
+    c.lines = json_array();
+    c.error[0] = '\0';
+    output_set_reply_sink(capture_sink, &c);
+    n->dev.now = socketcan_now_us();
+    q->emu->in_command = true;
+    const device_cmd_result_t dr = device_command(&n->dev, 3, (const char *const *)argv, n->dev.now);
+    q->emu->in_command = false;
+    n->dirty = true;
+    output_set_reply_sink(NULL, NULL);
+    json_decref(c.lines);
+    if (dr != DEVICE_CMD_OK) {
+        fail(q->s, q->id, "%s", c.error[0] != '\0' ? c.error : "refused");
+        return;
+    }
+    json_t *r = response(q->id, true);
+    if (!describe_value(q, n, index, sub, r)) {
+        json_decref(r);
+        return;
+    }
+    send_response(q->s, r);
+}
+
+/* Any other command of the language: "args" are its words after NODE; the reply lines come back as "lines". */
+static void cmd_words(const request_t *q)
+{
+    static const char *const fields[] = {"node", "args", NULL};
+    if (!only_fields(q, fields)) {
+        return;
+    }
+    char words[MAX_ARGS][128];
+    char *argv[MAX_ARGS];
+    int argc = 0;
+    (void)snprintf(words[argc], sizeof words[argc], "%s", q->cmd);
+    argv[argc] = words[argc];
+    argc++;
+    if (node_word(q, words[argc], sizeof words[argc], false)) {
+        argv[argc] = words[argc];
+        argc++;
+    } else if (json_object_get(q->req, "node") != NULL) {
+        return; /* a bad node: answered */
+    }
+    json_t *args = json_object_get(q->req, "args");
+    if (args != NULL && !json_is_array(args)) {
+        fail(q->s, q->id, "%s: \"args\" must be an array of strings and numbers", q->cmd);
+        return;
+    }
+    size_t i;
+    json_t *a;
+    json_array_foreach(args, i, a) {
+        if (argc == MAX_ARGS) {
+            fail(q->s, q->id, "%s: too many words (at most %d)", q->cmd, MAX_ARGS);
+            return;
+        }
+        if (json_is_integer(a)) {
+            (void)snprintf(words[argc], sizeof words[argc], "%" JSON_INTEGER_FORMAT, json_integer_value(a));
+        } else if (json_is_real(a)) {
+            (void)snprintf(words[argc], sizeof words[argc], "%.9g", json_real_value(a));
+        } else if (json_is_string(a) && json_string_length(a) < sizeof words[argc] && json_string_length(a) > 0U &&
+                   strlen(json_string_value(a)) == json_string_length(a) && strpbrk(json_string_value(a), " \t\r\n") == NULL) {
+            (void)snprintf(words[argc], sizeof words[argc], "%s", json_string_value(a));
+        } else {
+            fail(q->s, q->id, "%s: argument %zu must be a number or a word (no blanks, 1..127 bytes)", q->cmd, i + 1U);
+            return;
+        }
+        argv[argc] = words[argc];
+        argc++;
+    }
+    capture_t c;
+    const command_result_t res = run_captured(q->emu, argc, argv, &c);
+    json_t *r = response(q->id, res == COMMAND_OK);
+    if (res != COMMAND_OK) {
+        (void)json_object_set_new(r, "error", jstr(c.error[0] != '\0' ? c.error : "failed"));
+    }
+    (void)json_object_set_new(r, "lines", c.lines);
+    send_response(q->s, r);
+}
+
+bool json_parse_frame_filter(const char *text, uint32_t *id, uint32_t *mask)
+{
+    char buf[64];
+    if (strlen(text) >= sizeof buf) {
+        return false;
+    }
+    (void)snprintf(buf, sizeof buf, "%s", text);
+    char *slash = strchr(buf, '/');
+    long long v, m = 0x1FFFFFFF;
+    if (slash != NULL) {
+        *slash = '\0';
+        if (!device_parse_int(slash + 1, 0, 0x1FFFFFFF, &m)) {
+            return false;
+        }
+    }
+    if (!device_parse_int(buf, 0, 0x1FFFFFFF, &v)) {
+        return false;
+    }
+    *id = (uint32_t)v & (uint32_t)m;
+    *mask = (uint32_t)m;
+    return true;
+}
+
+static bool event_mask(const request_t *q, json_t *events, uint32_t *mask)
+{
+    *mask = 0U;
+    if (json_is_string(events) && strcmp(json_string_value(events), "all") == 0) {
+        *mask = ((1UL << EVENT_KIND_COUNT) - 1U) & ~(1UL << EVENT_FRAME); /* frames need their own filter */
+        return true;
+    }
+    if (!json_is_array(events) || json_array_size(events) == 0U) {
+        fail(q->s, q->id, "%s: \"events\" must be \"all\" or a non-empty array of event kinds", q->cmd);
+        return false;
+    }
+    size_t i;
+    json_t *k;
+    json_array_foreach(events, i, k) {
+        const int kind = json_is_string(k) ? event_kind_of(json_string_value(k)) : -1;
+        if (kind < 0) {
+            fail(q->s, q->id, "%s: unknown event kind %s", q->cmd, json_is_string(k) ? json_string_value(k) : "(not a string)");
+            return false;
+        }
+        *mask |= 1UL << (unsigned)kind;
+    }
+    return true;
+}
+
+static void cmd_subscribe(const request_t *q)
+{
+    static const char *const fields[] = {"events", "nodes", "frames", NULL};
+    if (!only_fields(q, fields)) {
+        return;
+    }
+    uint32_t mask;
+    if (!event_mask(q, json_object_get(q->req, "events"), &mask)) {
+        return;
+    }
+    emu_session_t *s = q->s;
+    json_t *frames = json_object_get(q->req, "frames");
+    uint32_t fid = s->frame_id, fmask = s->frame_mask;
+    if ((mask & (1UL << EVENT_FRAME)) != 0U) {
+        if (!json_is_string(frames) || !json_parse_frame_filter(json_string_value(frames), &fid, &fmask)) {
+            fail(q->s, q->id, "subscribe: frame events need \"frames\": \"COB-ID[/MASK]\" (\"0x700/0x780\": every heartbeat)");
+            return;
+        }
+    } else if (frames != NULL) {
+        fail(q->s, q->id, "subscribe: \"frames\" goes with the event kind \"frame\"");
+        return;
+    }
+    session_node_filter_t filters[SESSION_NODE_FILTERS];
+    size_t n_filters = 0U;
+    json_t *nodes = json_object_get(q->req, "nodes");
+    if (nodes != NULL) {
+        if (!json_is_array(nodes) || json_array_size(nodes) > SESSION_NODE_FILTERS) {
+            fail(q->s, q->id, "subscribe: \"nodes\" must be an array of at most %d nodes", SESSION_NODE_FILTERS);
+            return;
+        }
+        size_t i;
+        json_t *node;
+        json_array_foreach(nodes, i, node) {
+            char word[64];
+            if (json_is_integer(node)) {
+                (void)snprintf(word, sizeof word, "%" JSON_INTEGER_FORMAT, json_integer_value(node));
+            } else if (json_is_string(node) && json_string_length(node) < sizeof word) {
+                (void)snprintf(word, sizeof word, "%s", json_string_value(node));
+            } else {
+                fail(q->s, q->id, "subscribe: node %zu is not a node-ID or \"ID@IFACE\"", i + 1U);
+                return;
+            }
+            const bool on_bus = strchr(word, '@') != NULL;
+            emu_node_t *found[1];
+            capture_t c = {json_array(), ""};
+            output_set_reply_sink(capture_sink, &c);
+            const int n = select_nodes(q->emu, word, found, 1U);
+            output_set_reply_sink(NULL, NULL);
+            json_decref(c.lines);
+            if (n <= 0 || strncmp(word, "all", 3) == 0) {
+                fail(q->s, q->id, "subscribe: %s", n < 0 ? c.error : "no such node");
+                return;
+            }
+            filters[n_filters].id = co_node_id(&found[0]->dev.node);
+            filters[n_filters].bus = on_bus ? found[0]->bus : NULL;
+            n_filters++;
+        }
+    }
+    s->events |= mask;
+    s->events_json = true;
+    s->frame_id = fid;
+    s->frame_mask = fmask;
+    memcpy(s->nodes, filters, sizeof filters[0] * n_filters);
+    s->n_nodes = n_filters;
+    json_t *r = response(q->id, true);
+    json_t *kinds = json_array();
+    for (int k = 0; k < (int)EVENT_KIND_COUNT; k++) {
+        if ((s->events & (1UL << (unsigned)k)) != 0U) {
+            (void)json_array_append_new(kinds, json_string(event_kind_name((event_kind_t)k)));
+        }
+    }
+    (void)json_object_set_new(r, "events", kinds);
+    send_response(q->s, r);
+}
+
+static void cmd_unsubscribe(const request_t *q)
+{
+    static const char *const fields[] = {"events", NULL};
+    if (!only_fields(q, fields)) {
+        return;
+    }
+    uint32_t mask = 0xFFFFFFFFUL;
+    json_t *events = json_object_get(q->req, "events");
+    if (events != NULL && !event_mask(q, events, &mask)) {
+        return;
+    }
+    q->s->events &= ~mask;
+    send_response(q->s, response(q->id, true));
+}
+
+static void cmd_quit(const request_t *q)
+{
+    static const char *const fields[] = {NULL};
+    if (!only_fields(q, fields)) {
+        return;
+    }
+    q->emu->quit = true;
+    send_response(q->s, response(q->id, true));
+}
+
+void json_run(emu_t *emu, emu_session_t *s, const char *line)
+{
+    json_error_t err;
+    json_t *req = json_loads(line, JSON_REJECT_DUPLICATES, &err);
+    if (req == NULL) {
+        json_error(s, "malformed JSON at column %d: %s", err.column, err.text);
+        return;
+    }
+    request_t q = {emu, s, req, json_object_get(req, "id"), ""};
+    if (q.id != NULL && !json_is_string(q.id) && !json_is_integer(q.id) && !json_is_null(q.id)) {
+        json_error(s, "\"id\" must be a string, an integer or null");
+    } else if (!json_is_string(json_object_get(req, "cmd"))) {
+        fail(s, q.id, "a request needs \"cmd\": a command name (hello, list, show, get, set, subscribe, ...)");
+    } else {
+        q.cmd = json_string_value(json_object_get(req, "cmd"));
+        static const struct {
+            const char *name;
+            void (*run)(const request_t *q);
+        } table[] = {{"hello", cmd_hello}, {"list", cmd_list},           {"show", cmd_show},
+                     {"get", cmd_get},     {"set", cmd_set},             {"subscribe", cmd_subscribe},
+                     {"unsubscribe", cmd_unsubscribe}, {"quit", cmd_quit}, {"exit", cmd_quit}};
+        size_t i = 0U;
+        while (i < sizeof table / sizeof table[0] && strcmp(table[i].name, q.cmd) != 0) {
+            i++;
+        }
+        if (i < sizeof table / sizeof table[0]) {
+            table[i].run(&q);
+        } else if (strlen(q.cmd) == 0U || strpbrk(q.cmd, " \t\r\n") != NULL || strlen(q.cmd) >= 64U) {
+            fail(s, q.id, "'%s' is not a command", q.cmd);
+        } else {
+            cmd_words(&q); /* help, emcy, emcy-clear, power-cycle, the devices' commands; unknown ones answered there */
+        }
+    }
+    json_decref(req);
+}

@@ -1,0 +1,164 @@
+/* The control protocol's sessions: see emu_session.h. */
+#define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
+#include "emu_session.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "emu.h"
+#include "emu_commands.h"
+#include "emu_json.h"
+#include "emu_output.h"
+
+static const char *const kind_names[EVENT_KIND_COUNT] = {
+    "nmt", "boot-up", "emcy", "sdo-abort", "store", "nvm", "lss", "heartbeat", "guarding", "interface", "fault",
+    "message", "frame"};
+
+const char *event_kind_name(event_kind_t kind) { return kind < EVENT_KIND_COUNT ? kind_names[kind] : "?"; }
+
+int event_kind_of(const char *name)
+{
+    for (int k = 0; k < (int)EVENT_KIND_COUNT; k++) {
+        if (strcmp(kind_names[k], name) == 0) {
+            return k;
+        }
+    }
+    return -1;
+}
+
+void session_init(emu_session_t *s, const char *name, void (*write)(void *ctx, const char *line, size_t len), void *ctx)
+{
+    memset(s, 0, sizeof *s);
+    (void)snprintf(s->name, sizeof s->name, "%s", name);
+    s->write = write;
+    s->ctx = ctx;
+    line_reader_init(&s->lines);
+}
+
+void session_printf(emu_session_t *s, const char *fmt, ...)
+{
+    char line[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    const int n = vsnprintf(line, sizeof line - 1U, fmt, ap);
+    va_end(ap);
+    size_t len = n < 0 ? 0U : (size_t)n < sizeof line - 1U ? (size_t)n : sizeof line - 2U;
+    line[len++] = '\n';
+    s->write(s->ctx, line, len);
+}
+
+bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus)
+{
+    if ((s->events & (1UL << kind)) == 0U) {
+        return false;
+    }
+    if (s->n_nodes == 0U || node_id == 0U) {
+        return true; /* no node filter, or an event of no node (an interface's) */
+    }
+    for (size_t i = 0U; i < s->n_nodes; i++) {
+        if (s->nodes[i].id == node_id && (s->nodes[i].bus == NULL || s->nodes[i].bus == bus)) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Replies of a text command go to the session that sent it. */
+static void text_sink(void *ctx, const char *text, size_t len)
+{
+    emu_session_t *s = (emu_session_t *)ctx;
+    char line[4096];
+    if (len > sizeof line - 1U) {
+        len = sizeof line - 1U;
+    }
+    memcpy(line, text, len);
+    line[len++] = '\n';
+    s->write(s->ctx, line, len);
+}
+
+/* subscribe KIND[,KIND...] [NODE...] | subscribe frame COB-ID[/MASK] | unsubscribe [KIND[,KIND...]] */
+static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
+{
+    char *save = NULL;
+    const char *verb = strtok_r(line, " \t\r", &save);
+    const bool on = strcmp(verb, "subscribe") == 0;
+    char *kinds = strtok_r(NULL, " \t\r", &save);
+    uint32_t mask = 0U;
+    if (kinds == NULL) {
+        if (on) {
+            session_printf(s, "error: usage: subscribe KIND[,KIND...] [NODE...] | subscribe frame COB-ID[/MASK]; "
+                              "kinds: nmt boot-up emcy sdo-abort store nvm lss heartbeat guarding interface fault "
+                              "message frame, or all");
+            return;
+        }
+        mask = 0xFFFFFFFFUL;
+    } else if (strcmp(kinds, "all") == 0) {
+        mask = ((1UL << EVENT_KIND_COUNT) - 1U) & ~(1UL << EVENT_FRAME); /* frames need their own filter */
+    } else {
+        char *ksave = NULL;
+        for (char *k = strtok_r(kinds, ",", &ksave); k != NULL; k = strtok_r(NULL, ",", &ksave)) {
+            const int kind = event_kind_of(k);
+            if (kind < 0) {
+                session_printf(s, "error: unknown event kind '%s'", k);
+                return;
+            }
+            mask |= 1UL << (unsigned)kind;
+        }
+    }
+    if (!on) {
+        s->events &= ~mask;
+        session_printf(s, "unsubscribed");
+        return;
+    }
+    if ((mask & (1UL << EVENT_FRAME)) != 0U) {
+        const char *filter = strtok_r(NULL, " \t\r", &save);
+        if (mask != (1UL << EVENT_FRAME) || filter == NULL || !json_parse_frame_filter(filter, &s->frame_id, &s->frame_mask)) {
+            session_printf(s, "error: usage: subscribe frame COB-ID[/MASK] (0x700/0x780: every heartbeat)");
+            return;
+        }
+    } else {
+        size_t n = 0U;
+        for (char *w = strtok_r(NULL, " \t\r", &save); w != NULL; w = strtok_r(NULL, " \t\r", &save)) {
+            emu_node_t *nodes[1];
+            if (n == SESSION_NODE_FILTERS) {
+                session_printf(s, "error: at most %d nodes per subscription", SESSION_NODE_FILTERS);
+                return;
+            }
+            char *at = strchr(w, '@');
+            if (select_nodes(emu, w, nodes, 1U) <= 0) {
+                session_printf(s, "error: no node %s", w);
+                return;
+            }
+            s->nodes[n].id = co_node_id(&nodes[0]->dev.node);
+            s->nodes[n].bus = at != NULL ? nodes[0]->bus : NULL;
+            n++;
+        }
+        s->n_nodes = n;
+    }
+    s->events |= mask;
+    s->events_json = false;
+    session_printf(s, "subscribed");
+}
+
+void session_run_line(emu_t *emu, emu_session_t *s, char *line)
+{
+    const char *p = line;
+    while (*p == ' ' || *p == '\t' || *p == '\r') {
+        p++;
+    }
+    if (*p == '{') {
+        json_run(emu, s, p);
+        return;
+    }
+    if (strncmp(p, "subscribe", 9) == 0 || strncmp(p, "unsubscribe", 11) == 0) {
+        const char c = p[strncmp(p, "subscribe", 9) == 0 ? 9 : 11];
+        if (c == '\0' || c == ' ' || c == '\t' || c == '\r') {
+            text_subscribe(emu, s, line);
+            return;
+        }
+    }
+    output_set_reply_sink(text_sink, s);
+    (void)run_command(emu, line);
+    output_set_reply_sink(NULL, NULL);
+}

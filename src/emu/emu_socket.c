@@ -1,0 +1,364 @@
+/* The control sockets: see emu_socket.h. */
+#define _GNU_SOURCE /* accept4, MSG_NOSIGNAL, PATH_MAX and POSIX calls, as in every file of the Linux program */
+#include "emu_socket.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "emu.h"
+#include "emu_events.h"
+#include "emu_output.h"
+
+void sockets_init(emu_sockets_t *k)
+{
+    memset(k, 0, sizeof *k);
+    k->unix_fd = -1;
+    k->tcp_fd = -1;
+    k->next_number = 1U;
+}
+
+int sockets_listen_unix(emu_sockets_t *k, const char *path, char *err, size_t errlen)
+{
+    struct sockaddr_un addr;
+    memset(&addr, 0, sizeof addr);
+    addr.sun_family = AF_UNIX;
+    if (path[0] == '\0' || strlen(path) >= sizeof addr.sun_path) {
+        (void)snprintf(err, errlen, "control socket path '%s' must have 1..%zu bytes", path, sizeof addr.sun_path - 1U);
+        return EINVAL;
+    }
+    memcpy(addr.sun_path, path, strlen(path));
+    struct stat st;
+    if (lstat(path, &st) == 0) {
+        if (!S_ISSOCK(st.st_mode)) {
+            (void)snprintf(err, errlen, "control socket %s: the path exists and is not a socket", path);
+            return EEXIST;
+        }
+        /* A socket file: in use by a running emulator (connect works), or left by one that was killed. */
+        const int probe = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+        const bool live = probe >= 0 && connect(probe, (const struct sockaddr *)&addr, sizeof addr) == 0;
+        if (probe >= 0) {
+            (void)close(probe);
+        }
+        if (live) {
+            (void)snprintf(err, errlen, "control socket %s is in use by another program", path);
+            return EADDRINUSE;
+        }
+        (void)unlink(path);
+    }
+    const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd < 0) {
+        const int e = errno;
+        (void)snprintf(err, errlen, "control socket: %s", strerror(e));
+        return e;
+    }
+    /* 0600 from the start: between bind and a chmod another user could connect. */
+    const mode_t old = umask(0177);
+    const int bound = bind(fd, (const struct sockaddr *)&addr, sizeof addr);
+    const int e_bind = errno;
+    (void)umask(old);
+    if (bound != 0 || listen(fd, MAX_CLIENTS) != 0) {
+        const int e = bound != 0 ? e_bind : errno;
+        (void)close(fd);
+        (void)snprintf(err, errlen, "control socket %s: %s", path, strerror(e));
+        return e;
+    }
+    k->unix_fd = fd;
+    (void)snprintf(k->unix_path, sizeof k->unix_path, "%s", path);
+    return 0;
+}
+
+static bool is_loopback(const struct sockaddr *a)
+{
+    if (a->sa_family == AF_INET) {
+        return (ntohl(((const struct sockaddr_in *)(const void *)a)->sin_addr.s_addr) >> 24) == 127U;
+    }
+    if (a->sa_family == AF_INET6) {
+        const struct in6_addr *v6 = &((const struct sockaddr_in6 *)(const void *)a)->sin6_addr;
+        return IN6_IS_ADDR_LOOPBACK(v6) ||
+               (IN6_IS_ADDR_V4MAPPED(v6) && v6->s6_addr[12] == 127U);
+    }
+    return false;
+}
+
+int sockets_listen_tcp(emu_sockets_t *k, const char *host_port, bool *remote, char *err, size_t errlen)
+{
+    char host[256];
+    const char *colon = strrchr(host_port, ':');
+    if (colon == NULL || colon == host_port || colon[1] == '\0' || (size_t)(colon - host_port) >= sizeof host) {
+        (void)snprintf(err, errlen, "--control-tcp takes HOST:PORT (127.0.0.1:5020, [::1]:5020, localhost:0), not '%s'",
+                       host_port);
+        return EINVAL;
+    }
+    memcpy(host, host_port, (size_t)(colon - host_port));
+    host[colon - host_port] = '\0';
+    if (host[0] == '[' && host[strlen(host) - 1U] == ']') { /* [::1] */
+        memmove(host, host + 1, strlen(host) - 2U);
+        host[strlen(host) - 2U] = '\0';
+    }
+    long long port;
+    if (!device_parse_int(colon + 1, 0, 65535, &port)) {
+        (void)snprintf(err, errlen, "--control-tcp: bad port '%s' (0..65535; 0: any free one)", colon + 1);
+        return EINVAL;
+    }
+    struct addrinfo hints, *res = NULL;
+    memset(&hints, 0, sizeof hints);
+    hints.ai_family = AF_UNSPEC;
+    hints.ai_socktype = SOCK_STREAM;
+    hints.ai_flags = AI_NUMERICSERV;
+    char service[8];
+    (void)snprintf(service, sizeof service, "%lld", port);
+    const int gai = getaddrinfo(host, service, &hints, &res);
+    if (gai != 0 || res == NULL) {
+        (void)snprintf(err, errlen, "--control-tcp: cannot resolve '%s': %s", host, gai_strerror(gai));
+        return EINVAL;
+    }
+    int fd = -1, e = 0;
+    for (const struct addrinfo *a = res; a != NULL && fd < 0; a = a->ai_next) {
+        fd = socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol);
+        if (fd < 0) {
+            e = errno;
+            continue;
+        }
+        const int one = 1;
+        (void)setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+        if (bind(fd, a->ai_addr, a->ai_addrlen) != 0 || listen(fd, MAX_CLIENTS) != 0) {
+            e = errno;
+            (void)close(fd);
+            fd = -1;
+            continue;
+        }
+        *remote = !is_loopback(a->ai_addr);
+    }
+    freeaddrinfo(res);
+    if (fd < 0) {
+        (void)snprintf(err, errlen, "--control-tcp %s: %s", host_port, strerror(e));
+        return e != 0 ? e : EINVAL;
+    }
+    struct sockaddr_storage bound;
+    socklen_t len = sizeof bound;
+    char name[INET6_ADDRSTRLEN] = "?";
+    unsigned bound_port = 0U;
+    if (getsockname(fd, (struct sockaddr *)&bound, &len) == 0) {
+        if (bound.ss_family == AF_INET) {
+            const struct sockaddr_in *v4 = (const struct sockaddr_in *)(const void *)&bound;
+            (void)inet_ntop(AF_INET, &v4->sin_addr, name, sizeof name);
+            bound_port = ntohs(v4->sin_port);
+        } else if (bound.ss_family == AF_INET6) {
+            const struct sockaddr_in6 *v6 = (const struct sockaddr_in6 *)(const void *)&bound;
+            (void)inet_ntop(AF_INET6, &v6->sin6_addr, name, sizeof name);
+            bound_port = ntohs(v6->sin6_port);
+        }
+    }
+    (void)snprintf(k->tcp_name, sizeof k->tcp_name, strchr(name, ':') != NULL ? "[%s]:%u" : "%s:%u", name, bound_port);
+    k->tcp_fd = fd;
+    return 0;
+}
+
+/* ---- Clients ---------------------------------------------------------------------------------------------- */
+
+static void client_write(void *ctx, const char *line, size_t len)
+{
+    control_client_t *c = (control_client_t *)ctx;
+    if (c->overflow || c->gone) {
+        return;
+    }
+    if (len > CLIENT_OUTPUT_MAX - c->out_len) {
+        c->overflow = true; /* it does not read: closed at the next pass, logged there */
+        return;
+    }
+    if (c->out_len + len > c->out_cap) {
+        size_t cap = c->out_cap == 0U ? 4096U : c->out_cap;
+        while (cap < c->out_len + len) {
+            cap *= 2U;
+        }
+        char *grown = realloc(c->out, cap);
+        if (grown == NULL) {
+            c->overflow = true;
+            return;
+        }
+        c->out = grown;
+        c->out_cap = cap;
+    }
+    memcpy(c->out + c->out_len, line, len);
+    c->out_len += len;
+}
+
+static void client_flush(control_client_t *c)
+{
+    while (c->out_len > 0U && !c->gone) {
+        const ssize_t w = send(c->fd, c->out, c->out_len, MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (w < 0) {
+            if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+                c->gone = true; /* EPIPE, ECONNRESET: the client went away */
+            }
+            return;
+        }
+        memmove(c->out, c->out + w, c->out_len - (size_t)w);
+        c->out_len -= (size_t)w;
+    }
+}
+
+static void accept_clients(emu_t *emu, emu_sockets_t *k, int listen_fd, const char *how)
+{
+    for (int i = 0; i < 16; i++) {
+        const int fd = accept4(listen_fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
+        if (fd < 0) {
+            return; /* EAGAIN: all taken; anything else (EMFILE...) will be retried at the next POLLIN */
+        }
+        if (k->n_clients == MAX_CLIENTS || emu->n_sessions == MAX_SESSIONS) {
+            static const char full[] = "{\"id\":null,\"ok\":false,\"error\":\"too many control clients (at most 64)\"}\n";
+            (void)send(fd, full, sizeof full - 1U, MSG_NOSIGNAL | MSG_DONTWAIT);
+            (void)close(fd);
+            logline(LOG_QUIET, "control: a %s client refused: %d are connected already", how, MAX_CLIENTS);
+            continue;
+        }
+        control_client_t *c = calloc(1U, sizeof *c);
+        if (c == NULL) {
+            (void)close(fd);
+            continue;
+        }
+        c->fd = fd;
+        char name[64];
+        (void)snprintf(name, sizeof name, "client %lu (%s)", k->next_number++, how);
+        session_init(&c->session, name, client_write, c);
+        k->clients[k->n_clients++] = c;
+        events_add_session(emu, &c->session);
+        logline(LOG_VERBOSE, "control: %s connected", name);
+    }
+}
+
+static void client_close(emu_t *emu, emu_sockets_t *k, size_t i)
+{
+    control_client_t *c = k->clients[i];
+    if (c->overflow) {
+        logline(LOG_QUIET, "control: %s disconnected: it left more than %u bytes unread", c->session.name,
+                CLIENT_OUTPUT_MAX);
+    } else {
+        logline(LOG_VERBOSE, "control: %s disconnected", c->session.name);
+    }
+    events_remove_session(emu, &c->session);
+    (void)close(c->fd);
+    free(c->out);
+    free(c);
+    k->clients[i] = k->clients[--k->n_clients];
+}
+
+nfds_t sockets_poll_fds(const emu_sockets_t *k, struct pollfd *pfd, nfds_t max)
+{
+    nfds_t n = 0U;
+    const int listeners[2] = {k->unix_fd, k->tcp_fd};
+    for (size_t i = 0U; i < 2U && n < max; i++) {
+        if (listeners[i] >= 0) {
+            pfd[n].fd = listeners[i];
+            pfd[n].events = POLLIN;
+            pfd[n].revents = 0;
+            n++;
+        }
+    }
+    for (size_t i = 0U; i < k->n_clients && n < max; i++) {
+        pfd[n].fd = k->clients[i]->fd;
+        pfd[n].events = (short)(POLLIN | (k->clients[i]->out_len > 0U ? POLLOUT : 0));
+        pfd[n].revents = 0;
+        n++;
+    }
+    return n;
+}
+
+static void client_read(emu_t *emu, control_client_t *c)
+{
+    char chunk[16384];
+    /* At most 64 KiB a pass: a client that floods gets its share, the nodes theirs. */
+    for (int i = 0; i < 4 && !c->gone && !emu->quit; i++) {
+        const ssize_t r = recv(c->fd, chunk, sizeof chunk, MSG_DONTWAIT);
+        if (r > 0) {
+            session_feed(emu, &c->session, chunk, (size_t)r);
+        } else if (r == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+            c->gone = true; /* a line it did not finish is not run */
+        } else {
+            return;
+        }
+    }
+}
+
+void sockets_service(emu_t *emu, emu_sockets_t *k, const struct pollfd *pfd, nfds_t n)
+{
+    for (nfds_t i = 0U; i < n; i++) {
+        if (pfd[i].revents == 0) {
+            continue;
+        }
+        if (pfd[i].fd == k->unix_fd) {
+            accept_clients(emu, k, k->unix_fd, "unix");
+            continue;
+        }
+        if (pfd[i].fd == k->tcp_fd) {
+            accept_clients(emu, k, k->tcp_fd, "tcp");
+            continue;
+        }
+        for (size_t j = 0U; j < k->n_clients; j++) {
+            control_client_t *c = k->clients[j];
+            if (c->fd != pfd[i].fd) {
+                continue;
+            }
+            if ((pfd[i].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+                client_read(emu, c);
+            }
+            break;
+        }
+    }
+    sockets_flush(k);
+    for (size_t j = k->n_clients; j > 0U; j--) {
+        if (k->clients[j - 1U]->gone || k->clients[j - 1U]->overflow) {
+            client_close(emu, k, j - 1U);
+        }
+    }
+}
+
+void sockets_flush(emu_sockets_t *k)
+{
+    for (size_t j = 0U; j < k->n_clients; j++) {
+        client_flush(k->clients[j]);
+    }
+}
+
+void sockets_close(emu_t *emu, emu_sockets_t *k)
+{
+    /* The answer to a `quit` and the last events: up to 200 ms for the clients to take them. */
+    struct timespec t0;
+    (void)clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (;;) {
+        sockets_flush(k);
+        bool waiting = false;
+        for (size_t j = 0U; j < k->n_clients; j++) {
+            waiting = waiting || (k->clients[j]->out_len > 0U && !k->clients[j]->gone);
+        }
+        struct timespec t;
+        (void)clock_gettime(CLOCK_MONOTONIC, &t);
+        const long ms = (long)(t.tv_sec - t0.tv_sec) * 1000L + (t.tv_nsec - t0.tv_nsec) / 1000000L;
+        if (!waiting || ms >= 200L) {
+            break;
+        }
+        (void)poll(NULL, 0U, 5);
+    }
+    while (k->n_clients > 0U) {
+        client_close(emu, k, k->n_clients - 1U);
+    }
+    if (k->unix_fd >= 0) {
+        (void)close(k->unix_fd);
+        (void)unlink(k->unix_path);
+        k->unix_fd = -1;
+    }
+    if (k->tcp_fd >= 0) {
+        (void)close(k->tcp_fd);
+        k->tcp_fd = -1;
+    }
+}

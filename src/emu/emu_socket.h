@@ -1,0 +1,69 @@
+/*
+ * The control sockets of canopen-emu: --control-socket PATH (Unix domain, mode 0600) and --control-tcp HOST:PORT
+ * (loopback unless another address is named, which is warned about). Each client is a control session
+ * (emu_session.h): the command language or JSON lines, answered on its own connection, events if it subscribes.
+ *
+ * Nothing a client does can stop the nodes: sockets are non-blocking; a client's output waits in its own buffer,
+ * and a client that lets more than CLIENT_OUTPUT_MAX bytes pile up unread is disconnected (logged); a client that
+ * vanishes mid-line loses that line and nothing else; one that connects and sends nothing costs a descriptor.
+ * At most MAX_CLIENTS at once: the next is told so in one JSON line and closed.
+ */
+#ifndef EMU_SOCKET_H
+#define EMU_SOCKET_H
+
+#include <poll.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <sys/un.h>
+
+#include "emu_session.h"
+
+struct emu;
+
+#define MAX_CLIENTS 64
+#define CLIENT_OUTPUT_MAX (1024U * 1024U)
+
+typedef struct control_client {
+    int fd;
+    emu_session_t session;
+    char *out;              /* bytes waiting for the client (malloc'd, grows up to CLIENT_OUTPUT_MAX) */
+    size_t out_len;
+    size_t out_cap;
+    bool overflow;          /* more than CLIENT_OUTPUT_MAX waited: closed at the next pass */
+    bool gone;              /* the peer closed or an error happened: closed at the next pass */
+} control_client_t;
+
+typedef struct emu_sockets {
+    int unix_fd;                            /* -1: none */
+    char unix_path[sizeof(((struct sockaddr_un *)0)->sun_path)];
+    int tcp_fd;                             /* -1: none */
+    char tcp_name[80];                      /* address:port actually bound (port 0 gets one from the kernel) */
+    control_client_t *clients[MAX_CLIENTS];
+    size_t n_clients;
+    unsigned long next_number;              /* clients are numbered from 1 in the log */
+} emu_sockets_t;
+
+void sockets_init(emu_sockets_t *k);
+
+/** Listens on a Unix socket at path (a stale socket file is replaced; a live one or any other file is an error).
+ *  0, or an errno with a message in err. */
+int sockets_listen_unix(emu_sockets_t *k, const char *path, char *err, size_t errlen);
+
+/** Listens on TCP HOST:PORT ("127.0.0.1:5020", "[::1]:5020", "localhost:0"). 0, or an errno with a message in
+ *  err; *remote is set when the address is not a loopback one (the caller warns). */
+int sockets_listen_tcp(emu_sockets_t *k, const char *host_port, bool *remote, char *err, size_t errlen);
+
+/** Adds the listeners and clients to pfd (at most max entries); returns how many. */
+nfds_t sockets_poll_fds(const emu_sockets_t *k, struct pollfd *pfd, nfds_t max);
+
+/** After poll: accepts, reads and runs lines, writes what waits, closes what ended. pfd as sockets_poll_fds
+ *  filled it. */
+void sockets_service(struct emu *emu, emu_sockets_t *k, const struct pollfd *pfd, nfds_t n);
+
+/** Writes what waits for each client without blocking (once per pass of the main loop). */
+void sockets_flush(emu_sockets_t *k);
+
+/** Closes everything: what waits for the clients gets up to 200 ms; the Unix socket file is removed. */
+void sockets_close(struct emu *emu, emu_sockets_t *k);
+
+#endif /* EMU_SOCKET_H */

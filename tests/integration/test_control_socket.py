@@ -1,0 +1,279 @@
+"""The control sockets (--control-socket PATH, --control-tcp HOST:PORT): the command language and JSON lines on the
+same connection, typed results, events with the emulator's time stamps, many clients, and clients that misbehave
+(docs/control-protocol.md)."""
+import json
+import os
+import re
+import socket
+import stat
+import subprocess
+import time
+
+import can
+import pytest
+
+from conftest import EMU, IFACE, Deadline
+
+
+class Client:
+    """A raw control connection: lines out, lines in."""
+
+    def __init__(self, address, family=socket.AF_UNIX, timeout=5.0):
+        self.sock = socket.socket(family, socket.SOCK_STREAM)
+        self.sock.settimeout(timeout)
+        self.sock.connect(address)
+        self.buf = b""
+        self.events = []  # events that came while a request waited for its answer
+
+    def send(self, line):
+        self.sock.sendall(line.encode() + b"\n")
+
+    def line(self, timeout=5.0):
+        deadline = Deadline(timeout)
+        while b"\n" not in self.buf:
+            self.sock.settimeout(max(deadline.left(), 0.01))
+            try:
+                chunk = self.sock.recv(65536)
+            except socket.timeout:
+                raise AssertionError(f"no line within {timeout} s; have {self.buf[:200]!r}")
+            if not chunk:
+                raise AssertionError(f"connection closed; have {self.buf[:200]!r}")
+            self.buf += chunk
+        line, self.buf = self.buf.split(b"\n", 1)
+        return line.decode()
+
+    def request(self, **req):
+        self.send(json.dumps(req))
+        while True:
+            answer = json.loads(self.line())
+            if "event" not in answer:
+                return answer
+            self.events.append(answer)
+
+    def event(self, kind, timeout=5.0, **match):
+        deadline = Deadline(timeout)
+        while not deadline.expired():
+            msg = self.events.pop(0) if self.events else json.loads(self.line(deadline.left()))
+            if msg.get("event") == kind and all(msg.get(k) == v for k, v in match.items()):
+                return msg
+        raise AssertionError(f"no {kind} event {match} within {timeout} s")
+
+    def close(self):
+        self.sock.close()
+
+
+def start(emulator, tmp_path, *devices, extra=()):
+    path = tmp_path / "ctl.sock"
+    emu = emulator("--control-socket", str(path), *extra, *devices)
+    assert emu.log_contains(f"control: listening on unix {path}", timeout=3), emu.err_lines
+    assert emu.log_contains("NMT INITIALISING -> PRE-OPERATIONAL", timeout=3)
+    return emu, str(path)
+
+
+def test_socket_file_is_private_and_removed_at_exit(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "sds:16")
+    mode = os.stat(path).st_mode
+    assert stat.S_ISSOCK(mode) and stat.S_IMODE(mode) == 0o600, oct(mode)
+    assert emu.stop() == 0
+    assert not os.path.exists(path)
+
+
+def test_text_and_json_on_one_connection(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "sds:16", "buerkert:17")
+    c = Client(path)
+    c.send("get 16 0x1017")
+    assert c.line() == "node 16: 0x1017:00 = 5000 (0x1388)"
+    assert c.request(id=1, cmd="get", node=16, object="0x1017") == {
+        "id": 1, "ok": True, "node": 16, "object": "0x1017:00", "value": 5000, "type": "UNSIGNED16",
+        "name": "Producer heartbeat time"}
+    assert c.request(id="s", cmd="set", node="16", object="0x1017", value=700)["value"] == 700
+    assert c.request(id=2, cmd="set", node=16, object="0x1017", value=70000) == {
+        "id": 2, "ok": False, "error": "70000 is out of range: 0x1017:00 (UNSIGNED16) holds 0..65535"}
+    r = c.request(id=3, cmd="get", node=17, object="0x1008")
+    assert r["value"] == "Buerkert MFC" and r["type"] == "VISIBLE_STRING", r
+    hello = c.request(id=4, cmd="hello")
+    assert hello["protocol"] == 1 and hello["program"] == "canopen-emu" and hello["buses"] == [IFACE], hello
+    listed = c.request(id=5, cmd="list")["nodes"]
+    assert [(n["node"], n["device"], n["state"], n["bus"]) for n in listed] == [
+        (16, "sds", "PRE-OPERATIONAL", IFACE), (17, "buerkert", "PRE-OPERATIONAL", IFACE)]
+    shown = c.request(id=6, cmd="emcy", node=17, args=["0x3210", 5])
+    assert shown["ok"] and shown["lines"] == ["node 17: emcy 0x3210: done"], shown
+    show = c.request(id=7, cmd="show", node=17)["nodes"][0]
+    assert show["errors"] == [{"code": 0x3210, "register": 5, "info": "0000000000"}] and show["error_register"] == 5, show
+    # the text framing answers on this connection only, never on stdout
+    assert not any("0x1017" in line for line in emu.out_lines), emu.out_lines
+    c.close()
+
+
+@pytest.mark.parametrize("line, error", [
+    ("{bad", "malformed JSON at column 4: string or '}' expected near 'bad'"),
+    ('{"id":1.5,"cmd":"list"}', '"id" must be a string, an integer or null'),
+    ('{"id":1,"cmd":3}', 'a request needs "cmd": a command name (hello, list, show, get, set, subscribe, ...)'),
+    ('{"id":1,"cmd":"get","node":16}',
+     'get: "object" must be "INDEX[:SUB]" in hex ("0x6401:01") or an index number with an optional "sub"'),
+    ('{"id":1,"cmd":"get","node":16,"object":"0x1017","nod":1}', "get: unknown field 'nod'"),
+    ('{"id":1,"cmd":"get","node":99,"object":"0x1017"}', "no node 99"),
+    ('{"id":1,"cmd":"get","node":"all","object":"0x1017"}', "get needs one node, not all"),
+    ('{"id":1,"cmd":"get","node":16,"object":"0x5555"}', "node 16 has no object 0x5555:00"),
+    ('{"id":1,"cmd":"set","node":16,"object":"0x1017","value":[1]}',
+     'set: "value" must be a number, true/false or a string (without NUL, under 512 bytes)'),
+    ('{"id":1,"cmd":"list","cmd":"quit"}', "malformed JSON at column 26: duplicate object key near '\"cmd\"'"),
+    ('{"id":1,"cmd":"frobnicate","node":16}', "unknown command 'frobnicate' (try help 16)"),
+    ('{"id":1,"cmd":"subscribe","events":["nmt","weather"]}', "subscribe: unknown event kind weather"),
+])
+def test_bad_json_requests_get_an_error_and_the_connection_stays(emulator, tmp_path, line, error):
+    emu, path = start(emulator, tmp_path, "sds:16")
+    c = Client(path)
+    c.send(line)
+    answer = json.loads(c.line())
+    assert answer["ok"] is False and answer["error"] == error, answer
+    assert answer["id"] in (None, 1)
+    assert c.request(id=9, cmd="get", node=16, object="0x1018:00")["value"] == 4
+    c.close()
+    assert emu.proc.poll() is None
+
+
+def test_events_carry_the_emulators_time(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "sds:16", "pro-ionizer:0x20")
+    c = Client(path)
+    assert c.request(id=1, cmd="subscribe", events=["nmt", "boot-up", "emcy", "sdo-abort"], nodes=[16]) == {
+        "id": 1, "ok": True, "events": ["nmt", "boot-up", "emcy", "sdo-abort"]}
+    bus = can.Bus(channel=IFACE, interface="socketcan")
+    try:
+        bus.send(can.Message(arbitration_id=0x000, data=[0x01, 0x00], is_extended_id=False))  # start all
+        ev = c.event("nmt", node=16)
+        assert ev["from"] == "PRE-OPERATIONAL" and ev["to"] == "OPERATIONAL" and ev["bus"] == IFACE, ev
+        assert isinstance(ev["time_us"], int) and ev["time_us"] > 0
+        bus.send(can.Message(arbitration_id=0x610, data=[0x40, 0x55, 0x55, 0, 0, 0, 0, 0], is_extended_id=False))
+        ev = c.event("sdo-abort", node=16)
+        assert ev["abort_code"] == 0x06020000 and ev["index"] == 0x5555, ev
+        c.request(id=2, cmd="emcy", node=16, args=["0x5000"])
+        assert c.event("emcy", node=16)["code"] == 0x5000
+        c.request(id=3, cmd="power-cycle", node=16)
+        boot = c.event("boot-up", node=16)
+        assert boot["time_us"] >= ev["time_us"]
+    finally:
+        bus.shutdown()
+    # node 0x20 was filtered out: none of its events came
+    c.request(id=4, cmd="unsubscribe")
+    c.close()
+
+
+def test_frame_events_follow_the_cob_id_filter(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "buerkert:17")
+    c = Client(path)
+    c.send("subscribe frame 0x700/0x780")
+    assert c.line() == "subscribed"
+    lines = [c.line(2.0) for _ in range(3)]
+    for line in lines:
+        assert re.fullmatch(rf"event frame \d+\.\d{{6}} node 17@{IFACE} \(buerkert\): tx 711#7F", line), lines
+    stamps = [float(line.split()[2]) for line in lines]
+    assert all(0.45 < b - a < 0.55 for a, b in zip(stamps, stamps[1:])), stamps  # the 500 ms heartbeat
+    c.close()
+
+
+def test_many_clients_and_one_too_many(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "sds:16")
+    clients = [Client(path) for _ in range(50)]
+    for i, c in enumerate(clients):
+        c.send(json.dumps({"id": i, "cmd": "get", "node": 16, "object": "0x1018:04"}))
+    for i, c in enumerate(clients):
+        answer = json.loads(c.line())
+        assert answer["id"] == i and answer["ok"], answer
+    more = [Client(path) for _ in range(14)]  # 64 in all
+    extra = Client(path)
+    assert json.loads(extra.line()) == {"id": None, "ok": False, "error": "too many control clients (at most 64)"}
+    assert extra.sock.recv(10) == b""
+    assert emu.log_contains("control: a unix client refused: 64 are connected already")
+    for c in clients + more:
+        c.close()
+    # once the emulator has seen them go, there is room again
+    assert Deadline(3).until(lambda: Client(path).request(id=1, cmd="hello")["ok"], step=0.05)
+
+
+def test_clients_that_misbehave_cost_nothing(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "sds:16")
+    silent = Client(path)  # connects and never sends
+    # vanishes mid-line: the line is not run
+    c = Client(path)
+    c.sock.sendall(b"set 16 0x1017 300")
+    c.close()
+    # a 1 MiB line: refused whole, the connection goes on
+    c = Client(path)
+    c.sock.sendall(b"x" * (1 << 20) + b"\nget 16 0x1017\n")
+    assert c.line() == "error: client 3 (unix) line 1 is longer than 2047 bytes: ignored"
+    assert c.line() == "node 16: 0x1017:00 = 5000 (0x1388)"
+    c.sock.sendall(b'{"cmd":"list","x":"' + b"y" * 5000 + b'"}\n')
+    assert json.loads(c.line()) == {"id": None, "ok": False, "error": "line 3 is longer than 2047 bytes: ignored"}
+    c.sock.sendall(b'{"cmd":"li\x00st"}\n')
+    assert json.loads(c.line()) == {"id": None, "ok": False, "error": "line 4 holds a NUL byte: ignored"}
+    # one that asks and never reads: disconnected once 1 MiB waits for it, and the others go on
+    greedy = Client(path)
+    greedy.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    try:
+        for _ in range(3000):
+            greedy.sock.sendall(b"help 16\n")
+    except (BrokenPipeError, ConnectionResetError):
+        pass
+    assert emu.log_contains("disconnected: it left more than 1048576 bytes unread", timeout=10), emu.err_lines[-5:]
+    assert c.request(id=1, cmd="get", node=16, object="0x1017")["value"] == 5000
+    silent.close()
+    c.close()
+    assert emu.proc.poll() is None
+
+
+def test_heartbeats_go_on_while_a_client_floods(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "buerkert:17")
+    bus = can.Bus(channel=IFACE, interface="socketcan")
+    c = Client(path)
+    try:
+        end = time.monotonic() + 3.0
+        sent = 0
+        while time.monotonic() < end:
+            c.sock.sendall(b'{"cmd":"get","node":17,"object":"0x1017"}\n' * 50)
+            sent += 50
+            while c.buf.count(b"\n") < sent and time.monotonic() < end:
+                c.buf += c.sock.recv(1 << 16)
+        got = []
+        while (msg := bus.recv(0)) is not None:
+            if msg.arbitration_id == 0x711:
+                got.append(msg.timestamp)
+        # a liveness check, not a timing one (docs/performance.md has the measured figures)
+        assert len(got) >= 4, got
+    finally:
+        bus.shutdown()
+        c.close()
+
+
+def test_tcp_on_loopback_and_a_warning_elsewhere(emulator, tmp_path):
+    emu = emulator("--control-tcp", "127.0.0.1:0", "sds:16")
+    assert emu.log_contains("control: listening on tcp 127.0.0.1:", timeout=3)
+    port = int(next(l for l in emu.err_lines if "listening on tcp" in l).rsplit(":", 1)[1])
+    c = Client(("127.0.0.1", port), socket.AF_INET)
+    assert c.request(id=1, cmd="get", node=16, object="0x1018:01")["ok"]
+    c.close()
+    emu.stop()
+    emu = emulator("--control-tcp", "0.0.0.0:0", "sds:16", nvm_dir=tmp_path / "b")
+    assert emu.log_contains("is not a loopback address: whoever can reach it controls the emulated nodes", timeout=3)
+
+
+def test_socket_path_problems_stop_the_start(emulator, tmp_path):
+    regular = tmp_path / "file"
+    regular.write_text("x")
+    r = subprocess.run([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path), "--control-socket", str(regular), "sds:16"],
+                       capture_output=True, text=True, timeout=10)
+    assert r.returncode == 1 and "the path exists and is not a socket" in r.stderr, r.stderr
+    # a socket left by a killed emulator is replaced; a live one is not taken over
+    emu, path = start(emulator, tmp_path, "sds:16")
+    r = subprocess.run([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path / "2"), "--control-socket", path, "sds:17"],
+                       capture_output=True, text=True, timeout=10)
+    assert r.returncode == 1 and "is in use by another program" in r.stderr, r.stderr
+    emu.proc.kill()
+    emu.proc.wait()
+    assert os.path.exists(path)
+    emu2 = emulator("--control-socket", path, "sds:16", nvm_dir=tmp_path / "3")
+    assert emu2.log_contains(f"control: listening on unix {path}", timeout=3), emu2.err_lines
+    assert Client(path).request(id=1, cmd="hello")["ok"]
+    r = subprocess.run([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path), "--control-tcp", "nonsense", "sds:16"],
+                       capture_output=True, text=True, timeout=10)
+    assert r.returncode == 2 and "--control-tcp takes HOST:PORT" in r.stderr, r.stderr
