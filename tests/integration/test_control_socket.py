@@ -10,9 +10,33 @@ import subprocess
 import time
 
 import can
+import jsonschema
 import pytest
 
-from conftest import EMU, IFACE, Deadline
+from conftest import EMU, IFACE, SRC, Deadline
+
+SCHEMA = json.loads((SRC / "docs/control-protocol.schema.json").read_text())
+KNOWN = ("hello", "list", "show", "get", "set", "subscribe", "unsubscribe", "quit")
+
+
+def validator(pointer):
+    return jsonschema.Draft202012Validator({**SCHEMA, "$ref": pointer})
+
+
+VALIDATE_REQUEST = validator("#/$defs/request")
+VALIDATE_EVENT = validator("#/$defs/event")
+VALIDATE_ERROR = validator("#/$defs/error_response")
+VALIDATE_RESPONSE = {cmd: validator(f"#/$defs/responses/{cmd}") for cmd in KNOWN + ("command",)}
+
+
+def check_schema(msg, cmd):
+    """Every JSON line the emulator writes is what docs/control-protocol.schema.json says."""
+    if "event" in msg:
+        VALIDATE_EVENT.validate(msg)
+    elif msg.get("ok") is False and "lines" not in msg:
+        VALIDATE_ERROR.validate(msg)
+    else:
+        VALIDATE_RESPONSE[cmd if cmd in KNOWN else "command"].validate(msg)
 
 
 class Client:
@@ -43,9 +67,11 @@ class Client:
         return line.decode()
 
     def request(self, **req):
+        VALIDATE_REQUEST.validate(req)
         self.send(json.dumps(req))
         while True:
             answer = json.loads(self.line())
+            check_schema(answer, req["cmd"])
             if "event" not in answer:
                 return answer
             self.events.append(answer)
@@ -54,6 +80,7 @@ class Client:
         deadline = Deadline(timeout)
         while not deadline.expired():
             msg = self.events.pop(0) if self.events else json.loads(self.line(deadline.left()))
+            check_schema(msg, None)
             if msg.get("event") == kind and all(msg.get(k) == v for k, v in match.items()):
                 return msg
         raise AssertionError(f"no {kind} event {match} within {timeout} s")
@@ -126,6 +153,7 @@ def test_bad_json_requests_get_an_error_and_the_connection_stays(emulator, tmp_p
     c = Client(path)
     c.send(line)
     answer = json.loads(c.line())
+    check_schema(answer, None)
     assert answer["ok"] is False and answer["error"] == error, answer
     assert answer["id"] in (None, 1)
     assert c.request(id=9, cmd="get", node=16, object="0x1018:00")["value"] == 4
