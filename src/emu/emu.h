@@ -4,6 +4,7 @@
  *   emu_runtime.c   start (buses, nodes), the main loop (one poll for everything), the exit summary
  *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing to its nodes
  *   emu_node.c      one emulated node: the device, its port (CAN through its bus, NVM files)
+ *   emu_faults.c    protocol faults injected between a node and its bus
  *   emu_events.c    what the nodes report (NMT changes, EMCY, aborts, stores...) turned into log lines
  *   emu_session.c   the control protocol: a session's lines (the command language or JSON: emu_json.c),
  *                   its answers and its event subscriptions; emu_control.c (stdin) and emu_socket.c (the
@@ -23,6 +24,7 @@
 #include "../linux/socketcan.h"
 #include "device.h"
 #include "emu_control.h"
+#include "emu_faults.h"
 #include "emu_script.h"
 #include "emu_session.h"
 #include "emu_socket.h"
@@ -51,7 +53,8 @@ typedef struct emu_node {
     uint8_t cmdline_id;
     size_t index;           /* position in its bus's nodes */
     char key[64];           /* NVM file name stem: DEVICE-ID, or DEVICE-ID@IFACE on every bus but the first */
-    co_time_us_t deadline;  /* what device_process last returned */
+    node_faults_t faults;   /* protocol faults injected (emu_faults.h) */
+    co_time_us_t deadline;  /* what device_process last returned, or earlier when a fault must run */
     bool dirty;             /* a frame concerned the node or a command ran on it: process before sleeping */
 } emu_node_t;
 

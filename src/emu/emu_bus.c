@@ -68,7 +68,7 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
             b->local_head = (b->local_head + 1U) % LOCAL_QUEUE_LEN;
             b->local_count--;
             for (size_t i = 0U; i < b->n_nodes; i++) {
-                if (i != l.sender && device_rx(&b->nodes[i]->dev, &l.frame, now)) {
+                if (i != l.sender && faults_rx(b->nodes[i], &l.frame, now) && device_rx(&b->nodes[i]->dev, &l.frame, now)) {
                     b->nodes[i]->dirty = true;
                 }
             }
@@ -81,7 +81,13 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
             emu_node_t *n = b->nodes[i];
             if (n->dirty || now >= n->deadline) {
                 n->dirty = false;
-                n->deadline = device_process(&n->dev, now);
+                co_time_us_t d = device_process(&n->dev, now);
+                const co_time_us_t held = faults_run(n, now); /* frames held back (this pass's too), a bus-off's end */
+                if (n->dirty) {
+                    n->dirty = false;
+                    d = device_process(&n->dev, now); /* the faults changed the node: a recovery EMCY goes out now */
+                }
+                n->deadline = held < d ? held : d;
             }
             next = n->deadline < next ? n->deadline : next;
             *tx_pending = *tx_pending || n->dev.node.txq.count > 0U;
@@ -100,7 +106,7 @@ void bus_receive(emu_bus_t *b, co_time_us_t now)
         }
         events_frame(b, NULL, &f);
         for (size_t i = 0U; i < b->n_nodes; i++) {
-            if (device_rx(&b->nodes[i]->dev, &f, now)) {
+            if (faults_rx(b->nodes[i], &f, now) && device_rx(&b->nodes[i]->dev, &f, now)) {
                 b->nodes[i]->dirty = true;
             }
         }

@@ -50,6 +50,9 @@ static void help(void)
           "  power-cycle NODE             restart the node as switching its supply off and on would\n"
           "  emcy NODE CODE [REG [B0..B4]]  raise a raw CiA error (EMCY, 0x1001, 0x1003)\n"
           "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
+          "  fault NODE KIND [ARGS]       make the node misbehave on the bus (kinds: fault NODE)\n"
+          "  fault-clear NODE [KIND]      end its faults (all when no KIND is given)\n"
+          "  faults NODE                  the node's faults and their effect\n"
           "  help [NODE]                  this text, or the device commands of NODE\n"
           "  subscribe KIND[,KIND...] [NODE...]  events of these kinds (or all) to this session\n"
           "  subscribe frame COB-ID[/MASK]  the frames whose identifier matches, as events\n"
@@ -192,8 +195,16 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         }
         char *saved = argv[1];
         argv[1] = argv[0];
+        device_cmd_result_t r = DEVICE_CMD_UNKNOWN;
         emu->in_command = true;
-        const device_cmd_result_t r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
+        if (strcmp(cmd, "fault") != 0 && strcmp(cmd, "fault-clear") != 0) {
+            r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
+        }
+        if (strcmp(cmd, "fault") == 0 || strcmp(cmd, "fault-clear") == 0 || strcmp(cmd, "faults") == 0) {
+            /* Protocol faults (emu_faults.h); `faults` of an Eltex device lists its own errors first. */
+            n->dev.now = now;
+            r = faults_command(n, argc - 1, &argv[1], now) == 0 && r != DEVICE_CMD_ERROR ? DEVICE_CMD_OK : DEVICE_CMD_ERROR;
+        }
         emu->in_command = false;
         argv[1] = saved;
         n->dirty = true;

@@ -253,6 +253,14 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
     }
 }
 
+void events_fault(emu_node_t *n, const char *kind, const char *action, const char *text)
+{
+    json_t *f = json_object();
+    (void)json_object_set_new(f, "fault", json_string(kind));
+    (void)json_object_set_new(f, "action", json_string(action));
+    report(n, EVENT_FAULT, LOG_NORMAL, f, "%s", text);
+}
+
 void events_interface(emu_bus_t *bus, const char *line)
 {
     emu_t *emu = bus->emu;

@@ -582,7 +582,7 @@ static bool event_mask(const request_t *q, json_t *events, uint32_t *mask)
 {
     *mask = 0U;
     if (json_is_string(events) && strcmp(json_string_value(events), "all") == 0) {
-        *mask = ((1UL << EVENT_KIND_COUNT) - 1U) & ~(1UL << EVENT_FRAME); /* frames need their own filter */
+        *mask = (((uint32_t)1U << EVENT_KIND_COUNT) - 1U) & ~((uint32_t)1U << EVENT_FRAME); /* frames need their own filter */
         return true;
     }
     if (!json_is_array(events) || json_array_size(events) == 0U) {
@@ -597,7 +597,7 @@ static bool event_mask(const request_t *q, json_t *events, uint32_t *mask)
             fail(q->s, q->id, "%s: unknown event kind %s", q->cmd, json_is_string(k) ? json_string_value(k) : "(not a string)");
             return false;
         }
-        *mask |= 1UL << (unsigned)kind;
+        *mask |= (uint32_t)1U << (unsigned)kind;
     }
     return true;
 }
@@ -615,7 +615,7 @@ static void cmd_subscribe(const request_t *q)
     emu_session_t *s = q->s;
     json_t *frames = json_object_get(q->req, "frames");
     uint32_t fid = s->frame_id, fmask = s->frame_mask;
-    if ((mask & (1UL << EVENT_FRAME)) != 0U) {
+    if ((mask & ((uint32_t)1U << EVENT_FRAME)) != 0U) {
         if (!json_is_string(frames) || !json_parse_frame_filter(json_string_value(frames), &fid, &fmask)) {
             fail(q->s, q->id, "subscribe: frame events need \"frames\": \"COB-ID[/MASK]\" (\"0x700/0x780\": every heartbeat)");
             return;
@@ -669,7 +669,7 @@ static void cmd_subscribe(const request_t *q)
     json_t *r = response(q->id, true);
     json_t *kinds = json_array();
     for (int k = 0; k < (int)EVENT_KIND_COUNT; k++) {
-        if ((s->events & (1UL << (unsigned)k)) != 0U) {
+        if ((s->events & ((uint32_t)1U << (unsigned)k)) != 0U) {
             (void)json_array_append_new(kinds, json_string(event_kind_name((event_kind_t)k)));
         }
     }

@@ -50,7 +50,7 @@ void session_printf(emu_session_t *s, const char *fmt, ...)
 
 bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus)
 {
-    if ((s->events & (1UL << kind)) == 0U) {
+    if ((s->events & ((uint32_t)1U << kind)) == 0U) {
         return false;
     }
     if (s->n_nodes == 0U || node_id == 0U) {
@@ -94,7 +94,7 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
         }
         mask = 0xFFFFFFFFUL;
     } else if (strcmp(kinds, "all") == 0) {
-        mask = ((1UL << EVENT_KIND_COUNT) - 1U) & ~(1UL << EVENT_FRAME); /* frames need their own filter */
+        mask = (((uint32_t)1U << EVENT_KIND_COUNT) - 1U) & ~((uint32_t)1U << EVENT_FRAME); /* frames need their own filter */
     } else {
         char *ksave = NULL;
         for (char *k = strtok_r(kinds, ",", &ksave); k != NULL; k = strtok_r(NULL, ",", &ksave)) {
@@ -103,7 +103,7 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
                 session_printf(s, "error: unknown event kind '%s'", k);
                 return;
             }
-            mask |= 1UL << (unsigned)kind;
+            mask |= (uint32_t)1U << (unsigned)kind;
         }
     }
     if (!on) {
@@ -111,9 +111,9 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
         session_printf(s, "unsubscribed");
         return;
     }
-    if ((mask & (1UL << EVENT_FRAME)) != 0U) {
+    if ((mask & ((uint32_t)1U << EVENT_FRAME)) != 0U) {
         const char *filter = strtok_r(NULL, " \t\r", &save);
-        if (mask != (1UL << EVENT_FRAME) || filter == NULL || !json_parse_frame_filter(filter, &s->frame_id, &s->frame_mask)) {
+        if (mask != ((uint32_t)1U << EVENT_FRAME) || filter == NULL || !json_parse_frame_filter(filter, &s->frame_id, &s->frame_mask)) {
             session_printf(s, "error: usage: subscribe frame COB-ID[/MASK] (0x700/0x780: every heartbeat)");
             return;
         }

@@ -861,6 +861,13 @@ def control_seeds():
                         '{"cmd":"get","node":16,"object":"0x1017","nod":1}\n{"cmd":"list","cmd":"quit"}\n'
                         '{"cmd":"set","node":"all","object":"0x1017","value":1}\n{"cmd":"quit","node":16}\nlist\n'),
         ("json-quit", '{"id":"q","cmd":"quit"}\nlist\n'),
+        ("protocol-faults", "fault 16 sdo-ignore 2\nfault 17 sdo-ignore 30% 7\nfault 18 sdo-delay 100\n"
+                            "fault 20 sdo-abort 0x1017 0x08000020\nfault 21 heartbeat-stop\nfault 22 heartbeat-jitter 50\n"
+                            "fault 16 heartbeat-state 0x04\nfault 18 tpdo-freeze 1\nfault 22 tpdo-drop 1 2\n"
+                            "fault 18 tpdo-length 1 3\nfault 17 emcy-burst 3 0x5000\nfault 20 reboot\nfault 21 bus-off 50\n"
+                            "fault 16 lss-silent\nfaults 16\nfaults all\nfault-clear 16 sdo-ignore\nfault-clear all\n"
+                            "fault 16 weather\nfault 16 tpdo-freeze 9\n"
+                            '{"id":1,"cmd":"fault","node":17,"args":["sdo-delay",20]}\n{"id":2,"cmd":"faults","node":17}\n'),
         ("json-exit-in-blanks", ' \t {"cmd":"exit","id":null}  \nlist\n'),
         ("json-long-line", '{"cmd":"list","x":"' + "y" * 2100 + '"}\n{"cmd":"quit"}\n'),
     ])

@@ -47,7 +47,9 @@
 #include "emu.h"
 #include "emu_commands.h"
 #include "emu_control.h"
+#include "emu_bus.h"
 #include "emu_events.h"
+#include "emu_faults.h"
 #include "emu_output.h"
 #include "emu_session.h"
 #include "fake_port.h"
@@ -303,6 +305,13 @@ void logline(int level, const char *fmt, ...)
     va_end(ap);
 }
 
+/* The bus of the program (emu_bus.c) is not linked: frames the faults send go to the node's fake port. */
+co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
+{
+    (void)b;
+    return from->port.send(from->dev.cfg.port_ctx, f);
+}
+
 void __real_session_run_line(emu_t *emu, emu_session_t *s, char *line);
 void __wrap_session_run_line(emu_t *emu, emu_session_t *s, char *line);
 
@@ -375,6 +384,7 @@ static void nodes_power_on(void)
         }
         n->cmdline_id = specs[i].id;
         n->bus = &g_buses[i < N_NODES / 2U ? 0U : 1U];
+        faults_init(&n->faults);
         n->index = i;
         (void)snprintf(n->key, sizeof n->key, "%s-%u", cls->name, specs[i].id);
         fake_port_init(&g_ports[i], &g_now);
@@ -440,7 +450,9 @@ static void nodes_process(void)
         emu_node_t *n = &g_nodes[i];
         if (n->dirty || now >= n->deadline) {
             n->dirty = false;
-            n->deadline = device_process(&n->dev, now);
+            const co_time_us_t d = device_process(&n->dev, now);
+            const co_time_us_t held = faults_run(n, now); /* as bus_run: held frames, the end of a bus-off */
+            n->deadline = held < d ? held : d;
             g_ports[i].n_sent = 0U; /* frames are not looked at here: keep the recorder from filling */
         }
         const co_nmt_state_t s = co_node_state(&n->dev.node);
