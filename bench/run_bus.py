@@ -5,7 +5,8 @@ JSON file with every figure. Standard library only.
     run_bus.py --bin DIR --emu PATH --work DIR --out FILE [--mode full|quick|smoke]
 
 Sections (docs/performance.md explains each): SDO round trip against bench-echo (the floor) and
-canopen-emu; heartbeat/TPDO periods next to the ideal generator; instructions per SDO request, heartbeat
+canopen-emu; heartbeat/TPDO periods next to the ideal generator; the heartbeat while a control client floods
+the control socket; instructions per SDO request, heartbeat
 and TPDO of canopen-emu under callgrind (difference of runs); 127 nodes: CPU share, period error, highest
 lossless SDO rate. Any program failing (non-zero status, unparsable output) fails the whole run.
 """
@@ -88,11 +89,11 @@ class Runner:
             raise BenchError(f"{what}: exit {proc.returncode}\n{err}")
         return out, err
 
-    def emu(self, section, specs, valgrind_out=None):
+    def emu(self, section, specs, valgrind_out=None, extra=()):
         self.emu_runs += 1
         nvm = os.path.join(self.work, f"nvm{self.emu_runs}")
         os.makedirs(nvm, exist_ok=True)
-        argv = [self.emu_path, "-i", IFACE, "--nvm-dir", nvm, "-q"] + specs
+        argv = [self.emu_path, "-i", IFACE, "--nvm-dir", nvm, "-q"] + list(extra) + specs
         if valgrind_out:
             argv = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={valgrind_out}"] + argv
         show_specs = specs if len(specs) <= 3 else [specs[0], "...", specs[-1]]
@@ -191,6 +192,71 @@ def periods(r, sz):
     finally:
         r.stop(emu, "canopen-emu")
     return {"period_us": period_us, "seconds": d, "record": json.loads(rec_out), "gen": json.loads(gen_out)}
+
+
+FLOOD_IN_FLIGHT = 64  # requests a flooding client keeps on the way: it never waits for one answer at a time
+
+
+def flood_client(path, stop, counts):
+    """A control client that sends JSON get requests as fast as the emulator takes them, FLOOD_IN_FLIGHT at a time,
+    and checks every answer. counts: answered, wrong."""
+    import socket
+    request = (json.dumps({"cmd": "get", "node": NODE, "object": "0x1018:01"}) + "\n").encode()
+    s = socket.socket(socket.AF_UNIX)
+    s.connect(path)
+    buf, in_flight = b"", 0
+    while not stop.is_set():
+        if in_flight < FLOOD_IN_FLIGHT:
+            s.sendall(request * (FLOOD_IN_FLIGHT - in_flight))
+            in_flight = FLOOD_IN_FLIGHT
+        buf += s.recv(1 << 16)
+        *lines, buf = buf.split(b"\n")
+        for line in lines:
+            in_flight -= 1
+            answer = json.loads(line)
+            counts["answered" if answer.get("ok") and answer.get("value") is not None else "wrong"] += 1
+    s.close()
+
+
+def control_flood(r, sz):
+    """Heartbeat at 10 ms next to the ideal generator, recorded twice in one emulator run: with its control socket
+    idle, then while one client floods the socket with pipelined JSON requests. What the flood costs the bus side."""
+    import threading
+    period_us = 10000
+    d = sz["period_s"]
+    path = os.path.join(r.work, "ctl.sock")
+    emu = r.emu("flood", [f"buerkert:{NODE}"], extra=["--control-socket", path])
+    res = {"period_us": period_us, "seconds": d, "in_flight": FLOOD_IN_FLIGHT}
+    try:
+        r.run_json("flood", [r.prog("bench-sdo"), "-i", IFACE, "ready", str(NODE), "w", str(NODE), "0x1017", "2", "10"])
+        for phase in ("idle", "flood"):
+            stop, counts = threading.Event(), {"answered": 0, "wrong": 0}
+            client = threading.Thread(target=flood_client, args=(path, stop, counts))
+            if phase == "flood":
+                client.start()
+                time.sleep(0.5)  # the flood is on before the recording starts
+            t0, cpu0 = time.monotonic(), cpu_ticks(emu.pid)
+            rec = r.start("flood", [r.prog("bench-record"), "-i", IFACE, "-b", str(RECORD_BATCH_MS), "-p", str(period_us),
+                                    "-d", str(d), f"heartbeat=0x{0x700 + NODE:03X}", "ideal=0x7F0"])
+            gen = r.start("flood", [r.prog("bench-gen"), "-i", IFACE, "-p", str(period_us), "-d", str(d + 1), "0x7F0"])
+            rec_out, rec_err = rec.communicate(timeout=d + 60)
+            gen_out, gen_err = gen.communicate(timeout=d + 60)
+            t1, cpu1 = time.monotonic(), cpu_ticks(emu.pid)
+            answered_in_window = counts["answered"]
+            stop.set()
+            if phase == "flood":
+                client.join(timeout=10)
+            if rec.returncode != 0 or gen.returncode != 0:
+                raise BenchError(f"bench-record/bench-gen failed: {rec_err}{gen_err}")
+            if counts["wrong"]:
+                raise BenchError(f"{counts['wrong']} wrong answers to the flooding client")
+            hz = os.sysconf("SC_CLK_TCK")
+            res[phase] = {"record": json.loads(rec_out), "requests": answered_in_window,
+                          "requests_per_s": answered_in_window / (t1 - t0),
+                          "cpu_share": (sum(cpu1) - sum(cpu0)) / hz / (t1 - t0)}
+    finally:
+        r.stop(emu, "canopen-emu (control socket)")
+    return res
 
 
 def callgrind_total(path):
@@ -319,7 +385,7 @@ def main():
     res = {"mode": args.mode, "sizes": sz, "inside": {"kernel": os.uname().release, "cpus": os.cpu_count(),
                                                       "loadavg_before": loadavg()}}
     started = time.monotonic()
-    steps = [("rtt", sdo_rtt), ("periods", periods)]
+    steps = [("rtt", sdo_rtt), ("periods", periods), ("flood", control_flood)]
     if sz["callgrind"]:
         steps.append(("callgrind", callgrind))
     steps.append(("scale", scale))
