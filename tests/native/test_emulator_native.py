@@ -241,3 +241,87 @@ def test_sanitizers_are_on_where_they_should_be():
     out = subprocess.run(["nm", "-D", "--undefined-only", EMU], capture_output=True, text=True).stdout + \
         subprocess.run(["nm", EMU], capture_output=True, text=True).stdout
     assert "__asan_init" in out or "__asan_report_load" in out, "canopen-emu-fakecan is not built with ASan"
+
+
+def test_control_sockets_and_faults_run_clean(tmp_path):
+    """The control sockets, the JSON framing, the subscriptions and the protocol faults under the sanitizers (the vcan
+    suite holds their behaviour: test_control_socket.py, test_faults.py): 20 clients with JSON and text requests,
+    malformed and overlong lines, NUL bytes and random bytes, clients that vanish mid-line, one that subscribes to
+    every frame and never reads until it is cut off, faults that hold, change and drop frames while SDO traffic
+    runs; quit by JSON with status 0."""
+    import json
+    ctl = tmp_path / "ctl.sock"
+    bus = FakeBus(tmp_path / "bus")
+    env = dict(os.environ, CO_FAKECAN_SOCKET=bus.listener.getsockname(),
+               ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1",
+               UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1")
+    proc = subprocess.Popen([EMU, "-i", "fakecan0", "--nvm-dir", str(tmp_path / "nvm"), "--control-socket", str(ctl),
+                             "--control-tcp", "127.0.0.1:0"] + [f"{d}:{n}" for n, d in NODES.items()],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    bus.proc = proc
+    rng = random.Random(4711)
+    try:
+        bus.accept()
+        bus.expect(lambda i, d: i == 0x712 and d == b"\0", 10.0, "boot-up of node 18")
+        deadline = time.monotonic() + 10
+        while not ctl.exists() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        greedy = socket.socket(socket.AF_UNIX)
+        greedy.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        greedy.connect(str(ctl))
+        greedy.sendall(b'{"cmd":"subscribe","events":["frame"],"frames":"0x000/0x000"}\n'
+                       b'subscribe all\n' + b"help 16\n" * 2000)
+        requests = [
+            {"cmd": "hello"}, {"cmd": "list"}, {"cmd": "show", "node": "all"},
+            {"cmd": "get", "node": 16, "object": "0x1018:01"}, {"cmd": "get", "node": 17, "object": "0x1008"},
+            {"cmd": "set", "node": 18, "object": "0x1017", "value": 250}, {"cmd": "set", "node": 16, "object": 4119, "value": "x"},
+            {"cmd": "subscribe", "events": "all", "nodes": [16, 18]}, {"cmd": "unsubscribe"},
+            {"cmd": "fault", "node": 16, "args": ["sdo-delay", 30]}, {"cmd": "fault", "node": 17, "args": ["heartbeat-jitter", 20]},
+            {"cmd": "fault", "node": 18, "args": ["tpdo-freeze", 1]}, {"cmd": "fault", "node": 17, "args": ["emcy-burst", 10]},
+            {"cmd": "fault", "node": 18, "args": ["bus-off", 50]}, {"cmd": "fault", "node": 16, "args": ["sdo-ignore", "50%", 3]},
+            {"cmd": "fault", "node": 17, "args": ["reboot"]}, {"cmd": "faults", "node": 16},
+            {"cmd": "fault-clear", "node": "all"}, {"cmd": "emcy", "node": 16, "args": ["0x3210", 5]},
+            {"cmd": "power-cycle", "node": 18}, {"cmd": "status", "node": 16},
+        ]
+        clients = []
+        for k in range(20):
+            c = socket.socket(socket.AF_UNIX)
+            c.connect(str(ctl))
+            clients.append(c)
+        for round_ in range(3):
+            for k, c in enumerate(clients):
+                lines = [json.dumps(rng.choice(requests)).encode() for _ in range(5)]
+                lines.append(bytes(rng.randrange(1, 256) for _ in range(rng.randrange(1, 300))).replace(b"\n", b" "))
+                lines += [b"{bad json", b'{"cmd":"get","node":16,"object":"0x1017","x":' + b"1" * 5000 + b"}",
+                          b'{"cmd":"li\0st"}', b"get 16 0x1017", b"fault 16 weather", b"list"]
+                rng.shuffle(lines)
+                c.sendall(b"\n".join(lines) + b"\n")
+            for node in NODES:
+                bus.send(0x600 + node, upload(0x1018, 1))
+            time.sleep(0.2)
+        clients[0].sendall(b'{"cmd":"set","node":16,"object":"0x1017","va')  # vanishes mid-line
+        clients[0].close()
+        for c in clients[1:]:
+            c.setblocking(False)
+            try:
+                while c.recv(1 << 16):
+                    pass
+            except BlockingIOError:
+                pass
+        quitter = socket.socket(socket.AF_UNIX)
+        quitter.connect(str(ctl))
+        quitter.sendall(b'{"id":"bye","cmd":"quit"}\n')
+        out, err = proc.communicate(timeout=30)
+        quitter.close()
+        greedy.close()
+        for c in clients[1:]:
+            c.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+        bus.close()
+    assert not any(mark in err for mark in SANITIZER_MARKS), err[-6000:]
+    assert proc.returncode == 0, err[-3000:]
+    assert "disconnected: it left more than 1048576 bytes unread" in err, err[-3000:]
+    assert not ctl.exists()
