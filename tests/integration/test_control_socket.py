@@ -305,3 +305,18 @@ def test_socket_path_problems_stop_the_start(emulator, tmp_path):
     r = subprocess.run([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path), "--control-tcp", "nonsense", "sds:16"],
                        capture_output=True, text=True, timeout=10)
     assert r.returncode == 2 and "--control-tcp takes HOST:PORT" in r.stderr, r.stderr
+
+
+def test_interface_troubles_are_events(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "buerkert:17")
+    c = Client(path)
+    assert c.request(id=1, cmd="subscribe", events=["interface"])["ok"]
+    subprocess.run(["ip", "link", "set", IFACE, "down"], check=True, timeout=10)
+    try:
+        down = c.event("interface", timeout=3)
+    finally:
+        subprocess.run(["ip", "link", "set", IFACE, "up"], check=True, timeout=10)
+    assert down["bus"] == IFACE and "interface is down" in down["text"], down
+    up = c.event("interface", timeout=3)
+    assert up["bus"] == IFACE and up["time_us"] > down["time_us"], up
+    c.close()
