@@ -37,7 +37,7 @@ co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
 {
     const co_status_t st = socketcan_send(&b->can, f);
     if (st == CO_OK) {
-        events_frame(b, from, f);
+        events_frame(b, from, f, from->dev.now != 0U ? from->dev.now : socketcan_now_us());
     }
     if (st == CO_OK && b->n_nodes > 1U) {
         if (b->local_count == LOCAL_QUEUE_LEN) {
@@ -104,7 +104,7 @@ void bus_receive(emu_bus_t *b, co_time_us_t now)
         if (b->log_level >= LOG_VERBOSE) {
             logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
         }
-        events_frame(b, NULL, &f);
+        events_frame(b, NULL, &f, now);
         for (size_t i = 0U; i < b->n_nodes; i++) {
             if (faults_rx(b->nodes[i], &f, now) && device_rx(&b->nodes[i]->dev, &f, now)) {
                 b->nodes[i]->dirty = true;

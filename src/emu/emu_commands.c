@@ -79,7 +79,7 @@ static bool selects(const node_selector_t *sel, const emu_node_t *n)
     return (sel->bus == NULL || n->bus == sel->bus) && (sel->all || has_id(n, sel->id));
 }
 
-static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel)
+static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, bool any_bus)
 {
     sel->bus = NULL;
     sel->id = -1;
@@ -101,7 +101,7 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel)
         reply("error: '%s' is not a node-ID", word);
         return false;
     }
-    if (!sel->all && sel->bus == NULL) {
+    if (!sel->all && sel->bus == NULL && !any_bus) {
         /* The same node-ID on two buses: the command must say which. */
         const emu_bus_t *found = NULL;
         for (size_t i = 0U; i < emu->n_nodes; i++) {
@@ -122,10 +122,10 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel)
     return true;
 }
 
-int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max)
+static int select_on(emu_t *emu, char *word, emu_node_t **out, size_t max, bool any_bus)
 {
     node_selector_t sel;
-    if (!parse_selector(emu, word, &sel)) {
+    if (!parse_selector(emu, word, &sel, any_bus)) {
         return -1;
     }
     size_t n = 0U;
@@ -135,6 +135,13 @@ int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max)
         }
     }
     return (int)n;
+}
+
+int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max) { return select_on(emu, word, out, max, false); }
+
+int select_nodes_any_bus(emu_t *emu, char *word, emu_node_t **out, size_t max)
+{
+    return select_on(emu, word, out, max, true);
 }
 
 command_result_t run_command(emu_t *emu, char *line)

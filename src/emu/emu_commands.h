@@ -27,4 +27,7 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv);
  *  an ID on several buses). 0 matches are not an error here. */
 int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max);
 
+/** The same, but an ID alone that is on several buses names all of them (event filters: "node 16 on any bus"). */
+int select_nodes_any_bus(emu_t *emu, char *word, emu_node_t **out, size_t max);
+
 #endif /* EMU_COMMANDS_H */

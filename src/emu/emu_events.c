@@ -38,14 +38,14 @@ static bool anyone_wants(const emu_t *emu, event_kind_t kind, uint8_t id, const 
 }
 
 /* One event to every session that wants it: JSON built once, text formatted once. fields is consumed. */
-static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const emu_bus_t *bus, const char *text,
-                    json_t *fields)
+static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const emu_bus_t *bus, co_time_us_t at,
+                    const char *text, json_t *fields)
 {
     const uint8_t id = n != NULL ? co_node_id(&n->dev.node) : 0U;
     char *json_line = NULL;
     char text_line[1024];
     text_line[0] = '\0';
-    const co_time_us_t t = socketcan_now_us() - emu->start;
+    const co_time_us_t t = at > emu->start ? at - emu->start : 0U;
     for (size_t i = 0U; i < emu->n_sessions; i++) {
         emu_session_t *s = emu->sessions[i];
         if (!session_wants(s, kind, id, bus) ||
@@ -116,7 +116,8 @@ static void report(emu_node_t *n, event_kind_t kind, int level, json_t *fields, 
     }
     emu_t *emu = n->bus != NULL ? n->bus->emu : NULL;
     if (emu != NULL && anyone_wants(emu, kind, co_node_id(&n->dev.node), n->bus)) {
-        publish(emu, kind, n, n->bus, text, fields);
+        /* The node's time: that of the call in which it acted (the frame's arrival, its deadline). */
+        publish(emu, kind, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), text, fields);
     } else {
         json_decref(fields);
     }
@@ -130,7 +131,7 @@ void events_device_print(void *ctx, const device_t *dev, const char *line)
     reply("node %u: %s", id, line);
     emu_t *emu = n != NULL && n->bus != NULL ? n->bus->emu : NULL;
     if (emu != NULL && !emu->in_command && anyone_wants(emu, EVENT_MESSAGE, (uint8_t)id, n->bus)) {
-        publish(emu, EVENT_MESSAGE, n, n->bus, line, NULL); /* a model's own message (a fault raised...) */
+        publish(emu, EVENT_MESSAGE, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), line, NULL);
     }
 }
 
@@ -265,11 +266,11 @@ void events_interface(emu_bus_t *bus, const char *line)
 {
     emu_t *emu = bus->emu;
     if (emu != NULL && anyone_wants(emu, EVENT_INTERFACE, 0U, bus)) {
-        publish(emu, EVENT_INTERFACE, NULL, bus, line, NULL);
+        publish(emu, EVENT_INTERFACE, NULL, bus, socketcan_now_us(), line, NULL);
     }
 }
 
-void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f)
+void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at)
 {
     emu_t *emu = bus->emu;
     if (emu == NULL || emu->n_sessions == 0U || !anyone_wants(emu, EVENT_FRAME, 0U, bus)) {
@@ -289,5 +290,5 @@ void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f)
     char text[64];
     (void)snprintf(text, sizeof text, "%s %03X#%s%s", from != NULL ? "tx" : "rx", (unsigned)f->id, hex,
                    (f->flags & CO_FRAME_RTR) != 0U ? "R" : "");
-    publish(emu, EVENT_FRAME, from, bus, text, fields);
+    publish(emu, EVENT_FRAME, from, bus, at, text, fields);
 }

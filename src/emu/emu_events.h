@@ -27,7 +27,7 @@ void events_interface(emu_bus_t *bus, const char *line);
 /** A protocol fault of node n: kind ("sdo-ignore"...), action ("injected", "cleared", "ended"); logged too. */
 void events_fault(emu_node_t *n, const char *kind, const char *action, const char *text);
 
-/** A frame on the bus: sent by from, or received (from NULL). Costs a comparison when nobody subscribed. */
-void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f);
+/** A frame on the bus at time at: sent by from, or received (from NULL). Costs a comparison when nobody subscribed. */
+void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at);
 
 #endif /* EMU_EVENTS_H */

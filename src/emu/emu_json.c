@@ -549,7 +549,14 @@ static void cmd_words(const request_t *q)
     const command_result_t res = run_captured(q->emu, argc, argv, &c);
     json_t *r = response(q->id, res == COMMAND_OK);
     if (res != COMMAND_OK) {
-        (void)json_object_set_new(r, "error", jstr(c.error[0] != '\0' ? c.error : "failed"));
+        /* The reason: the first "error:" line, else the last line the command said ("emcy-clear 0x3210: not active"). */
+        const size_t n = json_array_size(c.lines);
+        const char *last = n > 0U ? json_string_value(json_array_get(c.lines, n - 1U)) : NULL;
+        if (c.error[0] == '\0' && last != NULL) {
+            const char *colon = strncmp(last, "node ", 5) == 0 ? strstr(last, ": ") : NULL;
+            (void)snprintf(c.error, sizeof c.error, "%s", colon != NULL ? colon + 2 : last);
+        }
+        (void)json_object_set_new(r, "error", jstr(c.error[0] != '\0' ? c.error : "refused"));
     }
     (void)json_object_set_new(r, "lines", c.lines);
     send_response(q->s, r);
@@ -648,7 +655,7 @@ static void cmd_subscribe(const request_t *q)
             emu_node_t *found[1];
             capture_t c = {json_array(), ""};
             output_set_reply_sink(capture_sink, &c);
-            const int n = select_nodes(q->emu, word, found, 1U);
+            const int n = select_nodes_any_bus(q->emu, word, found, 1U);
             output_set_reply_sink(NULL, NULL);
             json_decref(c.lines);
             if (n <= 0 || strncmp(word, "all", 3) == 0) {

@@ -126,7 +126,7 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
                 return;
             }
             char *at = strchr(w, '@');
-            if (select_nodes(emu, w, nodes, 1U) <= 0) {
+            if (select_nodes_any_bus(emu, w, nodes, 1U) <= 0) {
                 session_printf(s, "error: no node %s", w);
                 return;
             }

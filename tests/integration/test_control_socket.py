@@ -320,3 +320,12 @@ def test_interface_troubles_are_events(emulator, tmp_path):
     up = c.event("interface", timeout=3)
     assert up["bus"] == IFACE and up["time_us"] > down["time_us"], up
     c.close()
+
+
+def test_a_refused_command_says_why_in_error(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "sds:16")
+    c = Client(path)
+    r = c.request(id=1, cmd="emcy-clear", node=16, args=["0x3210"])
+    assert r == {"id": 1, "ok": False, "error": "emcy-clear 0x3210: not active",
+                 "lines": ["node 16: emcy-clear 0x3210: not active"]}, r
+    c.close()

@@ -1,5 +1,7 @@
 """Several buses in one process (-i vcan0 -i vcan1, DEVICE:ID@IFACE): a node-ID is unique per bus, each bus has
 its own socket, frames stay on their bus, and commands name a node by ID@IFACE where the ID alone is ambiguous."""
+import json
+import socket
 import subprocess
 
 import can
@@ -116,3 +118,24 @@ def test_a_bus_that_cannot_be_opened_stops_the_start(tmp_path):
                        capture_output=True, text=True, timeout=10)
     assert r.returncode == 1, r
     assert "nosuchcan0" in r.stderr, r.stderr
+
+
+def test_an_event_filter_by_id_alone_takes_the_node_on_every_bus(emulator, tmp_path):
+    path = tmp_path / "ctl.sock"
+    emu = emulator("-i", OTHER, "--control-socket", str(path), "sds:16", "sds:16@" + OTHER, nvm_dir=tmp_path)
+    assert emu.log_contains(f"control: listening on unix {path}", timeout=3)
+    c = socket.socket(socket.AF_UNIX)
+    c.connect(str(path))
+    f = c.makefile("rw")
+    f.write(json.dumps({"id": 1, "cmd": "subscribe", "events": ["nmt"], "nodes": [16]}) + "\n")
+    f.flush()
+    assert json.loads(f.readline()) == {"id": 1, "ok": True, "events": ["nmt"]}
+    for bus_name in (OTHER, IFACE):
+        bus = open_bus(bus_name)
+        try:
+            bus.send(can.Message(arbitration_id=0x000, data=[0x01, 16], is_extended_id=False))
+        finally:
+            bus.shutdown()
+        ev = json.loads(f.readline())
+        assert (ev["event"], ev["node"], ev["bus"], ev["to"]) == ("nmt", 16, bus_name, "OPERATIONAL"), ev
+    c.close()
