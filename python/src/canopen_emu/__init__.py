@@ -1,0 +1,26 @@
+"""canopen_emu: drive canopen-emu, the emulator of CANopen devices on Linux SocketCAN, from Python and pytest.
+
+- connect(): a client of the control socket (docs/control-protocol.md): typed get/set, device commands, faults,
+  events.
+- Emulator: starts canopen-emu, waits until its nodes have booted, stops it.
+- the pytest plugin (canopen_emu.pytest_plugin, registered through the pytest11 entry point): fixtures
+  canopen_emu, canopen_emu_factory, canopen_emu_session, and the emulator's log in a failed test's report.
+"""
+from ._version import __version__
+from .client import (PROTOCOL_VERSION, ActiveError, Address, Client, Entry, Event, NodeInfo, NodeRef, NodeStatus,
+                     ObjectRef, ServerInfo, Value, connect, decode_value, encode_value)
+from .emulator import DEFAULT_NODES, Emulator, find_executable
+from .errors import (CanopenEmuError, ConnectionClosed, ControlError, ControlTimeout, EmulatorError,
+                     ProtocolError)
+
+#: The protocol faults of ``Client.inject_fault`` (``fault NODE KIND ...``, docs/control-protocol.md).
+FAULT_KINDS = ("sdo-ignore", "sdo-delay", "sdo-abort", "heartbeat-stop", "heartbeat-jitter", "heartbeat-state",
+               "tpdo-freeze", "tpdo-drop", "tpdo-length", "emcy-burst", "reboot", "bus-off", "lss-silent")
+
+__all__ = [
+    "__version__", "PROTOCOL_VERSION", "FAULT_KINDS", "DEFAULT_NODES",
+    "connect", "Client", "Emulator", "find_executable", "decode_value", "encode_value",
+    "ServerInfo", "NodeInfo", "NodeStatus", "ActiveError", "Entry",
+    "Address", "NodeRef", "ObjectRef", "Value", "Event",
+    "CanopenEmuError", "ControlError", "ProtocolError", "ControlTimeout", "ConnectionClosed", "EmulatorError",
+]
