@@ -73,6 +73,7 @@ typedef struct fz {
     uint32_t guard_resp;
     uint32_t bootups;
     uint32_t resets;          /* bit 0: communication area re-initialised, bit 1: application area */
+    bool reset_in_call;       /* the node reset during the call in progress (a device may reset in its step) */
     uint32_t sdo_timeouts;    /* CO_EV_SDO_ABORT with 0x05040000 during the call */
     uint32_t emcy_events;
 

@@ -209,6 +209,7 @@ static uint32_t od_u32(fz_t *h, uint16_t index, uint8_t sub, uint32_t fallback)
 void fz_note_reset(fz_t *h, co_reset_t what)
 {
     h->resets |= what == CO_RESET_APPLICATION ? 2U : 1U;
+    h->reset_in_call = true;
     h->er_skip = false;
 }
 
@@ -289,7 +290,9 @@ static void check_frame(fz_t *h, const co_frame_t *f)
             fz_fail(h, "error-control frame with DLC %u", f->len);
         }
         if (st == CO_NMT_INITIALISING) {
-            if (b != 0U || h->call == FZ_CALL_PROCESS) {
+            /* A process call resets only when the device asked for it (the Buerkert's 0x2001:04, carried out in
+             * its step after the SDO confirmation): its on_reset hook has been seen then, before the boot-up. */
+            if (b != 0U || (h->call == FZ_CALL_PROCESS && !h->reset_in_call)) {
                 fz_fail(h, "error-control frame %02X while Initialising (only the boot-up 00 of a reset)", b);
             }
             h->bootups++;
@@ -469,6 +472,7 @@ static void begin_call(fz_t *h, fz_call_t call, const co_frame_t *f)
     }
     h->state0 = n->nmt_state;
     h->id0 = n->node_id;
+    h->reset_in_call = false;
     h->sdo_open0 = n->sdo.state != 0U;
     h->clean0 = h->fp.busy_count == 0U && !h->fp.send_io_error && n->txq.count == 0U &&
                 !(n->lss.silent_until != 0U && h->now < n->lss.silent_until);
@@ -586,7 +590,7 @@ static void end_call(fz_t *h, bool legit)
             fz_fail(h, "%u SDO frames from a process call with %u timeouts", (unsigned)h->sdo_resp,
                     (unsigned)h->sdo_timeouts);
         }
-        if (n->nmt_state != h->state0 || n->node_id != h->id0) {
+        if ((n->nmt_state != h->state0 || n->node_id != h->id0) && !h->reset_in_call) {
             fz_fail(h, "a process call changed NMT state 0x%02X -> 0x%02X / node-ID %u -> %u", (unsigned)h->state0,
                     (unsigned)n->nmt_state, h->id0, n->node_id);
         }
