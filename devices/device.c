@@ -506,12 +506,22 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
     return DEVICE_CMD_UNKNOWN;
 }
 
-const char *device_object_name(const device_class_t *cls, const co_od_entry_t *e)
+static const char *row_text(const device_class_t *cls, const char *const *table, const co_od_entry_t *e)
 {
-    if (cls->od_names == NULL || e < cls->od->entries || e >= cls->od->entries + cls->od->count) {
+    if (table == NULL || e < cls->od->entries || e >= cls->od->entries + cls->od->count) {
         return NULL;
     }
-    return cls->od_names[e - cls->od->entries];
+    return table[e - cls->od->entries];
+}
+
+const char *device_object_name(const device_class_t *cls, const co_od_entry_t *e)
+{
+    return row_text(cls, cls->od_names, e);
+}
+
+const char *device_object_unit(const device_class_t *cls, const co_od_entry_t *e)
+{
+    return row_text(cls, cls->od_units, e);
 }
 
 co_time_us_t device_save_phase_us(const device_t *dev)

@@ -43,6 +43,7 @@ typedef struct device_class {
     const char *summary;           /**< One line for --list-devices. */
     const co_od_t *od;             /**< Generated object dictionary. */
     const char *const *od_names;   /**< Its rows' EDS names, in table order (generated with it), or NULL. */
+    const char *const *od_units;   /**< Its rows' units (NULL entries where none), in table order, or NULL. */
     uint8_t default_node_id;       /**< Node-ID when the user gives none (the manual's factory setting). */
     uint8_t default_bit_timing;    /**< LSS bit-timing index at the factory setting. */
     uint32_t core_options;         /**< CO_OPT_* for co_node_init. */
@@ -152,6 +153,9 @@ const char *device_type_name(uint8_t type);
 
 /** The EDS name of an object of the device, or NULL. */
 const char *device_object_name(const device_class_t *cls, const co_od_entry_t *e);
+
+/** The unit of an object's value (od/<device>.toml [units]), or NULL. */
+const char *device_object_unit(const device_class_t *cls, const co_od_entry_t *e);
 
 /**
  * When a node's periodic NVM writes fall within each minute: (configured node-ID mod 60) seconds past it.

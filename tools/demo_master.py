@@ -16,6 +16,7 @@ import sys
 import tempfile
 import threading
 import time
+import tomllib
 from pathlib import Path
 
 import canopen
@@ -26,15 +27,23 @@ NODES = [  # (device, node-ID, EDS)
     ("sds", 0x11, SRC / "od/sds.eds"),
     ("buerkert", 0x12, SRC / "od/buerkert-flow-controller.eds"),
 ]
-# Units of the mapped process values, from the manuals.
-UNITS = {
-    ("pro-ionizer", 0x6000, 2): "%", ("pro-ionizer", 0x6401, 1): "V", ("pro-ionizer", 0x6401, 2): "µA",
-    ("pro-ionizer", 0x6401, 3): "µA", ("pro-ionizer", 0x6401, 4): "×0.1 W", ("pro-ionizer", 0x6401, 5): "V",
-    ("pro-ionizer", 0x6401, 6): "V", ("pro-ionizer", 0x6401, 7): "V", ("pro-ionizer", 0x6401, 8): "V",
-    ("sds", 0x6000, 2): "% (50 = balanced)", ("sds", 0x6000, 3): "%", ("sds", 0x6000, 4): "%",
-    ("sds", 0x6000, 5): "cm", ("sds", 0x6401, 1): "V", ("sds", 0x6401, 2): "µA", ("sds", 0x6401, 3): "µA",
-    ("buerkert", 0x2500, 1): "l/min", ("buerkert", 0x2540, 1): "l/min",
-}
+
+
+def profile_units(device, eds):
+    """{(device, index, sub): unit} from the device's generator profile (od/<device>.toml [units]): the units the
+    emulator answers with too (one source)."""
+    with open(eds.with_suffix(".toml"), "rb") as f:
+        units = tomllib.load(f).get("units", {})
+    out = {}
+    for spec, unit in units.items():
+        index, _, subs = spec.partition(":")
+        first, _, last = (subs or "0").partition("-")
+        for sub in range(int(first, 16), int(last or first, 16) + 1):
+            out[(device, int(index, 16), sub)] = unit
+    return out
+
+
+UNITS = {key: unit for device, _, eds in NODES for key, unit in profile_units(device, eds).items()}
 T0 = time.monotonic()
 print_lock = threading.Lock()
 

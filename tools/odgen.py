@@ -89,6 +89,7 @@ class Row:
     section: str = ""
     store: bool = False
     keep: bool = False
+    unit: str = ""         # of the value, from the profile's [units] (the manuals'; an EDS has none)
 
     @property
     def member(self) -> str:
@@ -433,9 +434,14 @@ def apply_profile(od: Od, path: Path) -> str:
             if not isinstance(capacity, int) or capacity < r.size or capacity > 255:
                 raise OdError(file, "strings", spec, f"capacity {capacity} must be {r.size}..255 (the default's length..255)")
             r.size = capacity
+    for spec, unit in prof.get("units", {}).items():
+        if not isinstance(unit, str) or not 1 <= len(unit) <= 31 or not unit.isprintable() or '"' in unit or "\\" in unit:
+            raise OdError(file, "units", spec, f"{unit!r} is not a unit (1..31 printable characters, no quotes)")
+        for r in parse_row_spec(spec, od, file, "units"):
+            r.unit = unit
     for key in prof:
-        if key not in ("c_name", "storage", "strings", "description"):
-            raise OdError(file, None, key, "unknown key (c_name, description, storage, strings)")
+        if key not in ("c_name", "storage", "strings", "description", "units"):
+            raise OdError(file, None, key, "unknown key (c_name, description, storage, strings, units)")
     return c_name
 
 
@@ -513,7 +519,9 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     h.append(f"extern const co_od_t {c_name}_od;\n")
     h.append(f"/** The EDS ParameterName of each row, in the order of the table (for tools; a firmware that does not\n"
              f" * use them links none of them). */\n")
-    h.append(f"extern const char *const {c_name}_od_names[{len(od.rows)}];\n\n")
+    h.append(f"extern const char *const {c_name}_od_names[{len(od.rows)}];\n")
+    h.append(f"/** The unit of each row's value (the profile's [units]), NULL where it has none; table order. */\n")
+    h.append(f"extern const char *const {c_name}_od_units[{len(od.rows)}];\n\n")
     h.append(f"#define {upper}_OD_ROWS {len(od.rows)}U\n")
     h.append(f"#define {upper}_OD_SIGNATURE 0x{signature(od, c_name):08X}UL\n\n#endif\n")
 
@@ -546,10 +554,15 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     c.append(f"const co_od_t {c_name}_od = {{\n    \"{od.name}\", rows, {len(od.rows)}U, &defaults,\n"
              f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n}};\n")
     # The names in an object file of their own: a firmware that links the table does not link them.
-    n = [banner, f"#include \"{c_name}_od.h\"\n\n"]
+    n = [banner, f"#include \"{c_name}_od.h\"\n\n#include <stddef.h>\n\n"]
     n.append(f"const char *const {c_name}_od_names[{len(od.rows)}] = {{\n")
     for r in od.rows:
         n.append(f"    \"{c_string(r.name)}\", /* 0x{r.index:04X}:{r.sub:02X} */\n")
+    n.append("};\n\n")
+    n.append(f"const char *const {c_name}_od_units[{len(od.rows)}] = {{\n")
+    for r in od.rows:
+        n.append(f"    \"{c_string(r.unit)}\", /* 0x{r.index:04X}:{r.sub:02X} */\n" if r.unit else
+                 f"    NULL, /* 0x{r.index:04X}:{r.sub:02X} */\n")
     n.append("};\n")
     return "".join(h), "".join(c), "".join(n)
 

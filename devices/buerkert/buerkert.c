@@ -876,6 +876,7 @@ const device_class_t buerkert_class = {
     .summary = "Buerkert mass flow controller: set-point by RPDO/SDO, first-order flow, NAMUR status",
     .od = &buerkert_fc_od,
     .od_names = buerkert_fc_od_names,
+    .od_units = buerkert_fc_od_units,
     .default_node_id = 1U,
     .default_bit_timing = 2U,
     .core_options = CO_OPT_SDO_SEGMENTED | CO_OPT_LSS_NO_UNCONFIGURE,

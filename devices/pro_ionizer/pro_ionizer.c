@@ -1175,6 +1175,7 @@ const device_class_t pro_ionizer_class = {
     .summary = "Eltex PRO IONIZER power supply (ES61): HV release, discharge values, counters",
     .od = &pro_ionizer_od,
     .od_names = pro_ionizer_od_names,
+    .od_units = pro_ionizer_od_units,
     .default_node_id = 99U,
     .default_bit_timing = 4U,
     .core_options = CO_OPT_NMT_ACCEPT_LONG | CO_OPT_TPDO_NO_COS, /* TPDOs: the 0x2002:01 grid only (E12) */

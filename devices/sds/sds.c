@@ -644,6 +644,7 @@ const device_class_t sds_class = {
     .summary = "Eltex SDS ionising bar: HV release with 10 s timeout, balance, pollution, variants N/E",
     .od = &sds_od,
     .od_names = sds_od_names,
+    .od_units = sds_od_units,
     .default_node_id = 99U,
     .default_bit_timing = 4U,
     .core_options = CO_OPT_NMT_ACCEPT_LONG | CO_OPT_TPDO_NO_COS, /* TPDOs: the 0x2002:01 grid only (E12) */

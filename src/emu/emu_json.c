@@ -327,6 +327,10 @@ static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, ui
     if (name != NULL) {
         (void)json_object_set_new(r, "name", jstr(name));
     }
+    const char *unit = device_object_unit(n->dev.cls, e);
+    if (unit != NULL) {
+        (void)json_object_set_new(r, "unit", jstr(unit));
+    }
     return true;
 }
 

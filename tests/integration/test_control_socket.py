@@ -117,7 +117,11 @@ def test_text_and_json_on_one_connection(emulator, tmp_path):
     assert c.request(id=2, cmd="set", node=16, object="0x1017", value=70000) == {
         "id": 2, "ok": False, "error": "70000 is out of range: 0x1017:00 (UNSIGNED16) holds 0..65535"}
     r = c.request(id=3, cmd="get", node=17, object="0x1008")
-    assert r["value"] == "Buerkert MFC" and r["type"] == "VISIBLE_STRING", r
+    assert r["value"] == "Buerkert MFC" and r["type"] == "VISIBLE_STRING" and "unit" not in r, r
+    r = c.request(id=31, cmd="get", node=17, object="0x2540:01")  # the set-point: its unit from od/*.toml
+    assert (r["type"], r["unit"]) == ("REAL32", "l/min"), r
+    r = c.request(id=32, cmd="get", node=16, object="0x6401:02")
+    assert (r["type"], r["unit"], r["name"]) == ("INTEGER16", "µA", "Read Effective Current"), r
     hello = c.request(id=4, cmd="hello")
     assert hello["protocol"] == 1 and hello["program"] == "canopen-emu" and hello["buses"] == [IFACE], hello
     listed = c.request(id=5, cmd="list")["nodes"]

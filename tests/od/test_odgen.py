@@ -103,7 +103,11 @@ def test_broken_eds_is_rejected_with_its_place(tmp_path, case):
 
 BROKEN_PROFILES = {
     "bad_c_name": ('c_name = "Not-C"\n', ["dev.toml", "c_name", "not a lower-case C identifier"]),
-    "unknown_key": (BASE_PROFILE + 'colour = "red"\n', ["dev.toml", "colour", "unknown key"]),
+    "unknown_key": ('colour = "red"\n' + BASE_PROFILE, ["dev.toml", "colour", "unknown key"]),
+    "unit_too_long": (BASE_PROFILE.replace('"0x6401:01" = "V"', '"0x6401:01" = "' + "V" * 32 + '"'),
+                      ["dev.toml", "units", "0x6401:01", "is not a unit"]),
+    "unit_with_quote": (BASE_PROFILE.replace('"0x6401:01" = "V"', '"0x6401:01" = "V\\""'), ["dev.toml", "units", "is not a unit"]),
+    "unit_of_missing_object": (BASE_PROFILE.replace('"0x6401:01" = "V"', '"0x6402:01" = "V"'), ["dev.toml", "units", "0x6402 is not in"]),
     "store_read_only_row": (BASE_PROFILE.replace('store = [', 'store = ["0x1000", '), ["dev.toml", "storage", "0x1000:00 is not writable"]),
     "store_missing_object": (BASE_PROFILE.replace('store = [', 'store = ["0x2100", '), ["dev.toml", "storage.store", "0x2100 is not in"]),
     "keep_not_stored": (BASE_PROFILE.replace('keep = [', 'keep = ["0x2002:03", '), ["dev.toml", "storage", "0x2002:03"]),
