@@ -28,6 +28,8 @@ def test_get_returns_typed_values(canopen_emu):
     assert supply == 24.0 and type(supply) is float
     assert c.get_entry(16, 0x1018, sub=1) == Entry(node=16, object="0x1018:01", value=0x24E, type="UNSIGNED32",
                                                    name="Vendor ID")
+    voltage = c.get_entry(0x20, "0x6401:01")  # a process value: its unit from the device's profile
+    assert (voltage.type, voltage.unit) == ("UNSIGNED16", "V"), voltage
     serial = c.get_entry(0x20, "0x1018:04")
     assert (serial.index, serial.sub, serial.value) == (0x1018, 4, 0x00ABCDEF + 0x20)  # EDS serial + node-ID
 
@@ -38,7 +40,7 @@ def test_set_returns_the_value_read_back(canopen_emu):
     assert c.get(16, "0x1017") == 700
     assert c.set(16, "0x1017", "0x3E8") == 1000  # a number in the command language's form
     entry = c.set_entry(17, "0x2540:01", 12.5)
-    assert entry == Entry(node=17, object="0x2540:01", value=12.5, type="REAL32", name="Value")
+    assert entry == Entry(node=17, object="0x2540:01", value=12.5, type="REAL32", name="Value", unit="l/min")
     assert c.get(17, "0x2540:01") == 12.5
 
 

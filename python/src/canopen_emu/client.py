@@ -84,12 +84,14 @@ class NodeStatus(NodeInfo):
 @dataclass(frozen=True)
 class Entry:
     """A typed answer of ``get`` or ``set``: the value (decoded, see Client.get), its CANopen data type
-    (``"UNSIGNED16"``...), the EDS ParameterName and the object normalised (``"0x1017:00"``)."""
+    (``"UNSIGNED16"``...), the EDS ParameterName, the object normalised (``"0x1017:00"``) and the value's unit
+    where the device's manual gives one (``"V"``, ``"l/min"``; ``None`` otherwise)."""
     node: int
     object: str
     value: Value
     type: str
     name: str
+    unit: Optional[str] = None
 
     @property
     def index(self) -> int:
@@ -629,5 +631,5 @@ def _node_status(n: Mapping[str, Any]) -> NodeStatus:
 
 def _entry(answer: Mapping[str, Any]) -> Entry:
     return Entry(node=answer["node"], object=answer["object"], value=decode_value(answer["value"], answer["type"]),
-                 type=answer["type"], name=answer.get("name", ""))
+                 type=answer["type"], name=answer.get("name", ""), unit=answer.get("unit"))
 
