@@ -57,29 +57,31 @@ static json_t *response(json_t *id, bool ok)
     return r;
 }
 
-static void fail(emu_session_t *s, json_t *id, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static void fail(emu_session_t *s, json_t *id, const char *fmt, ...)
+static void vfail(emu_session_t *s, json_t *id, const char *fmt, va_list ap) __attribute__((format(printf, 3, 0)));
+static void vfail(emu_session_t *s, json_t *id, const char *fmt, va_list ap)
 {
     char text[1024];
-    va_list ap;
-    va_start(ap, fmt);
     (void)vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
     json_t *r = response(id, false);
     (void)json_object_set_new(r, "error", jstr(text));
     send_response(s, r);
 }
 
-void json_error(emu_session_t *s, const char *fmt, ...)
+static void fail(emu_session_t *s, json_t *id, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void fail(emu_session_t *s, json_t *id, const char *fmt, ...)
 {
-    char text[1024];
     va_list ap;
     va_start(ap, fmt);
-    (void)vsnprintf(text, sizeof text, fmt, ap);
+    vfail(s, id, fmt, ap);
     va_end(ap);
-    json_t *r = response(NULL, false);
-    (void)json_object_set_new(r, "error", jstr(text));
-    send_response(s, r);
+}
+
+void json_error(emu_session_t *s, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vfail(s, NULL, fmt, ap);
+    va_end(ap);
 }
 
 /* ---- Reply lines of the command language, captured ---------------------------------------------------------- */
