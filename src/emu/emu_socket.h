@@ -23,7 +23,7 @@ struct emu;
 #define MAX_CLIENTS 64
 #define CLIENT_OUTPUT_MAX (1024U * 1024U)
 /** Bytes of one client read per pass of the main loop. */
-#define CLIENT_READ_MAX 4096U
+#define CLIENT_READ_MAX 512U
 
 typedef struct control_client {
     int fd;
