@@ -193,6 +193,7 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
     }
     command_result_t result = COMMAND_OK;
     const char *const cmd = argv[0];
+    const bool injects = strcmp(cmd, "fault") == 0 || strcmp(cmd, "fault-clear") == 0; /* emu_faults.h, not the device */
     for (int i = 0; i < n_sel; i++) {
         emu_node_t *n = nodes[i];
         if (strcmp(cmd, "help") == 0) {
@@ -204,10 +205,10 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         argv[1] = argv[0];
         device_cmd_result_t r = DEVICE_CMD_UNKNOWN;
         emu->in_command = true;
-        if (strcmp(cmd, "fault") != 0 && strcmp(cmd, "fault-clear") != 0) {
+        if (!injects) {
             r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
         }
-        if (strcmp(cmd, "fault") == 0 || strcmp(cmd, "fault-clear") == 0 || strcmp(cmd, "faults") == 0) {
+        if (injects || strcmp(cmd, "faults") == 0) {
             /* Protocol faults (emu_faults.h); `faults` of an Eltex device lists its own errors first. */
             n->dev.now = now;
             r = faults_command(n, argc - 1, &argv[1], now) == 0 && r != DEVICE_CMD_ERROR ? DEVICE_CMD_OK : DEVICE_CMD_ERROR;

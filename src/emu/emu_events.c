@@ -27,10 +27,10 @@ void events_remove_session(emu_t *emu, emu_session_t *s)
     }
 }
 
-static bool anyone_wants(const emu_t *emu, event_kind_t kind, uint8_t id, const emu_bus_t *bus)
+static bool anyone_wants(const emu_t *emu, event_kind_t kind, uint8_t id, const emu_bus_t *bus, uint32_t cob_id)
 {
     for (size_t i = 0U; i < emu->n_sessions; i++) {
-        if (session_wants(emu->sessions[i], kind, id, bus)) {
+        if (session_wants(emu->sessions[i], kind, id, bus, cob_id)) {
             return true;
         }
     }
@@ -39,17 +39,17 @@ static bool anyone_wants(const emu_t *emu, event_kind_t kind, uint8_t id, const 
 
 /* One event to every session that wants it: JSON built once, text formatted once. fields is consumed. */
 static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const emu_bus_t *bus, co_time_us_t at,
-                    const char *text, json_t *fields)
+                    uint32_t cob_id, const char *text, json_t *fields)
 {
     const uint8_t id = n != NULL ? co_node_id(&n->dev.node) : 0U;
     char *json_line = NULL;
+    size_t json_len = 0U;
     char text_line[1024];
-    text_line[0] = '\0';
+    size_t text_len = 0U;
     const co_time_us_t t = at > emu->start ? at - emu->start : 0U;
     for (size_t i = 0U; i < emu->n_sessions; i++) {
         emu_session_t *s = emu->sessions[i];
-        if (!session_wants(s, kind, id, bus) ||
-            (kind == EVENT_FRAME && fields != NULL && (json_integer_value(json_object_get(fields, "id")) & s->frame_mask) != s->frame_id)) {
+        if (!session_wants(s, kind, id, bus, cob_id)) {
             continue;
         }
         if (s->events_json) {
@@ -76,25 +76,24 @@ static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const em
                 if (json_line == NULL) {
                     continue;
                 }
-                const size_t len = strlen(json_line);
-                json_line[len] = '\n'; /* the NUL's room: written with its length below */
+                json_len = strlen(json_line);
+                json_line[json_len++] = '\n'; /* in the NUL's room: written with its length */
             }
-            s->write(s->ctx, json_line, strcspn(json_line, "\n") + 1U);
+            s->write(s->ctx, json_line, json_len);
         } else {
-            if (text_line[0] == '\0') {
+            if (text_len == 0U) {
+                int w;
                 if (n != NULL) {
-                    (void)snprintf(text_line, sizeof text_line, "event %s %.6f node %u@%s (%s): %s\n", event_kind_name(kind),
-                                   (double)t / 1e6, id, bus->can.ifname, n->dev.cls->name, text != NULL ? text : "");
+                    w = snprintf(text_line, sizeof text_line - 1U, "event %s %.6f node %u@%s (%s): %s", event_kind_name(kind),
+                                 (double)t / 1e6, id, bus->can.ifname, n->dev.cls->name, text != NULL ? text : "");
                 } else {
-                    (void)snprintf(text_line, sizeof text_line, "event %s %.6f %s: %s\n", event_kind_name(kind),
-                                   (double)t / 1e6, bus != NULL ? bus->can.ifname : "-", text != NULL ? text : "");
+                    w = snprintf(text_line, sizeof text_line - 1U, "event %s %.6f %s: %s", event_kind_name(kind),
+                                 (double)t / 1e6, bus != NULL ? bus->can.ifname : "-", text != NULL ? text : "");
                 }
-                if (strchr(text_line, '\n') == NULL || text_line[strlen(text_line) - 1U] != '\n') {
-                    text_line[sizeof text_line - 2U] = '\n';
-                    text_line[sizeof text_line - 1U] = '\0';
-                }
+                text_len = w < 0 ? 0U : (size_t)w < sizeof text_line - 1U ? (size_t)w : sizeof text_line - 2U;
+                text_line[text_len++] = '\n'; /* a line cut to size still ends with its newline */
             }
-            s->write(s->ctx, text_line, strlen(text_line));
+            s->write(s->ctx, text_line, text_len);
         }
     }
     free(json_line);
@@ -115,9 +114,9 @@ static void report(emu_node_t *n, event_kind_t kind, int level, json_t *fields, 
         logline(level, "node %u (%s): %s", co_node_id(&n->dev.node), n->dev.cls->name, text);
     }
     emu_t *emu = n->bus != NULL ? n->bus->emu : NULL;
-    if (emu != NULL && anyone_wants(emu, kind, co_node_id(&n->dev.node), n->bus)) {
+    if (emu != NULL && anyone_wants(emu, kind, co_node_id(&n->dev.node), n->bus, 0U)) {
         /* The node's time: that of the call in which it acted (the frame's arrival, its deadline). */
-        publish(emu, kind, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), text, fields);
+        publish(emu, kind, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), 0U, text, fields);
     } else {
         json_decref(fields);
     }
@@ -130,8 +129,8 @@ void events_device_print(void *ctx, const device_t *dev, const char *line)
     const unsigned id = co_node_id(&dev->node) != 0U ? co_node_id(&dev->node) : dev->cfg.node_id;
     reply("node %u: %s", id, line);
     emu_t *emu = n != NULL && n->bus != NULL ? n->bus->emu : NULL;
-    if (emu != NULL && !emu->in_command && anyone_wants(emu, EVENT_MESSAGE, (uint8_t)id, n->bus)) {
-        publish(emu, EVENT_MESSAGE, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), line, NULL);
+    if (emu != NULL && !emu->in_command && anyone_wants(emu, EVENT_MESSAGE, (uint8_t)id, n->bus, 0U)) {
+        publish(emu, EVENT_MESSAGE, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), 0U, line, NULL);
     }
 }
 
@@ -265,16 +264,17 @@ void events_fault(emu_node_t *n, const char *kind, const char *action, const cha
 void events_interface(emu_bus_t *bus, const char *line)
 {
     emu_t *emu = bus->emu;
-    if (emu != NULL && anyone_wants(emu, EVENT_INTERFACE, 0U, bus)) {
-        publish(emu, EVENT_INTERFACE, NULL, bus, socketcan_now_us(), line, NULL);
+    if (emu != NULL && anyone_wants(emu, EVENT_INTERFACE, 0U, bus, 0U)) {
+        publish(emu, EVENT_INTERFACE, NULL, bus, socketcan_now_us(), 0U, line, NULL);
     }
 }
 
 void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at)
 {
     emu_t *emu = bus->emu;
-    if (emu == NULL || emu->n_sessions == 0U || !anyone_wants(emu, EVENT_FRAME, 0U, bus)) {
-        return; /* the common case: one comparison per frame */
+    if (emu == NULL || emu->n_sessions == 0U ||
+        !anyone_wants(emu, EVENT_FRAME, from != NULL ? co_node_id(&from->dev.node) : 0U, bus, f->id)) {
+        return; /* the common case: nothing is built for a frame nobody's filter takes */
     }
     json_t *fields = json_object();
     char hex[17] = "";
@@ -290,5 +290,5 @@ void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, c
     char text[64];
     (void)snprintf(text, sizeof text, "%s %03X#%s%s", from != NULL ? "tx" : "rx", (unsigned)f->id, hex,
                    (f->flags & CO_FRAME_RTR) != 0U ? "R" : "");
-    publish(emu, EVENT_FRAME, from, bus, at, text, fields);
+    publish(emu, EVENT_FRAME, from, bus, at, f->id, text, fields);
 }

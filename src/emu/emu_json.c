@@ -125,6 +125,19 @@ static command_result_t run_captured(emu_t *emu, int argc, char **argv, capture_
     return r;
 }
 
+/* select_nodes with the reply that explains a refusal kept in c->error instead of written. */
+static int select_captured(emu_t *emu, char *word, emu_node_t **out, size_t max, capture_t *c)
+{
+    c->lines = json_array();
+    c->error[0] = '\0';
+    output_set_reply_sink(capture_sink, c);
+    const int n = select_nodes(emu, word, out, max);
+    output_set_reply_sink(NULL, NULL);
+    json_decref(c->lines);
+    c->lines = NULL;
+    return n;
+}
+
 /* ---- Request fields ------------------------------------------------------------------------------------------ */
 
 typedef struct request {
@@ -186,11 +199,8 @@ static emu_node_t *one_node(const request_t *q)
         return NULL;
     }
     emu_node_t *nodes[2];
-    capture_t c = {json_array(), ""};
-    output_set_reply_sink(capture_sink, &c);
-    const int n = select_nodes(q->emu, word, nodes, 2U);
-    output_set_reply_sink(NULL, NULL);
-    json_decref(c.lines);
+    capture_t c;
+    const int n = select_captured(q->emu, word, nodes, 2U, &c);
     if (n < 0) {
         fail(q->s, q->id, "%s", c.error);
         return NULL;
@@ -336,6 +346,17 @@ static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, ui
     return true;
 }
 
+/* The response of get and set: the object's value as it is now. */
+static void answer_value(const request_t *q, emu_node_t *n, uint16_t index, uint8_t sub)
+{
+    json_t *r = response(q->id, true);
+    if (!describe_value(q, n, index, sub, r)) {
+        json_decref(r);
+        return;
+    }
+    send_response(q->s, r);
+}
+
 /* ---- Commands ---------------------------------------------------------------------------------------------- */
 
 static json_t *node_summary(const emu_t *emu, const emu_node_t *n)
@@ -398,11 +419,8 @@ static void cmd_show(const request_t *q)
         return;
     }
     emu_node_t *sel[MAX_NODES_ALL];
-    capture_t c = {json_array(), ""};
-    output_set_reply_sink(capture_sink, &c);
-    const int n = select_nodes(q->emu, word, sel, MAX_NODES_ALL);
-    output_set_reply_sink(NULL, NULL);
-    json_decref(c.lines);
+    capture_t c;
+    const int n = select_captured(q->emu, word, sel, MAX_NODES_ALL, &c);
     if (n <= 0) {
         fail(q->s, q->id, "%s", n < 0 ? c.error : "no such node");
         return;
@@ -442,12 +460,7 @@ static void cmd_get(const request_t *q)
     if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object)) {
         return;
     }
-    json_t *r = response(q->id, true);
-    if (!describe_value(q, n, index, sub, r)) {
-        json_decref(r);
-        return;
-    }
-    send_response(q->s, r);
+    answer_value(q, n, index, sub);
 }
 
 /* The value as a word of `set`: numbers in decimal, true/false as 1/0, strings as they are. */
@@ -474,14 +487,13 @@ static void cmd_set(const request_t *q)
     static const char *const fields[] = {"node", "object", "sub", "value", NULL};
     uint16_t index;
     uint8_t sub;
-    char object[16], value[512], node[8];
+    char object[16], value[512];
     emu_node_t *n;
     if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object) ||
         !value_word(q, value, sizeof value)) {
         return;
     }
-    /* Written as `set` writes it (its checks and messages), on the one node, addressed by its position. */
-    (void)snprintf(node, sizeof node, "%u", co_node_id(&n->dev.node));
+    /* Written as the device's `set` writes it (its checks and messages), on the one node. */
     char *argv[3] = {(char *)"set", object, value};
     capture_t c;
     c.lines = json_array();
@@ -498,12 +510,7 @@ static void cmd_set(const request_t *q)
         fail(q->s, q->id, "%s", c.error[0] != '\0' ? c.error : "refused");
         return;
     }
-    json_t *r = response(q->id, true);
-    if (!describe_value(q, n, index, sub, r)) {
-        json_decref(r);
-        return;
-    }
-    send_response(q->s, r);
+    answer_value(q, n, index, sub);
 }
 
 /* Any other command of the language: "args" are its words after NODE; the reply lines come back as "lines". */
@@ -657,19 +664,11 @@ static void cmd_subscribe(const request_t *q)
                 fail(q->s, q->id, "subscribe: node %zu is not a node-ID or \"ID@IFACE\"", i + 1U);
                 return;
             }
-            const bool on_bus = strchr(word, '@') != NULL;
-            emu_node_t *found[1];
-            capture_t c = {json_array(), ""};
-            output_set_reply_sink(capture_sink, &c);
-            const int n = select_nodes_any_bus(q->emu, word, found, 1U);
-            output_set_reply_sink(NULL, NULL);
-            json_decref(c.lines);
-            if (n <= 0 || strncmp(word, "all", 3) == 0) {
-                fail(q->s, q->id, "subscribe: %s", n < 0 ? c.error : "no such node");
+            char err[256];
+            if (!session_node_filter(q->emu, word, &filters[n_filters], err, sizeof err)) {
+                fail(q->s, q->id, "subscribe: %s", err[0] != '\0' ? err : "no such node");
                 return;
             }
-            filters[n_filters].id = co_node_id(&found[0]->dev.node);
-            filters[n_filters].bus = on_bus ? found[0]->bus : NULL;
             n_filters++;
         }
     }

@@ -48,9 +48,10 @@ void session_printf(emu_session_t *s, const char *fmt, ...)
     s->write(s->ctx, line, len);
 }
 
-bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus)
+bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus,
+                   uint32_t cob_id)
 {
-    if ((s->events & ((uint32_t)1U << kind)) == 0U) {
+    if ((s->events & ((uint32_t)1U << kind)) == 0U || (kind == EVENT_FRAME && (cob_id & s->frame_mask) != s->frame_id)) {
         return false;
     }
     if (s->n_nodes == 0U || node_id == 0U) {
@@ -75,6 +76,42 @@ static void text_sink(void *ctx, const char *text, size_t len)
     memcpy(line, text, len);
     line[len++] = '\n';
     s->write(s->ctx, line, len);
+}
+
+/* The refusal select_nodes_any_bus replies ("error: no interface 'vcan7'"), kept for the caller's own answer. */
+typedef struct refusal {
+    char *text;
+    size_t size;
+} refusal_t;
+
+static void refusal_sink(void *ctx, const char *text, size_t len)
+{
+    refusal_t *r = (refusal_t *)ctx;
+    if (strncmp(text, "error: ", 7U) == 0) {
+        text += 7;
+        len -= 7U;
+    }
+    (void)snprintf(r->text, r->size, "%.*s", (int)len, text);
+}
+
+bool session_node_filter(emu_t *emu, char *word, session_node_filter_t *out, char *err, size_t errlen)
+{
+    emu_node_t *found[1];
+    refusal_t r = {err, errlen};
+    err[0] = '\0';
+    const bool on_bus = strchr(word, '@') != NULL;
+    output_set_reply_sink(refusal_sink, &r);
+    const int n = select_nodes_any_bus(emu, word, found, 1U);
+    output_set_reply_sink(NULL, NULL);
+    if (n <= 0 || strncmp(word, "all", 3U) == 0) {
+        if (n > 0) {
+            err[0] = '\0'; /* "all" is no filter */
+        }
+        return false;
+    }
+    out->id = co_node_id(&found[0]->dev.node);
+    out->bus = on_bus ? found[0]->bus : NULL;
+    return true;
 }
 
 /* subscribe KIND[,KIND...] [NODE...] | subscribe frame COB-ID[/MASK] | unsubscribe [KIND[,KIND...]] */
@@ -120,18 +157,19 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
     } else {
         size_t n = 0U;
         for (char *w = strtok_r(NULL, " \t\r", &save); w != NULL; w = strtok_r(NULL, " \t\r", &save)) {
-            emu_node_t *nodes[1];
             if (n == SESSION_NODE_FILTERS) {
                 session_printf(s, "error: at most %d nodes per subscription", SESSION_NODE_FILTERS);
                 return;
             }
-            char *at = strchr(w, '@');
-            if (select_nodes_any_bus(emu, w, nodes, 1U) <= 0) {
-                session_printf(s, "error: no node %s", w);
+            char err[256];
+            if (!session_node_filter(emu, w, &s->nodes[n], err, sizeof err)) {
+                if (err[0] != '\0') {
+                    session_printf(s, "error: %s", err);
+                } else {
+                    session_printf(s, "error: no node %s", w);
+                }
                 return;
             }
-            s->nodes[n].id = co_node_id(&nodes[0]->dev.node);
-            s->nodes[n].bus = at != NULL ? nodes[0]->bus : NULL;
             n++;
         }
         s->n_nodes = n;

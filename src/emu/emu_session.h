@@ -75,8 +75,14 @@ void session_finish(struct emu *emu, emu_session_t *s);
 /** Runs one line of the session (text or JSON) and answers it. */
 void session_run_line(struct emu *emu, emu_session_t *s, char *line);
 
-/** Whether an event of kind about node (NULL: none) is for s. */
-bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus);
+/** Whether an event of kind about node node_id (0: none) on bus is for s; for EVENT_FRAME, cob_id is the frame's
+ *  identifier, matched against the session's COB-ID filter. */
+bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus,
+                   uint32_t cob_id);
+
+/** The event filter a subscription's NODE word names: an ID (that ID on any bus) or ID@IFACE, not "all". false when
+ *  it names none: err then says why ("" when no node has that ID). */
+bool session_node_filter(struct emu *emu, char *word, session_node_filter_t *out, char *err, size_t errlen);
 
 /** Writes a formatted text line (newline added) to the session. */
 void session_printf(emu_session_t *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
