@@ -105,7 +105,4 @@ co_time_us_t faults_run(struct emu_node *n, co_time_us_t now);
  *  reply(). 0: done; 1: refused (the reply says why). argv[0] is the command. */
 int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now);
 
-/** "sdo-ignore"... */
-const char *fault_kind_name(fault_kind_t kind);
-
 #endif /* EMU_FAULTS_H */
