@@ -107,6 +107,9 @@ if(TARGET canopen-emu)
     install(FILES ${co_man} DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
   endif()
 endif()
+if(TARGET canopen-eds)
+  install(TARGETS canopen-eds RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})  # the EDS/DCF checker (docs/eds.md)
+endif()
 install(FILES README.md CHANGELOG.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/${co_package})
 
 # ---- Packages: cpack -G DEB (and TGZ) from the same build ----------------------------------------------------

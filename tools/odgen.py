@@ -1,29 +1,27 @@
 #!/usr/bin/env python3
 """odgen: turns a CiA 306 EDS and its generator profile into the C object-dictionary tables of the core.
 
-    tools/odgen.py --eds od/pro-ionizer.eds --profile od/pro-ionizer.toml --out-dir build/od
-    tools/odgen.py --check od/pro-ionizer.eds          (validate only)
+    tools/odgen.py --reader build/canopen-eds --eds od/pro-ionizer.eds --profile od/pro-ionizer.toml --out-dir build/od
+    tools/odgen.py --reader build/canopen-eds --check od/pro-ionizer.eds          (validate only)
 
 Output: <c_name>_od.h (the values struct, the co_od_t) and <c_name>_od.c (the sorted const row table,
 the defaults image, the limits). Both say they are generated. The output depends only on the inputs
 (no dates, no paths), so a rebuild gives the same bytes.
 
-The EDS is read with Python's configparser in strict mode (duplicate sections or keys are errors) and
-then checked: object lists unique and sorted, every listed object present and every object listed,
-known data and access types, defaults representable in their type and inside LowLimit/HighLimit,
-node-ID-relative defaults well-formed, every PDO mapping entry naming an existing mappable object of
-the right size and direction, at most 64 bits per PDO. Every error names file, section and key.
+The EDS is read by the project's one EDS/DCF reader (src/eds/, docs/eds.md), through `canopen-eds json
+--strict`: the emulator reads files with the same code, so a generated table and an emulated device never
+disagree about a file. The project's own files must be clean: any warning of the reader is an error here.
 
 The profile (TOML, beside the EDS) says what an EDS cannot: which rows 0x1010 stores, which survive
-0x1011 restore, the capacity of writable strings.
+0x1011 restore, the capacity of writable strings, the units of values.
 """
 from __future__ import annotations
 
 import argparse
-import configparser
-import math
+import json
+import os
 import re
-import struct
+import subprocess
 import sys
 import tomllib
 import zlib
@@ -58,11 +56,6 @@ ACCESS = {
     "rwr": (True, True, False, True, False),  # read/write, mappable to TPDOs only
     "rww": (True, True, False, False, True),  # read/write, mappable to RPDOs only
 }
-OBJECT_LISTS = ("MandatoryObjects", "OptionalObjects", "ManufacturerObjects")
-DEVICE_INFO_KEYS = ("VendorName", "VendorNumber", "ProductName", "ProductNumber", "RevisionNumber",
-                    "NrOfRXPDO", "NrOfTXPDO", "Granularity", "LSS_Supported")
-NODEID_RE = re.compile(r"^\$NODEID\s*\+\s*(\S+)$|^(\S+?)\s*\+\s*\$NODEID$", re.IGNORECASE)
-SECTION_RE = re.compile(r"^([0-9A-F]{4})(?:SUB([0-9A-F]{1,2}))?$")
 
 
 class OdError(Exception):
@@ -110,274 +103,43 @@ class Od:
         return None
 
 
-def parse_int(text: str, file: str, section: str, key: str) -> int:
-    t = text.strip()
+def find_reader(explicit: str | None) -> str:
+    reader = explicit or os.environ.get("CO_EDS_TOOL")
+    if not reader:
+        raise OdError("odgen", None, None, "the EDS reader is not given: pass --reader PATH/canopen-eds "
+                      "(built with the project) or set CO_EDS_TOOL")
+    return reader
+
+
+def read_eds(path: Path, reader: str) -> Od:
+    """The EDS as the project's reader sees it; any warning or error of it is an error here."""
     try:
-        if re.fullmatch(r"[+-]?0[xX][0-9a-fA-F]+", t):
-            return int(t, 16)
-        if re.fullmatch(r"[+-]?[0-9]+", t):
-            return int(t, 10)
-    except ValueError:
-        pass
-    raise OdError(file, section, key, f"'{text}' is not an integer")
-
-
-def parse_value(text: str, dtype: int, file: str, section: str, key: str) -> tuple[object, bool]:
-    """Returns (value, node-ID relative) for a DefaultValue/LowLimit/HighLimit of a row of type dtype."""
-    t = text.strip()
-    if dtype in STRING_TYPES:
+        r = subprocess.run([reader, "json", "--strict", str(path)], capture_output=True, text=True, timeout=120)
+    except OSError as e:
+        raise OdError(str(path), None, None, f"cannot run the EDS reader {reader}: {e}") from None
+    if r.returncode != 0:
+        raise OdError(str(path), None, None, "the EDS reader reports:\n" + r.stderr.rstrip())
+    model = json.loads(r.stdout)
+    od = Od(str(path), Path(path).stem)
+    od.device_info = model["device"]
+    for e in model["entries"]:
+        dtype = e["type"]
+        if dtype not in TYPES:
+            raise OdError(str(path), f"{e['index']:04X}", "DataType",
+                          f"data type {dtype:#06x} is read but the core's generated tables do not hold it yet")
+        value = e["default"]
         if dtype == 0x0A:
-            hexdigits = t.replace(" ", "")
-            if len(hexdigits) % 2 or not re.fullmatch(r"[0-9a-fA-F]*", hexdigits):
-                raise OdError(file, section, key, f"OCTET_STRING '{text}' is not pairs of hex digits")
-            return bytes.fromhex(hexdigits), False
-        try:
-            t.encode("ascii")
-        except UnicodeEncodeError:
-            raise OdError(file, section, key, f"VISIBLE_STRING '{text}' is not ASCII") from None
-        return t, False
-    if "$" in t:
-        m = NODEID_RE.match(t)
-        if not m:
-            raise OdError(file, section, key, f"malformed node-ID-relative value '{text}' (use $NODEID+0x180)")
-        if dtype in REAL_TYPES:
-            raise OdError(file, section, key, "a node-ID-relative value needs an integer type")
-        return parse_int(m.group(1) or m.group(2), file, section, key), True
-    if t == "":
-        return (0.0 if dtype in REAL_TYPES else 0), False
-    if dtype in REAL_TYPES:
-        try:
-            v = float(t)
-        except ValueError:
-            raise OdError(file, section, key, f"'{text}' is not a number") from None
-        if not math.isfinite(v):
-            raise OdError(file, section, key, f"'{text}' is not finite")
-        return v, False
-    return parse_int(t, file, section, key), False
-
-
-def check_representable(v: object, nodeid: bool, dtype: int, file: str, section: str, key: str) -> None:
-    name, _, _, lo, hi = TYPES[dtype]
-    if dtype in STRING_TYPES:
-        return
-    if dtype in REAL_TYPES:
-        if dtype == 0x08:
+            value = bytes.fromhex(value)
+        row = Row(e["index"], e["sub"], e["name"].strip(), dtype, e["access"], e["pdo_mapping"], value, e["nodeid"],
+                  low=e["low"], high=e["high"], section=f"line {e['line']}")
+        row.size = len(value) if dtype in STRING_TYPES else TYPES[dtype][2]
+        if dtype == 0x09:
             try:
-                struct.pack("<f", v)
-            except OverflowError:
-                raise OdError(file, section, key, f"{v} does not fit {name}") from None
-        return
-    values = [v + 1, v + 127] if nodeid else [v]  # every node-ID 1..127 must give a valid value
-    for x in values:
-        if not lo <= x <= hi:
-            raise OdError(file, section, key, f"{x:#x} does not fit {name}" if x >= 0 else f"{x} does not fit {name}")
-
-
-class EdsReader:
-    def __init__(self, path: Path):
-        self.path = str(path)
-        self.cp = configparser.ConfigParser(interpolation=None, strict=True, delimiters=("=",),
-                                            comment_prefixes=(";",), inline_comment_prefixes=None,
-                                            default_section="\x00no-defaults", empty_lines_in_values=False)
-        try:
-            with open(path, encoding="utf-8") as f:
-                self.cp.read_file(f, source=self.path)
-        except configparser.DuplicateSectionError as e:
-            raise OdError(self.path, e.section, None, f"duplicate section (line {e.lineno})") from None
-        except configparser.DuplicateOptionError as e:
-            raise OdError(self.path, e.section, e.option, f"duplicate key (line {e.lineno})") from None
-        except configparser.Error as e:
-            raise OdError(self.path, None, None, f"not an EDS/INI file: {e}") from None
-        except UnicodeDecodeError as e:
-            raise OdError(self.path, None, None, f"not UTF-8 text: {e}") from None
-        self.sections: dict[str, str] = {}
-        for s in self.cp.sections():
-            norm = s.upper()
-            if norm in self.sections:
-                raise OdError(self.path, s, None, f"duplicate section (same as [{self.sections[norm]}])")
-            self.sections[norm] = s
-
-    def section(self, name: str) -> str | None:
-        return self.sections.get(name.upper())
-
-    def get(self, section: str, key: str, required: bool = True) -> str | None:
-        if self.cp.has_option(section, key):
-            return self.cp.get(section, key)
-        if required:
-            raise OdError(self.path, section, key, "missing")
-        return None
-
-
-def read_object_lists(eds: EdsReader) -> list[int]:
-    seen: dict[int, str] = {}
-    for lst in OBJECT_LISTS:
-        sec = eds.section(lst)
-        if sec is None:
-            if lst == "MandatoryObjects":
-                raise OdError(eds.path, lst, None, "missing section")
-            continue
-        n = parse_int(eds.get(sec, "SupportedObjects"), eds.path, sec, "SupportedObjects")
-        keys = {k for k in eds.cp.options(sec) if k != "supportedobjects"}
-        expected = {str(i) for i in range(1, n + 1)}
-        if keys != expected:
-            extra, missing = sorted(keys - expected), sorted(expected - keys, key=int)
-            raise OdError(eds.path, sec, None, f"keys must be 1..{n}" + (f"; unexpected {extra}" if extra else "")
-                          + (f"; missing {missing}" if missing else ""))
-        previous = -1
-        for i in range(1, n + 1):
-            idx = parse_int(eds.get(sec, str(i)), eds.path, sec, str(i))
-            if idx in seen:
-                raise OdError(eds.path, sec, str(i), f"object 0x{idx:04X} listed twice (also in [{seen[idx]}])")
-            if idx <= previous:
-                raise OdError(eds.path, sec, str(i), f"object 0x{idx:04X} out of order (after 0x{previous:04X})")
-            previous = idx
-            seen[idx] = sec
-    return sorted(seen)
-
-
-def read_row(eds: EdsReader, sec: str, index: int, sub: int) -> Row:
-    p = eds.path
-    name = eds.get(sec, "ParameterName")
-    otype = parse_int(eds.get(sec, "ObjectType", required=False) or "0x7", p, sec, "ObjectType")
-    if otype != 0x7:
-        raise OdError(p, sec, "ObjectType", f"a sub-index must be a VAR (0x7), not {otype:#x}")
-    dtype = parse_int(eds.get(sec, "DataType"), p, sec, "DataType")
-    if dtype not in TYPES:
-        raise OdError(p, sec, "DataType", f"unknown or unsupported data type {dtype:#06x}")
-    access = eds.get(sec, "AccessType").strip().lower()
-    if access not in ACCESS:
-        raise OdError(p, sec, "AccessType", f"unknown access type '{access}' (ro, wo, rw, rwr, rww, const)")
-    pdo_text = (eds.get(sec, "PDOMapping", required=False) or "0").strip()
-    if pdo_text not in ("0", "1"):
-        raise OdError(p, sec, "PDOMapping", f"must be 0 or 1, not '{pdo_text}'")
-    value, nodeid = parse_value(eds.get(sec, "DefaultValue", required=False) or "", dtype, p, sec, "DefaultValue")
-    check_representable(value, nodeid, dtype, p, sec, "DefaultValue")
-    row = Row(index, sub, name.strip(), dtype, access, pdo_text == "1", value, nodeid, section=sec)
-    for key in ("LowLimit", "HighLimit"):
-        text = eds.get(sec, key, required=False)
-        if text is None or text.strip() == "":
-            continue
-        if dtype in STRING_TYPES:
-            raise OdError(p, sec, key, "limits on a string")
-        v, rel = parse_value(text, dtype, p, sec, key)
-        if rel:
-            raise OdError(p, sec, key, "limits cannot be node-ID relative")
-        check_representable(v, False, dtype, p, sec, key)
-        setattr(row, "low" if key == "LowLimit" else "high", v)
-    if row.low is not None and row.high is not None and row.low > row.high:
-        raise OdError(p, sec, "LowLimit", f"LowLimit {row.low} > HighLimit {row.high}")
-    if dtype not in STRING_TYPES:
-        lo_ok = row.low is None or all(row.low <= v for v in ([value + 1, value + 127] if nodeid else [value]))
-        hi_ok = row.high is None or all(v <= row.high for v in ([value + 1, value + 127] if nodeid else [value]))
-        if not (lo_ok and hi_ok):
-            raise OdError(p, sec, "DefaultValue", f"default {value} outside LowLimit..HighLimit ({row.low}..{row.high})")
-    if dtype in STRING_TYPES:
-        row.size = len(value)
-    else:
-        row.size = TYPES[dtype][2]
-    return row
-
-
-def read_eds(path: Path) -> Od:
-    eds = EdsReader(path)
-    p = eds.path
-    info = eds.section("DeviceInfo")
-    if info is None:
-        raise OdError(p, "DeviceInfo", None, "missing section")
-    od = Od(p, Path(path).stem)
-    for key in DEVICE_INFO_KEYS:
-        od.device_info[key] = eds.get(info, key)
-    indices = read_object_lists(eds)
-    listed = set(indices)
-    for norm, sec in eds.sections.items():
-        m = SECTION_RE.match(norm)
-        if m and int(m.group(1), 16) not in listed:
-            raise OdError(p, sec, None, "object section not listed in any object list")
-    for index in indices:
-        sec = eds.section(f"{index:04X}")
-        if sec is None:
-            raise OdError(p, f"{index:04X}", None, "listed object has no section")
-        otype = parse_int(eds.get(sec, "ObjectType", required=False) or "0x7", p, sec, "ObjectType")
-        if eds.get(sec, "CompactSubObj", required=False) not in (None, "0"):
-            raise OdError(p, sec, "CompactSubObj", "compact sub-objects are not supported; list each sub-index")
-        if otype == 0x7:
-            od.rows.append(read_row(eds, sec, index, 0))
-            continue
-        if otype not in (0x8, 0x9):
-            raise OdError(p, sec, "ObjectType", f"unsupported object type {otype:#x} (0x7 VAR, 0x8 ARRAY, 0x9 RECORD)")
-        subs = sorted(int(SECTION_RE.match(n).group(2), 16) for n in eds.sections
-                      if SECTION_RE.match(n) and SECTION_RE.match(n).group(2) is not None
-                      and int(SECTION_RE.match(n).group(1), 16) == index)
-        if len(subs) != len(set(subs)):
-            raise OdError(p, sec, None, "a sub-index is defined twice (e.g. [..sub1] and [..sub01])")
-        n = parse_int(eds.get(sec, "SubNumber"), p, sec, "SubNumber")
-        if n != len(subs):
-            raise OdError(p, sec, "SubNumber", f"says {n} but {len(subs)} sub-index sections exist")
-        if 0 not in subs:
-            raise OdError(p, sec, None, "an ARRAY/RECORD needs sub-index 0")
-        for sub in subs:
-            od.rows.append(read_row(eds, eds.section(f"{index:04X}sub{sub:X}"), index, sub))
-        sub0 = od.find(index, 0)
-        if sub0.dtype != 0x05:
-            raise OdError(p, sub0.section, "DataType", "sub-index 0 must be UNSIGNED8")
-        # sub 0 is the highest sub-index, except where it counts active entries (error history, mappings)
-        counts_entries = index == 0x1003 or 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
-        if sub0.value < max(subs) and not counts_entries:
-            raise OdError(p, sub0.section, "DefaultValue", f"highest sub-index {max(subs):#x} > sub 0 value {sub0.value:#x}")
-    od.rows.sort(key=lambda r: (r.index, r.sub))
-    check_pdos(od)
+                value.encode("ascii")
+            except UnicodeEncodeError:
+                raise OdError(str(path), row.section, "DefaultValue", "a VISIBLE_STRING of the project must be ASCII") from None
+        od.rows.append(row)
     return od
-
-
-def mapping_row(od: Od, row: Row, receive: bool, p: str) -> int:
-    v = row.value
-    if row.nodeid or not isinstance(v, int):
-        raise OdError(p, row.section, "DefaultValue", "a mapping entry must be a plain number")
-    if v == 0:
-        return 0
-    index, sub, bits = v >> 16, (v >> 8) & 0xFF, v & 0xFF
-    if receive and 1 <= index <= 7 and sub == 0:
-        return bits
-    target = od.find(index, sub)
-    if target is None:
-        raise OdError(p, row.section, "DefaultValue", f"maps 0x{index:04X}:{sub:02X}, which does not exist")
-    if not target.pdo:
-        raise OdError(p, row.section, "DefaultValue", f"maps 0x{index:04X}:{sub:02X}, which has PDOMapping=0")
-    allowed = ACCESS[target.access][4 if receive else 3]
-    if not allowed:
-        raise OdError(p, row.section, "DefaultValue",
-                      f"maps 0x{index:04X}:{sub:02X} (AccessType={target.access}) into a {'R' if receive else 'T'}PDO")
-    if bits != target.size * 8 or bits % 8:
-        raise OdError(p, row.section, "DefaultValue", f"maps {bits} bits of 0x{index:04X}:{sub:02X}, a {target.size * 8}-bit object")
-    return bits
-
-
-def check_pdos(od: Od) -> None:
-    p = od.path
-    for comm_base, map_base, receive in ((0x1400, 0x1600, True), (0x1800, 0x1A00, False)):
-        comm = sorted({r.index for r in od.rows if comm_base <= r.index < comm_base + 0x200})
-        maps = sorted({r.index for r in od.rows if map_base <= r.index < map_base + 0x200})
-        if [c - comm_base for c in comm] != [m - map_base for m in maps]:
-            raise OdError(p, f"{map_base:04X}", None, f"communication {[hex(c) for c in comm]} and mapping "
-                          f"{[hex(m) for m in maps]} objects do not pair up")
-        key = "NrOfRXPDO" if receive else "NrOfTXPDO"
-        if parse_int(od.device_info[key], p, "DeviceInfo", key) != len(comm):
-            raise OdError(p, "DeviceInfo", key, f"says {od.device_info[key]} but the OD has {len(comm)}")
-        for m in maps:
-            count = od.find(m, 0)
-            if count.value > 8:
-                raise OdError(p, count.section, "DefaultValue", "more than 8 mapping entries")
-            bits = 0
-            for sub in range(1, count.value + 1):
-                entry = od.find(m, sub)
-                if entry is None:
-                    raise OdError(p, count.section, "DefaultValue", f"{count.value} entries but sub {sub} is missing")
-                bits += mapping_row(od, entry, receive, p)
-            if bits > 64:
-                raise OdError(p, count.section, "DefaultValue", f"the mapping has {bits} bits, more than 64")
-            cob = od.find(m - map_base + comm_base, 1)
-            if cob is not None and not (cob.value & 0x80000000) and count.value == 0:
-                raise OdError(p, cob.section, "DefaultValue", "a valid PDO (bit 31 clear) with an empty mapping")
 
 
 def parse_row_spec(spec: str, od: Od, file: str, key: str) -> list[Row]:
@@ -569,6 +331,7 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
 
 def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description="Generate the C object dictionary of a device from its EDS.")
+    ap.add_argument("--reader", help="the project's canopen-eds program (default: $CO_EDS_TOOL)")
     ap.add_argument("--eds", type=Path, help="the device's EDS (CiA 306)")
     ap.add_argument("--profile", type=Path, help="the generator profile (TOML); default: the EDS with .toml")
     ap.add_argument("--out-dir", type=Path, help="where <c_name>_od.h/.c are written")
@@ -578,7 +341,7 @@ def main(argv: list[str]) -> int:
     if eds_path is None:
         ap.error("--eds or --check is required")
     try:
-        od = read_eds(eds_path)
+        od = read_eds(eds_path, find_reader(args.reader))
         profile = args.profile or eds_path.with_suffix(".toml")
         c_name = None
         if profile.exists() or not args.check:

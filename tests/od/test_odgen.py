@@ -52,40 +52,67 @@ def run_odgen(tmp_path, eds_text, profile_text=BASE_PROFILE):
                           capture_output=True, text=True, timeout=60)
 
 
+# Each mutation of the SDS's EDS and the reader's diagnostic for it ("FILE:LINE: warning: ..."): the reader repairs
+# the file (it could be emulated), but the project's own files must be clean, so odgen refuses it.
 BROKEN_EDS = {
-    "not_an_ini_file": (lambda t: "garbage line\n" + t, ["dev.eds", "not an EDS/INI file"]),
-    "duplicate_section": (lambda t: t + "\n[1000]\nParameterName=again\n", ["dev.eds", "[1000]", "duplicate section"]),
-    "duplicate_key": (lambda t: add_to_section(t, "1000", "DataType=0x0007"), ["[1000] datatype", "duplicate key"]),
-    "unknown_data_type": (lambda t: set_key(t, "1000", "DataType", "0x0042"), ["[1000] DataType", "unknown or unsupported data type"]),
-    "unknown_access_type": (lambda t: set_key(t, "1000", "AccessType", "rx"), ["[1000] AccessType", "unknown access type"]),
-    "default_not_representable": (lambda t: set_key(t, "1017", "DefaultValue", "70000"), ["[1017] DefaultValue", "does not fit UNSIGNED16"]),
-    "negative_unsigned_default": (lambda t: set_key(t, "1017", "DefaultValue", "-1"), ["[1017] DefaultValue", "does not fit UNSIGNED16"]),
-    "default_not_a_number": (lambda t: set_key(t, "1017", "DefaultValue", "fast"), ["[1017] DefaultValue", "not an integer"]),
-    "default_outside_limits": (lambda t: set_key(t, "2002sub1", "DefaultValue", "50"), ["[2002sub1] DefaultValue", "outside LowLimit..HighLimit"]),
-    "limits_reversed": (lambda t: set_key(t, "2002sub1", "LowLimit", "60001"), ["[2002sub1] LowLimit", "> HighLimit"]),
+    "not_an_ini_file": (lambda t: "garbage line\n" + t,
+                        ["dev.eds:1: warning: neither a [section] nor a key=value line"]),
+    "duplicate_section": (lambda t: t + "\n[1000]\nParameterName=again\n",
+                          ["dev.eds:900: warning: section [1000] appears again (first at line 63)"]),
+    "duplicate_key": (lambda t: add_to_section(t, "1000", "DataType=0x0007"),
+                      ["dev.eds:64: warning: key DataType appears again in [1000] (line 67)"]),
+    "unknown_data_type": (lambda t: set_key(t, "1000", "DataType", "0x0042"),
+                          ["dev.eds:66: warning: [1000] DataType=0x0042 is not a CiA 301 basic data type",
+                           "error: object 0x1000 is missing"]),
+    "unknown_access_type": (lambda t: set_key(t, "1000", "AccessType", "rx"),
+                            ["dev.eds:67: warning: [1000] AccessType=rx is not ro, wo, rw, rwr, rww or const; ro used"]),
+    "default_not_representable": (lambda t: set_key(t, "1017", "DefaultValue", "70000"),
+                                  ["dev.eds:236: warning: [1017] DefaultValue: '70000' does not fit UNSIGNED16; 0xFFFF used"]),
+    "negative_unsigned_default": (lambda t: set_key(t, "1017", "DefaultValue", "-1"),
+                                  ["dev.eds:236: warning: [1017] DefaultValue: '-1' does not fit UNSIGNED16; 0x0 used"]),
+    "default_not_a_number": (lambda t: set_key(t, "1017", "DefaultValue", "fast"),
+                             ["dev.eds:236: warning: [1017] DefaultValue: 'fast' is not an integer"]),
+    "default_outside_limits": (lambda t: set_key(t, "2002sub1", "DefaultValue", "50"),
+                               ["dev.eds:786: warning: [2002sub1] DefaultValue 0x32 is outside LowLimit..HighLimit; "
+                                "0x64 (the LowLimit) used"]),
+    "limits_reversed": (lambda t: set_key(t, "2002sub1", "LowLimit", "60001"),
+                        ["dev.eds:781: warning: [2002sub1] LowLimit 0xEA61 > HighLimit 0xEA60; both ignored"]),
     "object_list_unsorted": (lambda t: replace_list(t, "OptionalObjects", list(reversed(optional_objects(t)))),
-                             ["[OptionalObjects] 2", "out of order"]),
+                             ["dev.eds:127: warning: [OptionalObjects] 2: object 0x6200 out of order (after 0x6401)"]),
     "object_listed_twice": (lambda t: replace_list(t, "OptionalObjects", optional_objects(t) + [optional_objects(t)[-1]]),
-                            ["[OptionalObjects]", "listed twice"]),
-    "listed_object_missing": (lambda t: replace_list(t, "ManufacturerObjects", list_entries(t, "ManufacturerObjects") and
-                                                     [v for k, v in sorted(list_entries(t, "ManufacturerObjects").items(), key=lambda kv: kv[0]) if k != "SupportedObjects"] + ["0x5FFF"]),
-                              ["[5FFF]", "listed object has no section"]),
+                            ["dev.eds:143: warning: [OptionalObjects] 18: object 0x6401 is listed twice"]),
+    "listed_object_missing": (lambda t: replace_list(t, "ManufacturerObjects", [v for k, v in sorted(
+                                  list_entries(t, "ManufacturerObjects").items()) if k != "SupportedObjects"] + ["0x5FFF"]),
+                              ["warning: object 0x5FFF is listed but has no section [5FFF]; left out"]),
     "section_not_listed": (lambda t: t + "\n[2100]\nParameterName=orphan\nObjectType=0x7\nDataType=0x0005\nAccessType=ro\n",
-                           ["[2100]", "not listed"]),
-    "sub_number_mismatch": (lambda t: set_key(t, "1018", "SubNumber", "7"), ["[1018] SubNumber", "says 7"]),
-    "mapping_to_missing_object": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x21000108"), ["[1A00sub1] DefaultValue", "does not exist"]),
-    "mapping_to_unmappable_object": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x10000020"), ["[1A00sub1] DefaultValue", "PDOMapping=0"]),
-    "mapping_wrong_length": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x60000110"), ["[1A00sub1] DefaultValue", "16 bits of 0x6000:01, a 8-bit object"]),
-    "mapping_wrong_direction": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x62000108"), ["[1A00sub1] DefaultValue", "into a TPDO"]),
+                           ["dev.eds:900: warning: [2100] is in no object list"]),
+    "sub_number_mismatch": (lambda t: set_key(t, "1018", "SubNumber", "7"),
+                            ["dev.eds:79: warning: [1018] SubNumber=7 but 5 sub-index sections are usable"]),
+    "mapping_to_missing_object": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x21000108"),
+                                  ["dev.eds:391: warning: [1A00sub1] DefaultValue 0x21000108 maps 0x2100:01, which does "
+                                   "not exist; the PDO is disabled"]),
+    "mapping_to_unmappable_object": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x10000020"),
+                                     ["dev.eds:391: warning: [1A00sub1] DefaultValue 0x10000020 maps 0x1000:00, which "
+                                      "has PDOMapping=0"]),
+    "mapping_wrong_length": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x60000110"),
+                             ["dev.eds:391: warning: [1A00sub1] DefaultValue 0x60000110 maps 16 bits of 0x6000:01, a "
+                              "8-bit object"]),
+    "mapping_wrong_direction": (lambda t: set_key(t, "1A00sub1", "DefaultValue", "0x62000108"),
+                                ["dev.eds:391: warning: [1A00sub1] DefaultValue 0x62000108 maps 0x6200:01 "
+                                 "(AccessType=wo) into a TPDO"]),
     "mapping_over_64_bits": (lambda t: set_key(set_key(set_key(set_key(set_key(t, "1A00sub1", "DefaultValue", "0x64010110"),
                              "1A00sub2", "DefaultValue", "0x64010210"), "1A00sub3", "DefaultValue", "0x64010310"),
                              "1A00sub4", "DefaultValue", "0x64010110"), "1A00sub5", "DefaultValue", "0x64010210"),
-                             ["[1A00sub0] DefaultValue", "80 bits, more than 64"]),
-    "nodeid_malformed": (lambda t: set_key(t, "1014", "DefaultValue", "$NODEID*0x80"), ["[1014] DefaultValue", "malformed node-ID-relative value"]),
+                             ["dev.eds:383: warning: [1A00sub0] the mapping (DefaultValue) has 80 bits, more than 64"]),
+    "nodeid_malformed": (lambda t: set_key(t, "1014", "DefaultValue", "$NODEID*0x80"),
+                         ["dev.eds:228: warning: [1014] DefaultValue: '$NODEID*0x80' is not an integer"]),
     "nodeid_overflows_type": (lambda t: set_key(set_key(t, "1001", "DefaultValue", "$NODEID+200"), "1001", "DataType", "0x0005"),
-                              ["[1001] DefaultValue", "does not fit UNSIGNED8"]),
-    "pdo_count_mismatch": (lambda t: set_key(t, "DeviceInfo", "NrOfTXPDO", "4"), ["[DeviceInfo] NrOfTXPDO", "says 4"]),
-    "missing_device_info_key": (lambda t: re.sub(r"^VendorNumber=.*\n", "", t, flags=re.MULTILINE), ["[DeviceInfo] VendorNumber", "missing"]),
+                              ["dev.eds:76: warning: [1001] DefaultValue: '$NODEID+200' does not fit UNSIGNED8 for "
+                               "every node-ID 1..127"]),
+    "pdo_count_mismatch": (lambda t: set_key(t, "DeviceInfo", "NrOfTXPDO", "4"),
+                           ["dev.eds:14: warning: [DeviceInfo] NrOfTXPDO=4 but the file has 2 such PDOs; 2 used"]),
+    "missing_device_info_key": (lambda t: re.sub(r"^VendorNumber=.*\n", "", t, flags=re.MULTILINE),
+                                ["dev.eds:14: warning: [DeviceInfo] has no VendorNumber; taken from object 0x1018"]),
 }
 
 

@@ -1,0 +1,28 @@
+# The EDS/DCF reader: library co_eds and the host program canopen-eds (src/eds/, docs/eds.md).
+# Sets CO_EDS_TOOL (the canopen-eds the build runs) and CO_EDS_TOOL_TARGET (what generation depends on).
+set(CO_EDS_SOURCES src/eds/eds.c src/eds/eds_ini.c src/eds/eds_value.c src/eds/eds_objects.c src/eds/eds_pdo.c
+                   src/eds/eds_write.c)
+if(NOT CMAKE_CROSSCOMPILING)
+  add_library(co_eds STATIC ${CO_EDS_SOURCES})
+  target_include_directories(co_eds PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src/eds>)
+  target_compile_options(co_eds PRIVATE ${CO_WARNINGS})
+  target_link_libraries(co_eds PRIVATE m)
+  add_executable(canopen-eds src/eds/canopen_eds.c)
+  target_link_libraries(canopen-eds PRIVATE co_eds)
+  target_compile_options(canopen-eds PRIVATE ${CO_WARNINGS})
+  set(CO_EDS_TOOL $<TARGET_FILE:canopen-eds>)
+  set(CO_EDS_TOOL_TARGET canopen-eds)
+else()
+  # Cross build: the generator runs on the build machine, so the reader is built there with its C compiler.
+  include(ExternalProject)
+  set(CO_HOST_C_COMPILER cc CACHE STRING "The build machine's C compiler (for canopen-eds in cross builds)")
+  set(host_dir ${PROJECT_BINARY_DIR}/host-eds)
+  ExternalProject_Add(co_eds_host
+    SOURCE_DIR ${PROJECT_SOURCE_DIR}/src/eds
+    BINARY_DIR ${host_dir}
+    CMAKE_ARGS -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPILER=${CO_HOST_C_COMPILER}
+    BUILD_BYPRODUCTS ${host_dir}/canopen-eds
+    INSTALL_COMMAND "")
+  set(CO_EDS_TOOL ${host_dir}/canopen-eds)
+  set(CO_EDS_TOOL_TARGET co_eds_host)
+endif()

@@ -1,0 +1,729 @@
+/**
+ * @file eds_objects.c
+ * @brief The model of an EDS/DCF from its sections: device info, object lists, objects and their sub-indices
+ * (explicit or CompactSubObj), values, DCF commissioning. Each defect is repaired and reported.
+ */
+#include "eds_internal.h"
+
+#include <ctype.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct builder {
+    eds_file_t *f;
+    const ini_t *ini;
+    size_t cap_entries, cap_objects;
+    bool oom;
+    uint64_t identity[3];     /* VendorNumber, ProductNumber, RevisionNumber; UINT64_MAX: not in [DeviceInfo] */
+    uint32_t *listed_line;    /* line of the object list key that names each index */
+} builder_t;
+
+static eds_entry_t *push_entry(builder_t *b)
+{
+    eds_file_t *f = b->f;
+    if (f->n_entries == b->cap_entries) {
+        size_t cap = b->cap_entries == 0U ? 256U : b->cap_entries * 2U;
+        eds_entry_t *e = realloc(f->entries, cap * sizeof *e);
+        if (e == NULL) {
+            b->oom = true;
+            return NULL;
+        }
+        f->entries = e;
+        b->cap_entries = cap;
+    }
+    eds_entry_t *e = &f->entries[f->n_entries++];
+    memset(e, 0, sizeof *e);
+    return e;
+}
+
+static eds_object_t *push_object(builder_t *b)
+{
+    eds_file_t *f = b->f;
+    if (f->n_objects == b->cap_objects) {
+        size_t cap = b->cap_objects == 0U ? 64U : b->cap_objects * 2U;
+        eds_object_t *o = realloc(f->objects, cap * sizeof *o);
+        if (o == NULL) {
+            b->oom = true;
+            return NULL;
+        }
+        f->objects = o;
+        b->cap_objects = cap;
+    }
+    eds_object_t *o = &f->objects[f->n_objects++];
+    memset(o, 0, sizeof *o);
+    return o;
+}
+
+static const char *text_of(const builder_t *b, const ini_section_t *s, const char *key)
+{
+    const ini_key_t *k = ini_get(b->ini, s, key);
+    return k != NULL ? k->value : NULL;
+}
+
+/* An unsigned number key; absent -> dflt silently, malformed -> dflt with a warning. */
+static uint64_t number_of(builder_t *b, const ini_section_t *s, const char *key, uint64_t max, uint64_t dflt)
+{
+    const ini_key_t *k = ini_get(b->ini, s, key);
+    if (k == NULL) {
+        return dflt;
+    }
+    uint64_t v;
+    const char *text = ini_number_text(b->f, k);
+    if (*text == '\0') {
+        return dflt;
+    }
+    if (!eds_parse_unsigned(text, max, &v)) {
+        eds_warn(b->f, k->line, "[%s] %s: '%s' is not a number from 0 to %llu; %llu used", s->name, k->key, text,
+                 (unsigned long long)max, (unsigned long long)dflt);
+        return dflt;
+    }
+    return v;
+}
+
+/* ---- [DeviceInfo], [DummyUsage], [DeviceComissioning], and the keys kept for the writer ----------------------- */
+
+static const uint16_t CIA305_KBIT[] = {1000, 800, 500, 250, 125, 0, 50, 20, 10};
+
+static void read_device_info(builder_t *b)
+{
+    eds_file_t *f = b->f;
+    const ini_section_t *s = ini_find_named(b->ini, "DeviceInfo");
+    if (s == NULL) {
+        eds_warn(f, 0U, "no [DeviceInfo]; the identity comes from object 0x1018 where it has one");
+    } else {
+        f->device_info_line = s->line;
+    }
+    static const char *const required[] = {"VendorName", "VendorNumber", "ProductName", "ProductNumber",
+                                           "RevisionNumber", "NrOfRXPDO", "NrOfTXPDO"};
+    for (size_t i = 0; s != NULL && i < sizeof required / sizeof required[0]; i++) {
+        if (ini_get(b->ini, s, required[i]) == NULL) {
+            eds_warn(f, s->line, "[DeviceInfo] has no %s; %s", required[i],
+                     strncmp(required[i], "Nr", 2) == 0 ? "counted from the PDO objects" :
+                     (strstr(required[i], "Name") != NULL ? "left empty" : "taken from object 0x1018 (or 0)"));
+        }
+    }
+    const char *v = text_of(b, s, "VendorName");
+    f->vendor_name = v != NULL ? v : "";
+    v = text_of(b, s, "ProductName");
+    f->product_name = v != NULL ? v : "";
+    /* UINT64_MAX: not given; filled from 0x1018 once the objects are read (identity_from_1018). */
+    b->identity[0] = number_of(b, s, "VendorNumber", UINT32_MAX, UINT64_MAX);
+    b->identity[1] = number_of(b, s, "ProductNumber", UINT32_MAX, UINT64_MAX);
+    b->identity[2] = number_of(b, s, "RevisionNumber", UINT32_MAX, UINT64_MAX);
+    f->nr_of_rxpdo = (uint16_t)number_of(b, s, "NrOfRXPDO", 512U, 0xFFFFU);
+    f->nr_of_txpdo = (uint16_t)number_of(b, s, "NrOfTXPDO", 512U, 0xFFFFU);
+    f->granularity = (uint8_t)number_of(b, s, "Granularity", 64U, 8U);
+    f->lss_supported = number_of(b, s, "LSS_Supported", 1U, 0U) != 0U;
+    for (unsigned i = 0; i < sizeof CIA305_KBIT / sizeof CIA305_KBIT[0]; i++) {
+        char key[24];
+        snprintf(key, sizeof key, "BaudRate_%u", (unsigned)CIA305_KBIT[i]);
+        if (CIA305_KBIT[i] != 0U && number_of(b, s, key, 1U, 0U) != 0U) {
+            f->baud_rates = (uint16_t)(f->baud_rates | (1U << i));
+        }
+    }
+    const ini_section_t *d = ini_find_named(b->ini, "DummyUsage");
+    for (unsigned t = 1U; t <= 7U; t++) {
+        char key[16];
+        snprintf(key, sizeof key, "Dummy%04X", t);
+        if (number_of(b, d, key, 1U, 0U) != 0U) {
+            f->dummy_usage = (uint8_t)(f->dummy_usage | (1U << t));
+        }
+    }
+    const ini_section_t *c = ini_find_named(b->ini, "DeviceComissioning");
+    if (c == NULL) {
+        c = ini_find_named(b->ini, "DeviceCommissioning");
+        if (c != NULL) {
+            eds_warn(f, c->line, "[DeviceCommissioning]: CiA 306 spells it [DeviceComissioning]; read as such");
+        }
+    }
+    if (c != NULL) {
+        f->is_dcf = true;
+        f->comm.present = true;
+        uint64_t id = number_of(b, c, "NodeID", 255U, 0U);
+        if (id > 127U && id != 255U) {
+            eds_warn(f, c->line, "[DeviceComissioning] NodeID %llu is not 1..127; ignored", (unsigned long long)id);
+            id = 0U;
+        }
+        f->comm.node_id = (uint8_t)(id == 255U ? 0U : id);
+        f->comm.baudrate_kbit = (uint16_t)number_of(b, c, "Baudrate", 1000U, 0U);
+        f->comm.node_name = text_of(b, c, "NodeName");
+        f->comm.net_number = (uint32_t)number_of(b, c, "NetNumber", UINT32_MAX, 0U);
+        f->comm.network_name = text_of(b, c, "NetworkName");
+        f->comm.canopen_manager = number_of(b, c, "CANopenManager", 1U, 0U) != 0U;
+        f->comm.lss_serial_number = (uint32_t)number_of(b, c, "LSS_SerialNumber", UINT32_MAX, 0U);
+    }
+    /* [FileInfo], [DeviceInfo] and [Comments] as written, for the writer. */
+    static const char *const kept[] = {"FileInfo", "DeviceInfo", "Comments"};
+    size_t n = 0U;
+    for (uint32_t i = 0; i < b->ini->n_keys; i++) {
+        const ini_section_t *sec = &b->ini->sections[b->ini->file_order[i].section];
+        for (size_t k = 0; k < 3U; k++) {
+            if (sec->kind == INI_OTHER && sec == ini_find_named(b->ini, kept[k])) {
+                n++;
+            }
+        }
+    }
+    f->info = eds_alloc(f, (n + 1U) * sizeof *f->info);
+    for (uint32_t i = 0; f->info != NULL && i < b->ini->n_keys; i++) {
+        const ini_key_t *k = &b->ini->file_order[i];
+        const ini_section_t *sec = &b->ini->sections[k->section];
+        for (size_t j = 0; j < 3U; j++) {
+            if (sec->kind == INI_OTHER && sec == ini_find_named(b->ini, kept[j])) {
+                f->info[f->n_info].section = kept[j];
+                f->info[f->n_info].key = k->key;
+                f->info[f->n_info].value = k->value;
+                f->n_info++;
+            }
+        }
+    }
+}
+
+/* ---- Object lists ------------------------------------------------------------------------------------------------- */
+
+static int u16_cmp(const void *a, const void *b)
+{
+    return (int)*(const uint16_t *)a - (int)*(const uint16_t *)b;
+}
+
+typedef struct list_item {
+    uint32_t pos;
+    const ini_key_t *key;
+} list_item_t;
+
+static int item_cmp(const void *a, const void *b)
+{
+    uint32_t x = ((const list_item_t *)a)->pos, y = ((const list_item_t *)b)->pos;
+    return x < y ? -1 : (x > y ? 1 : 0);
+}
+
+/* The indices the object lists name, sorted and unique; sections no list names are added (with a warning). */
+static uint16_t *object_indices(builder_t *b, uint32_t *count)
+{
+    eds_file_t *f = b->f;
+    static const char *const lists[] = {"MandatoryObjects", "OptionalObjects", "ManufacturerObjects"};
+    uint8_t *listed = eds_alloc(f, 65536U);
+    uint16_t *out = eds_alloc(f, 65536U * sizeof(uint16_t));
+    b->listed_line = eds_alloc(f, 65536U * sizeof(uint32_t));
+    uint32_t n = 0U;
+    if (listed == NULL || out == NULL || b->listed_line == NULL) {
+        b->oom = true;
+        return NULL;
+    }
+    bool any_list = false;
+    for (size_t l = 0; l < 3U; l++) {
+        const ini_section_t *s = ini_find_named(b->ini, lists[l]);
+        if (s == NULL) {
+            continue;
+        }
+        any_list = true;
+        uint64_t supported = number_of(b, s, "SupportedObjects", 65535U, 0U);
+        /* The keys are sorted as text ("10" before "2"): take them in the order of their numbers. */
+        list_item_t *items = eds_alloc(f, ((size_t)s->count + 1U) * sizeof *items);
+        if (items == NULL) {
+            b->oom = true;
+            return NULL;
+        }
+        uint32_t found = 0U;
+        for (uint32_t i = s->first; i < s->first + s->count; i++) {
+            const ini_key_t *k = &b->ini->keys[i];
+            uint64_t pos;
+            if (!eds_parse_unsigned(k->key, 65535U, &pos)) {
+                if (k != ini_get(b->ini, s, "SupportedObjects")) {
+                    eds_warn(f, k->line, "[%s] %s: not a position number; ignored", lists[l], k->key);
+                }
+                continue;
+            }
+            items[found].pos = (uint32_t)pos;
+            items[found].key = k;
+            found++;
+        }
+        qsort(items, found, sizeof *items, item_cmp);
+        long previous = -1;
+        bool warned_order = false;
+        for (uint32_t i = 0; i < found; i++) {
+            const ini_key_t *k = items[i].key;
+            uint64_t index;
+            if (items[i].pos == 0U || items[i].pos > supported) {
+                eds_warn(f, k->line, "[%s] %s: position outside 1..SupportedObjects (%llu); the object is read anyway",
+                         lists[l], k->key, (unsigned long long)supported);
+            }
+            const char *text = ini_number_text(f, k);
+            if (!eds_parse_unsigned(text, 0xFFFFU, &index)) {
+                eds_warn(f, k->line, "[%s] %s: '%s' is not an object index; ignored", lists[l], k->key, text);
+                continue;
+            }
+            if (listed[index] != 0U) {
+                eds_warn(f, k->line, "[%s] %s: object 0x%04llX is listed twice; read once", lists[l], k->key,
+                         (unsigned long long)index);
+                continue;
+            }
+            if ((long)index < previous && !warned_order) {
+                eds_warn(f, k->line, "[%s] %s: object 0x%04llX out of order (after 0x%04lX); the objects are sorted",
+                         lists[l], k->key, (unsigned long long)index, previous);
+                warned_order = true;
+            }
+            previous = (long)index;
+            listed[index] = 1U;
+            b->listed_line[index] = k->line;
+            out[n++] = (uint16_t)index;
+        }
+        if (found != supported) {
+            eds_warn(f, s->line, "[%s] SupportedObjects=%llu but %lu entries are listed; the listed ones are read",
+                     lists[l], (unsigned long long)supported, (unsigned long)found);
+        }
+    }
+    if (!any_list) {
+        eds_warn(f, 0U, "no object lists ([MandatoryObjects], [OptionalObjects], [ManufacturerObjects]); every "
+                        "object section is read");
+    }
+    for (uint32_t i = 0; i < b->ini->n_sections; i++) {
+        const ini_section_t *s = &b->ini->sections[i];
+        if (s->kind == INI_OBJECT && listed[s->index] == 0U) {
+            if (any_list) {
+                eds_warn(f, s->line, "[%s] is in no object list; read as an object of the device", s->name);
+            }
+            listed[s->index] = 1U;
+            out[n++] = s->index;
+        }
+    }
+    qsort(out, n, sizeof *out, u16_cmp);
+    *count = n;
+    return out;
+}
+
+/* ---- Entries ------------------------------------------------------------------------------------------------------- */
+
+static bool read_access(builder_t *b, const ini_section_t *s, const ini_section_t *fallback, eds_access_t *out)
+{
+    const ini_key_t *k = ini_get(b->ini, s, "AccessType");
+    if (k == NULL && fallback != NULL) {
+        k = ini_get(b->ini, fallback, "AccessType");
+    }
+    if (k == NULL) {
+        eds_warn(b->f, s->line, "[%s] has no AccessType; ro used", s->name);
+        *out = EDS_RO;
+        return true;
+    }
+    char a[8];
+    size_t n = strlen(k->value);
+    for (size_t i = 0; i < n && i < sizeof a - 1U; i++) {
+        a[i] = (char)tolower((unsigned char)k->value[i]);
+    }
+    a[n < sizeof a - 1U ? n : sizeof a - 1U] = '\0';
+    static const char *const names[] = {"ro", "wo", "rw", "rwr", "rww", "const"};
+    for (unsigned i = 0; i < 6U && n < sizeof a; i++) {
+        if (strcmp(a, names[i]) == 0) {
+            *out = (eds_access_t)i;
+            return true;
+        }
+    }
+    if (strcmp(a, "r") == 0 || strcmp(a, "w") == 0) {
+        *out = a[0] == 'r' ? EDS_RO : EDS_WO;
+        eds_warn(b->f, k->line, "[%s] AccessType=%s is not CiA 306; read as %s", s->name, k->value, eds_access_name(*out));
+        return true;
+    }
+    eds_warn(b->f, k->line, "[%s] AccessType=%s is not ro, wo, rw, rwr, rww or const; ro used", s->name, k->value);
+    *out = EDS_RO;
+    return true;
+}
+
+static void read_value(builder_t *b, const ini_section_t *s, const ini_key_t *k, const char *text, uint8_t type,
+                       eds_value_t *out, bool allow_nodeid)
+{
+    char why[160];
+    eds_parse_t r = eds_parse_value(b->f, type, text, out, why, sizeof why);
+    const char *name = eds_type_name(type);
+    char used[96];
+    if (r == EDS_PARSE_BAD) {
+        eds_parse_value(b->f, type, "", out, why + strlen(why), 0U);
+        eds_warn(b->f, k->line, "[%s] %s: '%s' %s; %s used", s->name, k->key, text, why,
+                 eds_type_is_bytes(type) ? "an empty value" : "0");
+        return;
+    }
+    if (r == EDS_PARSE_RANGE) {
+        eds_format_value(used, sizeof used, type, out);
+        eds_warn(b->f, k->line, "[%s] %s: '%s' %s; %s used", s->name, k->key, text, why, used);
+        return;
+    }
+    if (why[0] != '\0') {
+        eds_warn(b->f, k->line, "[%s] %s: '%s' %s", s->name, k->key, text, why);
+    }
+    if (out->nodeid && !allow_nodeid) {
+        out->nodeid = false;
+        eds_warn(b->f, k->line, "[%s] %s: a limit cannot depend on the node-ID; '%s' read without $NODEID", s->name,
+                 k->key, text);
+    }
+    if (type == 0x09) {
+        for (size_t i = 0; i < out->len; i++) {
+            if (out->bytes[i] >= 0x80U) {
+                eds_warn(b->f, k->line, "[%s] %s: VISIBLE_STRING with non-ASCII text (ISO 646); kept as UTF-8 bytes",
+                         s->name, k->key);
+                break;
+            }
+        }
+    }
+    (void)name;
+}
+
+/* The value text of a key: strings verbatim, numbers without an inline comment. */
+static const char *value_text(builder_t *b, const ini_key_t *k, uint8_t type)
+{
+    return eds_type_is_bytes(type) ? k->value : ini_number_text(b->f, k);
+}
+
+/*
+ * Reads an entry from section s; keys it lacks come from parent (CompactSubObj objects). name overrides
+ * ParameterName (compact sub-objects). value_key, if not NULL, is the [xxxxValue] key of a compact sub-object.
+ * Returns false when the entry cannot be emulated (unknown data type): the caller leaves it out.
+ */
+static bool read_entry(builder_t *b, const ini_section_t *s, const ini_section_t *parent, uint16_t index, uint8_t sub,
+                       const char *name, const ini_key_t *value_key, uint8_t default_type, eds_entry_t *e)
+{
+    eds_file_t *f = b->f;
+    memset(e, 0, sizeof *e);
+    e->index = index;
+    e->sub = sub;
+    e->line = s->line;
+    const ini_key_t *k;
+    e->name = name != NULL ? name : text_of(b, s, "ParameterName");
+    if (e->name == NULL) {
+        char buf[32];
+        snprintf(buf, sizeof buf, sub == 0U ? "Object %04X" : "Object %04X sub %u", (unsigned)index, (unsigned)sub);
+        eds_warn(f, s->line, "[%s] has no ParameterName; '%s' used", s->name, buf);
+        e->name = eds_strndup(f, buf, strlen(buf));
+    }
+    e->denotation = text_of(b, s, "Denotation");
+    k = ini_get(b->ini, s, "DataType");
+    if (k == NULL && parent != NULL) {
+        k = ini_get(b->ini, parent, "DataType");
+    }
+    uint64_t type = default_type;
+    if (k == NULL && default_type == 0U) {
+        eds_warn(f, s->line, "[%s] has no DataType; the entry is left out", s->name);
+        return false;
+    }
+    const char *tt = k != NULL ? ini_number_text(f, k) : "0x000F";
+    if (k != NULL && (!eds_parse_unsigned(tt, 0xFFFFU, &type) || type > 0xFFU || eds_type_name((uint8_t)type) == NULL)) {
+        eds_warn(f, k->line, "[%s] DataType=%s is not a CiA 301 basic data type this reader knows; the entry is "
+                             "left out", s->name, tt);
+        return false;
+    }
+    e->type = (uint8_t)type;
+    read_access(b, s, parent, &e->access);
+    k = ini_get(b->ini, s, "PDOMapping");
+    if (k == NULL && parent != NULL) {
+        k = ini_get(b->ini, parent, "PDOMapping");
+    }
+    if (k != NULL) {
+        const char *t = ini_number_text(f, k);
+        if (strcmp(t, "1") == 0 || strcmp(t, "0") == 0 || *t == '\0') {
+            e->pdo_mapping = strcmp(t, "1") == 0;
+        } else {
+            e->pdo_mapping = t[0] == 't' || t[0] == 'T';
+            eds_warn(f, k->line, "[%s] PDOMapping=%s is not 0 or 1; read as %d", s->name, t, e->pdo_mapping ? 1 : 0);
+        }
+    }
+    static const char *const limit_keys[] = {"LowLimit", "HighLimit"};
+    for (int i = 0; i < 2; i++) {
+        k = ini_get(b->ini, s, limit_keys[i]);
+        if (k == NULL && parent != NULL) {
+            k = ini_get(b->ini, parent, limit_keys[i]);
+        }
+        if (k == NULL || k->value[0] == '\0') {
+            continue;
+        }
+        if (eds_type_is_bytes(e->type)) {
+            eds_warn(f, k->line, "[%s] %s on a %s; ignored", s->name, k->key, eds_type_name(e->type));
+            continue;
+        }
+        read_value(b, s, k, value_text(b, k, e->type), e->type, i == 0 ? &e->low : &e->high, false);
+    }
+    if (e->low.kind != EDS_V_NONE && e->high.kind != EDS_V_NONE && eds_value_cmp(&e->low, &e->high) > 0) {
+        char lo[64], hi[64];
+        eds_format_value(lo, sizeof lo, e->type, &e->low);
+        eds_format_value(hi, sizeof hi, e->type, &e->high);
+        eds_warn(f, s->line, "[%s] LowLimit %s > HighLimit %s; both ignored", s->name, lo, hi);
+        e->low.kind = EDS_V_NONE;
+        e->high.kind = EDS_V_NONE;
+    }
+    k = ini_get(b->ini, s, "DefaultValue");
+    if (k == NULL && parent != NULL) {
+        k = ini_get(b->ini, parent, "DefaultValue");
+    }
+    if (k != NULL) {
+        read_value(b, s, k, value_text(b, k, e->type), e->type, &e->def, true);
+    } else {
+        eds_parse_value(f, e->type, "", &e->def, (char[8]){0}, 8U);
+    }
+    /* A default outside the limits would be refused when stored and loaded again: it is moved into them. */
+    bool empty = k == NULL || k->value[0] == '\0';
+    for (int i = 0; i < 2 && !eds_type_is_bytes(e->type) && !e->def.nodeid; i++) {
+        const eds_value_t *lim = i == 0 ? &e->low : &e->high;
+        if (lim->kind == EDS_V_NONE || (i == 0 ? eds_value_cmp(&e->def, lim) >= 0 : eds_value_cmp(&e->def, lim) <= 0)) {
+            continue;
+        }
+        char was[64], now[64];
+        eds_format_value(was, sizeof was, e->type, &e->def);
+        e->def = *lim;
+        eds_format_value(now, sizeof now, e->type, &e->def);
+        eds_warn(f, k != NULL ? k->line : s->line, "[%s] DefaultValue %s%s is outside LowLimit..HighLimit; %s (the %s) used",
+                 s->name, empty ? "(none, so 0) " : "", empty ? "" : was, now, i == 0 ? "LowLimit" : "HighLimit");
+    }
+    k = value_key != NULL ? value_key : ini_get(b->ini, s, "ParameterValue");
+    if (k != NULL) {
+        f->is_dcf = true;
+        read_value(b, s, k, value_text(b, k, e->type), e->type, &e->param, true);
+    }
+    return true;
+}
+
+/* Sub-index 0 of an ARRAY/RECORD counts active entries rather than giving the highest sub-index. */
+static bool counts_entries(uint16_t index)
+{
+    return index == 0x1003U || (index >= 0x1600U && index <= 0x17FFU) || (index >= 0x1A00U && index <= 0x1BFFU) ||
+           index == 0x1F81U || index == 0x1016U;
+}
+
+static void read_compact(builder_t *b, const ini_section_t *s, eds_object_t *o, uint64_t n)
+{
+    eds_file_t *f = b->f;
+    uint32_t first = f->n_entries;
+    eds_entry_t *e = push_entry(b);
+    if (e == NULL) {
+        return;
+    }
+    e->index = o->index;
+    e->line = s->line;
+    e->name = "NrOfObjects";
+    e->type = 0x05;
+    e->access = EDS_RO;
+    e->def.kind = EDS_V_UINT;
+    e->def.u = n;
+    const ini_section_t *names = ini_find(b->ini, INI_NAME, o->index, 0U);
+    const ini_section_t *values = ini_find(b->ini, INI_VALUE, o->index, 0U);
+    for (unsigned sub = 1U; sub <= n; sub++) {
+        char key[8], formed[300];
+        snprintf(key, sizeof key, "%u", sub);
+        const char *name = text_of(b, names, key);
+        if (name == NULL) {
+            snprintf(formed, sizeof formed, "%s%u", o->name, sub);
+            name = eds_strndup(f, formed, strlen(formed));
+        }
+        eds_entry_t tmp;
+        if (!read_entry(b, s, NULL, o->index, (uint8_t)sub, name, ini_get(b->ini, values, key), 0U, &tmp)) {
+            f->n_entries = first; /* the object goes: sub-index 0 too */
+            return;
+        }
+        e = push_entry(b);
+        if (e == NULL) {
+            return;
+        }
+        *e = tmp;
+    }
+}
+
+static void read_object(builder_t *b, uint16_t index)
+{
+    eds_file_t *f = b->f;
+    const ini_section_t *s = ini_find(b->ini, INI_OBJECT, index, 0U);
+    if (s == NULL) {
+        eds_warn(f, b->listed_line[index], "object 0x%04X is listed but has no section [%04X]; left out", (unsigned)index,
+                 (unsigned)index);
+        return;
+    }
+    uint64_t otype = number_of(b, s, "ObjectType", 0xFFU, 0x7U);
+    if (otype == 0x0U) {
+        eds_warn(f, s->line, "[%s] ObjectType=0 (NULL): nothing to emulate; left out", s->name);
+        return;
+    }
+    if (otype != 0x2U && (otype < 0x5U || otype > 0x9U)) {
+        eds_warn(f, s->line, "[%s] ObjectType=0x%llX is not DOMAIN, DEFTYPE, DEFSTRUCT, VAR, ARRAY or RECORD; left out",
+                 s->name, (unsigned long long)otype);
+        return;
+    }
+    uint32_t before = f->n_entries;
+    eds_object_t *o = push_object(b);
+    if (o == NULL) {
+        return;
+    }
+    o->index = index;
+    o->object_type = (uint8_t)otype;
+    o->line = s->line;
+    o->name = text_of(b, s, "ParameterName");
+    if (o->name == NULL) {
+        o->name = "";
+    }
+    o->denotation = text_of(b, s, "Denotation");
+    const ini_section_t *links = ini_find(b->ini, INI_LINKS, index, 0U);
+    if (links != NULL) {
+        uint64_t nl = number_of(b, links, "ObjectLinks", 0xFFFFU, 0U);
+        o->links = eds_alloc(f, (size_t)(nl + 1U) * sizeof(uint16_t));
+        for (unsigned i = 1U; o->links != NULL && i <= nl; i++) {
+            char key[8];
+            snprintf(key, sizeof key, "%u", i);
+            uint64_t v = number_of(b, links, key, 0xFFFFU, 0x10000U);
+            if (v <= 0xFFFFU) {
+                o->links[o->n_links++] = (uint16_t)v;
+            }
+        }
+    }
+    /* DOMAIN and DEFTYPE objects are one value like a VAR; DEFSTRUCT has sub-indices like a RECORD. */
+    bool var = otype == 0x7U || otype == 0x2U || otype == 0x5U;
+    uint64_t compact = number_of(b, s, "CompactSubObj", 0xFEU, 0U);
+    o->compact = (uint8_t)compact;
+    if (var) {
+        if (compact != 0U || ini_get(b->ini, s, "SubNumber") != NULL) {
+            eds_warn(f, s->line, "[%s] a VAR has no sub-indices; SubNumber/CompactSubObj ignored", s->name);
+        }
+        eds_entry_t tmp;
+        /* a DOMAIN object may omit its data type */
+        if (read_entry(b, s, NULL, index, 0U, o->name, NULL, otype == 0x2U ? 0x0FU : 0U, &tmp)) {
+            eds_entry_t *e = push_entry(b);
+            if (e != NULL) {
+                *e = tmp;
+            }
+        }
+    } else if (compact != 0U) {
+        read_compact(b, s, o, compact);
+    } else {
+        uint8_t highest = 0U;
+        for (unsigned sub = 0U; sub <= 0xFFU; sub++) {
+            const ini_section_t *ss = ini_find(b->ini, INI_SUB, index, (uint8_t)sub);
+            if (ss == NULL) {
+                continue;
+            }
+            eds_entry_t tmp;
+            if (read_entry(b, ss, NULL, index, (uint8_t)sub, NULL, NULL, 0U, &tmp)) {
+                eds_entry_t *e = push_entry(b);
+                if (e == NULL) {
+                    return;
+                }
+                *e = tmp;
+                highest = (uint8_t)sub;
+            }
+        }
+        uint32_t got = f->n_entries - before;
+        uint64_t subnumber = number_of(b, s, "SubNumber", 0xFFFFU, got);
+        if (got == 0U) {
+            eds_warn(f, s->line, "[%s] an %s without sub-index sections; left out", s->name,
+                     otype == 0x8U ? "ARRAY" : "RECORD");
+        } else if (subnumber != got) {
+            eds_warn(f, s->line, "[%s] SubNumber=%llu but %lu sub-index sections are usable; those are read", s->name,
+                     (unsigned long long)subnumber, (unsigned long)got);
+        }
+        eds_entry_t *sub0 = got > 0U ? &f->entries[before] : NULL;
+        if (sub0 != NULL && sub0->sub != 0U) {
+            eds_warn(f, s->line, "[%s] has no sub-index 0; added (UNSIGNED8, ro, %u)", s->name, (unsigned)highest);
+            eds_entry_t *e = push_entry(b);
+            if (e == NULL) {
+                return;
+            }
+            memset(e, 0, sizeof *e);
+            e->index = index;
+            e->line = s->line;
+            e->name = "Highest sub-index supported";
+            e->type = 0x05;
+            e->access = EDS_RO;
+            e->def.kind = EDS_V_UINT;
+            e->def.u = highest;
+            sub0 = NULL;
+        }
+        if (sub0 != NULL && sub0->type != 0x05U) {
+            eds_warn(f, sub0->line, "[%ssub0] sub-index 0 of an ARRAY/RECORD is UNSIGNED8, not %s; read as UNSIGNED8",
+                     s->name, eds_type_name(sub0->type));
+            uint64_t v = sub0->def.kind == EDS_V_UINT ? sub0->def.u : (sub0->def.kind == EDS_V_INT && sub0->def.i > 0 ? (uint64_t)sub0->def.i : 0U);
+            memset(&sub0->def, 0, sizeof sub0->def);
+            sub0->def.kind = EDS_V_UINT;
+            sub0->def.u = v > 0xFFU ? 0xFFU : v;
+            sub0->type = 0x05;
+            sub0->low.kind = sub0->high.kind = sub0->param.kind = EDS_V_NONE;
+        }
+        if (sub0 != NULL && sub0->def.u < highest && !counts_entries(index)) {
+            eds_warn(f, sub0->line, "[%ssub0] DefaultValue %llu is below the highest sub-index %u; kept (the "
+                                    "sub-indices above it still answer)", s->name, (unsigned long long)sub0->def.u,
+                     (unsigned)highest);
+        }
+    }
+    if (f->n_entries == before) {
+        f->n_objects--;
+    }
+}
+
+/* ---- The whole model ----------------------------------------------------------------------------------------------- */
+
+static int entry_cmp(const void *pa, const void *pb)
+{
+    const eds_entry_t *a = pa, *b = pb;
+    if (a->index != b->index) {
+        return a->index < b->index ? -1 : 1;
+    }
+    return (int)a->sub - (int)b->sub;
+}
+
+static void orphan_subs(builder_t *b)
+{
+    for (uint32_t i = 0; i < b->ini->n_sections; i++) {
+        const ini_section_t *s = &b->ini->sections[i];
+        if ((s->kind == INI_SUB || s->kind == INI_NAME || s->kind == INI_VALUE) &&
+            eds_find_object(b->f, s->index) == NULL) {
+            eds_warn(b->f, s->line, "[%s] belongs to no object of the device; ignored", s->name);
+        }
+    }
+}
+
+/* The identity numbers [DeviceInfo] lacks, from 0x1018 sub 1..3 (a device's own statement of them). */
+static void identity_from_1018(builder_t *b)
+{
+    uint32_t *fields[3] = {&b->f->vendor_number, &b->f->product_number, &b->f->revision_number};
+    for (uint8_t i = 0; i < 3U; i++) {
+        const eds_entry_t *e = eds_find(b->f, 0x1018U, (uint8_t)(i + 1U));
+        if (b->identity[i] != UINT64_MAX) {
+            *fields[i] = (uint32_t)b->identity[i];
+        } else if (e != NULL && e->def.kind == EDS_V_UINT) {
+            *fields[i] = (uint32_t)e->def.u;
+        }
+    }
+}
+
+void eds_read_model(eds_file_t *f, const ini_t *ini)
+{
+    builder_t b;
+    memset(&b, 0, sizeof b);
+    b.f = f;
+    b.ini = ini;
+    read_device_info(&b);
+    uint32_t n = 0U;
+    uint16_t *indices = object_indices(&b, &n);
+    for (uint32_t i = 0; indices != NULL && i < n && !b.oom; i++) {
+        read_object(&b, indices[i]);
+    }
+    if (b.oom) {
+        eds_error(f, 0U, "out of memory");
+        return;
+    }
+    qsort(f->entries, f->n_entries, sizeof *f->entries, entry_cmp);
+    uint32_t e = 0U;
+    for (uint32_t i = 0; i < f->n_objects; i++) { /* objects were read in index order */
+        eds_object_t *o = &f->objects[i];
+        while (e < f->n_entries && f->entries[e].index < o->index) {
+            e++;
+        }
+        o->first = e;
+        while (e < f->n_entries && f->entries[e].index == o->index) {
+            e++;
+        }
+        o->count = (uint16_t)(e - o->first);
+    }
+    orphan_subs(&b);
+    identity_from_1018(&b);
+    if (f->n_objects == 0U) {
+        eds_error(f, 0U, "no objects: not a device description");
+        return;
+    }
+    static const uint16_t mandatory[] = {0x1000, 0x1001, 0x1018};
+    for (size_t i = 0; i < 3U; i++) {
+        if (eds_find_object(f, mandatory[i]) == NULL) {
+            eds_error(f, 0U, "object 0x%04X is missing; every CANopen device has it (CiA 301)", (unsigned)mandatory[i]);
+        }
+    }
+}

@@ -1,0 +1,185 @@
+/**
+ * @file eds_pdo.c
+ * @brief PDO checks of the EDS reader: communication and mapping objects pair up, every mapping entry names an
+ * existing mappable object of the right size and direction (dummy entries only where [DummyUsage] allows),
+ * at most 64 bits. A PDO whose mapping is wrong is disabled with an empty mapping, so the device still loads.
+ */
+#include "eds_internal.h"
+
+#include <string.h>
+
+/* The value a node starts with: a DCF's ParameterValue, else the default. */
+static eds_value_t *effective(eds_entry_t *e)
+{
+    return e->param.kind != EDS_V_NONE ? &e->param : &e->def;
+}
+
+/* Checks one mapping entry value; returns its bits, or -1 with a reason. */
+static long entry_bits(const eds_file_t *f, uint64_t v, bool receive, char *why, size_t cap)
+{
+    uint16_t index = (uint16_t)(v >> 16);
+    uint8_t sub = (uint8_t)(v >> 8), bits = (uint8_t)v;
+    if (index >= 0x0001U && index <= 0x0007U && sub == 0U) {
+        if (!receive) {
+            snprintf(why, cap, "maps dummy 0x%04X into a TPDO (dummy entries are for RPDOs)", (unsigned)index);
+            return -1;
+        }
+        if ((f->dummy_usage & (1U << index)) == 0U) {
+            snprintf(why, cap, "maps dummy 0x%04X while [DummyUsage] Dummy%04X is not 1", (unsigned)index, (unsigned)index);
+            return -1;
+        }
+        return bits;
+    }
+    const eds_entry_t *t = eds_find(f, index, sub);
+    if (t == NULL) {
+        snprintf(why, cap, "maps 0x%04X:%02X, which does not exist", (unsigned)index, (unsigned)sub);
+        return -1;
+    }
+    if (!t->pdo_mapping) {
+        snprintf(why, cap, "maps 0x%04X:%02X, which has PDOMapping=0", (unsigned)index, (unsigned)sub);
+        return -1;
+    }
+    bool ok = receive ? (t->access == EDS_WO || t->access == EDS_RW || t->access == EDS_RWW)
+                      : (t->access != EDS_WO && t->access != EDS_RWW);
+    if (!ok) {
+        snprintf(why, cap, "maps 0x%04X:%02X (AccessType=%s) into a %cPDO", (unsigned)index, (unsigned)sub,
+                 eds_access_name(t->access), receive ? 'R' : 'T');
+        return -1;
+    }
+    size_t size = eds_type_size(t->type);
+    if (size == 0U || bits != size * 8U) {
+        snprintf(why, cap, "maps %u bits of 0x%04X:%02X, a %u-bit object", (unsigned)bits, (unsigned)index,
+                 (unsigned)sub, (unsigned)(size * 8U));
+        return -1;
+    }
+    return bits;
+}
+
+/* Disables a PDO: COB-ID bit 31 set, mapping count 0 (the value a node starts with and the default). */
+static void disable(eds_file_t *f, uint16_t comm, uint16_t map)
+{
+    eds_entry_t *cob = eds_find_mut(f, comm, 1U);
+    eds_entry_t *count = eds_find_mut(f, map, 0U);
+    if (cob != NULL && cob->def.kind == EDS_V_UINT) {
+        cob->def.u |= 0x80000000U;
+        if (cob->param.kind == EDS_V_UINT) {
+            cob->param.u |= 0x80000000U;
+        }
+    }
+    if (count != NULL) {
+        count->def.u = 0U;
+        if (count->param.kind == EDS_V_UINT) {
+            count->param.u = 0U;
+        }
+    }
+}
+
+static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool receive)
+{
+    eds_entry_t *count = eds_find_mut(f, map, 0U);
+    if (count == NULL || count->type != 0x05U) {
+        return;
+    }
+    for (int pass = 0; pass < 2; pass++) { /* the default, then a DCF's ParameterValue */
+        eds_value_t *n = pass == 0 ? &count->def : &count->param;
+        if (n->kind != EDS_V_UINT) {
+            continue;
+        }
+        const char *key = pass == 0 ? "DefaultValue" : "ParameterValue";
+        if (n->u > 0x40U) {
+            eds_warn(f, count->line, "[%04Xsub0] %s %llu: a mapping has at most 64 entries; the PDO is disabled",
+                     (unsigned)map, key, (unsigned long long)n->u);
+            disable(f, comm, map);
+            return;
+        }
+        unsigned bits = 0U;
+        for (unsigned sub = 1U; sub <= n->u; sub++) {
+            eds_entry_t *e = eds_find_mut(f, map, (uint8_t)sub);
+            char why[128];
+            if (e == NULL) {
+                eds_warn(f, count->line, "[%04Xsub0] %s %llu but sub-index %u is missing; the PDO is disabled",
+                         (unsigned)map, key, (unsigned long long)n->u, sub);
+                disable(f, comm, map);
+                return;
+            }
+            eds_value_t *v = pass == 0 ? &e->def : effective(e);
+            if (v->kind != EDS_V_UINT || v->nodeid || e->type != 0x07U) {
+                eds_warn(f, e->line, "[%04Xsub%X] a mapping entry is a plain UNSIGNED32; the PDO is disabled",
+                         (unsigned)map, sub);
+                disable(f, comm, map);
+                return;
+            }
+            long b = entry_bits(f, v->u, receive, why, sizeof why);
+            if (b < 0) {
+                eds_warn(f, e->line, "[%04Xsub%X] %s 0x%08llX %s; the PDO is disabled", (unsigned)map, sub, key,
+                         (unsigned long long)v->u, why);
+                disable(f, comm, map);
+                return;
+            }
+            bits += (unsigned)b;
+        }
+        if (bits > 64U) {
+            eds_warn(f, count->line, "[%04Xsub0] the mapping (%s) has %u bits, more than 64; the PDO is disabled",
+                     (unsigned)map, key, bits);
+            disable(f, comm, map);
+            return;
+        }
+        eds_entry_t *cob = eds_find_mut(f, comm, 1U);
+        if (pass == 0 && cob != NULL && cob->def.kind == EDS_V_UINT && (cob->def.u & 0x80000000U) == 0U && n->u == 0U) {
+            eds_warn(f, cob->line, "[%04Xsub1] a valid PDO (bit 31 clear) with an empty mapping; it sends or takes "
+                                   "no data", (unsigned)comm);
+        }
+    }
+}
+
+/* Leaves an object out of the model (entries and object). */
+static void drop_object(eds_file_t *f, uint16_t index)
+{
+    const eds_object_t *o = eds_find_object(f, index);
+    if (o == NULL) {
+        return;
+    }
+    uint32_t first = o->first, count = o->count;
+    memmove(&f->entries[first], &f->entries[first + count], (f->n_entries - first - count) * sizeof *f->entries);
+    f->n_entries -= count;
+    size_t pos = (size_t)(o - f->objects);
+    memmove(&f->objects[pos], &f->objects[pos + 1U], (f->n_objects - pos - 1U) * sizeof *f->objects);
+    f->n_objects--;
+    for (uint32_t i = (uint32_t)pos; i < f->n_objects; i++) {
+        f->objects[i].first -= count;
+    }
+}
+
+void eds_check_pdos(eds_file_t *f)
+{
+    static const struct {
+        uint16_t comm, map;
+        bool receive;
+        const char *key;
+    } dirs[] = {{0x1400, 0x1600, true, "NrOfRXPDO"}, {0x1800, 0x1A00, false, "NrOfTXPDO"}};
+    for (size_t d = 0; d < 2U; d++) {
+        unsigned pdos = 0U;
+        for (unsigned n = 0U; n < 0x200U; n++) {
+            uint16_t comm = (uint16_t)(dirs[d].comm + n), map = (uint16_t)(dirs[d].map + n);
+            const eds_object_t *c = eds_find_object(f, comm), *m = eds_find_object(f, map);
+            if (c == NULL && m == NULL) {
+                continue;
+            }
+            if (c == NULL || m == NULL) {
+                const eds_object_t *lone = c != NULL ? c : m;
+                eds_warn(f, lone->line, "[%04X] has no %s object 0x%04X; left out", (unsigned)lone->index,
+                         c != NULL ? "mapping" : "communication", (unsigned)(c != NULL ? map : comm));
+                drop_object(f, lone->index);
+                continue;
+            }
+            pdos++;
+            check_mapping(f, comm, map, dirs[d].receive);
+        }
+        uint16_t *said = dirs[d].receive ? &f->nr_of_rxpdo : &f->nr_of_txpdo;
+        if (*said != 0xFFFFU && *said != pdos) {
+            eds_warn(f, f->device_info_line, "[DeviceInfo] %s=%u but the file has %u such PDOs; %u used", dirs[d].key, (unsigned)*said,
+                     pdos, pdos);
+        }
+        *said = (uint16_t)pdos;
+    }
+}

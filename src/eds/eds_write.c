@@ -1,0 +1,211 @@
+/**
+ * @file eds_write.c
+ * @brief Writes the model back as a CiA 306 EDS or DCF: every object with explicit sub-index sections, values in
+ * the forms the reader reads back to the same model (the round-trip tests hold it to that).
+ */
+#include "eds_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* Decodes raw little-endian bytes of an entry's type into a value (for a DCF's current values). */
+static bool decode_raw(eds_file_t *scratch, uint8_t type, const uint8_t *raw, size_t len, eds_value_t *out)
+{
+    memset(out, 0, sizeof *out);
+    if (eds_type_is_bytes(type)) {
+        if (type == 0x09U) { /* a string ends at its first NUL */
+            const void *nul = memchr(raw, 0, len);
+            if (nul != NULL) {
+                len = (size_t)((const uint8_t *)nul - raw);
+            }
+        }
+        out->kind = EDS_V_BYTES;
+        out->bytes = eds_alloc(scratch, len + 1U);
+        if (out->bytes == NULL) {
+            return false;
+        }
+        memcpy(out->bytes, raw, len);
+        out->len = len;
+        return true;
+    }
+    size_t size = eds_type_size(type);
+    if (size == 0U || len < size) {
+        return false;
+    }
+    eds_value_t lo;
+    eds_type_bound(type, false, &lo);
+    out->kind = lo.kind;
+    uint64_t u = 0U;
+    for (size_t i = size; i-- > 0U;) {
+        u = (u << 8) | raw[i];
+    }
+    if (lo.kind == EDS_V_REAL) {
+        if (size == 4U) {
+            uint32_t b = (uint32_t)u;
+            float fv;
+            memcpy(&fv, &b, sizeof fv);
+            out->r = (double)fv;
+        } else {
+            memcpy(&out->r, &u, sizeof out->r);
+        }
+    } else if (lo.kind == EDS_V_INT) {
+        if (size < 8U && (u >> (size * 8U - 1U)) != 0U) {
+            u |= ~0ULL << (size * 8U); /* sign-extend */
+        }
+        memcpy(&out->i, &u, sizeof out->i);
+    } else {
+        out->u = u;
+    }
+    return true;
+}
+
+static void put(FILE *out, const char *key, const char *value)
+{
+    fprintf(out, "%s=%s\n", key, value != NULL ? value : "");
+}
+
+static void write_entry(FILE *out, eds_file_t *scratch, const eds_entry_t *e, const char *section,
+                        uint8_t object_type, const eds_write_options_t *o)
+{
+    char text[1024];
+    fprintf(out, "\n[%s]\n", section);
+    put(out, "ParameterName", e->name);
+    if (o->dcf && e->denotation != NULL) {
+        put(out, "Denotation", e->denotation);
+    }
+    fprintf(out, "ObjectType=0x%X\nDataType=0x%04X\nAccessType=%s\n", (unsigned)object_type, (unsigned)e->type,
+            eds_access_name(e->access));
+    eds_format_value(text, sizeof text, e->type, &e->def);
+    put(out, "DefaultValue", text);
+    fprintf(out, "PDOMapping=%d\n", e->pdo_mapping ? 1 : 0);
+    if (e->low.kind != EDS_V_NONE) {
+        eds_format_value(text, sizeof text, e->type, &e->low);
+        put(out, "LowLimit", text);
+    }
+    if (e->high.kind != EDS_V_NONE) {
+        eds_format_value(text, sizeof text, e->type, &e->high);
+        put(out, "HighLimit", text);
+    }
+    if (!o->dcf) {
+        return;
+    }
+    const eds_value_t *value = e->param.kind != EDS_V_NONE ? &e->param : &e->def;
+    eds_value_t current;
+    if (o->current != NULL) {
+        uint8_t raw[1024];
+        long n = o->current(o->ctx, e, raw, sizeof raw);
+        if (n >= 0 && decode_raw(scratch, e->type, raw, (size_t)n, &current)) {
+            value = &current;
+        }
+    }
+    eds_format_value(text, sizeof text, e->type, value);
+    put(out, "ParameterValue", text);
+}
+
+static void write_list(FILE *out, const eds_file_t *f, const char *name, int which)
+{
+    unsigned n = 0U;
+    for (uint32_t pass = 0; pass < 2U; pass++) {
+        if (pass == 1U) {
+            fprintf(out, "\n[%s]\nSupportedObjects=%u\n", name, n);
+            n = 0U;
+        }
+        for (uint32_t i = 0; i < f->n_objects; i++) {
+            uint16_t x = f->objects[i].index;
+            int kind = (x == 0x1000U || x == 0x1001U || x == 0x1018U) ? 0 : (x >= 0x2000U && x <= 0x5FFFU ? 2 : 1);
+            if (kind != which) {
+                continue;
+            }
+            n++;
+            if (pass == 1U) {
+                fprintf(out, "%u=0x%04X\n", n, (unsigned)x);
+            }
+        }
+    }
+}
+
+static void write_info(FILE *out, const eds_file_t *f, const char *section, const eds_write_options_t *o)
+{
+    fprintf(out, "%s[%s]\n", strcmp(section, "FileInfo") == 0 ? "" : "\n", section);
+    bool is_device = strcmp(section, "DeviceInfo") == 0;
+    for (uint32_t i = 0; i < f->n_info; i++) {
+        const eds_info_key_t *k = &f->info[i];
+        if (strcmp(k->section, section) != 0) {
+            continue;
+        }
+        if (strcmp(section, "FileInfo") == 0 && o->file_name != NULL && strcmp(k->key, "FileName") == 0) {
+            put(out, k->key, o->file_name);
+        } else if (is_device && strcmp(k->key, "NrOfRXPDO") == 0) {
+            fprintf(out, "NrOfRXPDO=%u\n", (unsigned)f->nr_of_rxpdo);
+        } else if (is_device && strcmp(k->key, "NrOfTXPDO") == 0) {
+            fprintf(out, "NrOfTXPDO=%u\n", (unsigned)f->nr_of_txpdo);
+        } else {
+            put(out, k->key, k->value);
+        }
+    }
+}
+
+int eds_write(FILE *out, const eds_file_t *f, const eds_write_options_t *options)
+{
+    eds_write_options_t none;
+    memset(&none, 0, sizeof none);
+    const eds_write_options_t *o = options != NULL ? options : &none;
+    eds_file_t scratch; /* owns decoded current values */
+    memset(&scratch, 0, sizeof scratch);
+    write_info(out, f, "FileInfo", o);
+    write_info(out, f, "DeviceInfo", o);
+    fprintf(out, "\n[DummyUsage]\n");
+    for (unsigned t = 1U; t <= 7U; t++) {
+        fprintf(out, "Dummy%04X=%d\n", t, (f->dummy_usage >> t) & 1U);
+    }
+    bool has_comments = false;
+    for (uint32_t i = 0; i < f->n_info; i++) {
+        has_comments = has_comments || strcmp(f->info[i].section, "Comments") == 0;
+    }
+    if (has_comments) {
+        write_info(out, f, "Comments", o);
+    }
+    if (o->dcf) {
+        uint8_t id = o->node_id != 0U ? o->node_id : f->comm.node_id;
+        uint16_t kbit = o->baudrate_kbit != 0U ? o->baudrate_kbit : f->comm.baudrate_kbit;
+        fprintf(out, "\n[DeviceComissioning]\nNodeID=%u\nNodeName=%s\nBaudrate=%u\nNetNumber=%lu\nNetworkName=%s\n"
+                     "CANopenManager=%d\nLSS_SerialNumber=%lu\n",
+                (unsigned)id, f->comm.node_name != NULL ? f->comm.node_name : "", (unsigned)kbit,
+                (unsigned long)f->comm.net_number, f->comm.network_name != NULL ? f->comm.network_name : "",
+                f->comm.canopen_manager ? 1 : 0, (unsigned long)f->comm.lss_serial_number);
+    }
+    write_list(out, f, "MandatoryObjects", 0);
+    write_list(out, f, "OptionalObjects", 1);
+    write_list(out, f, "ManufacturerObjects", 2);
+    char section[16];
+    for (uint32_t i = 0; i < f->n_objects; i++) {
+        const eds_object_t *obj = &f->objects[i];
+        const eds_entry_t *first = &f->entries[obj->first];
+        bool var = obj->object_type == 0x7U || obj->object_type == 0x2U || obj->object_type == 0x5U;
+        snprintf(section, sizeof section, "%04X", (unsigned)obj->index);
+        if (var) {
+            write_entry(out, &scratch, first, section, obj->object_type, o);
+        } else {
+            fprintf(out, "\n[%s]\n", section);
+            put(out, "ParameterName", obj->name);
+            if (o->dcf && obj->denotation != NULL) {
+                put(out, "Denotation", obj->denotation);
+            }
+            fprintf(out, "ObjectType=0x%X\nSubNumber=0x%X\n", (unsigned)obj->object_type, (unsigned)obj->count);
+            for (uint32_t k = 0; k < obj->count; k++) {
+                const eds_entry_t *e = &f->entries[obj->first + k];
+                snprintf(section, sizeof section, "%04Xsub%X", (unsigned)e->index, (unsigned)e->sub);
+                write_entry(out, &scratch, e, section, 0x7U, o);
+            }
+        }
+        if (obj->n_links > 0U) {
+            fprintf(out, "\n[%04XObjectLinks]\nObjectLinks=%u\n", (unsigned)obj->index, (unsigned)obj->n_links);
+            for (unsigned k = 0; k < obj->n_links; k++) {
+                fprintf(out, "%u=0x%04X\n", k + 1U, (unsigned)obj->links[k]);
+            }
+        }
+    }
+    eds_arena_free(scratch.arena);
+    free(scratch.diagnostics);
+    return ferror(out) ? -1 : 0;
+}
