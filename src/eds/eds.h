@@ -162,6 +162,11 @@ typedef struct eds_write_options {
 /** Writes the model as an EDS (or DCF): every object with explicit sub-index sections. 0, or -1 on a write error. */
 int eds_write(FILE *out, const eds_file_t *file, const eds_write_options_t *options);
 
+/** -1, 0, 1: a <=> b for two integer or real values of one type ($NODEID ignored). */
+int eds_value_cmp(const eds_value_t *a, const eds_value_t *b);
+/** True when the value is of the type's kind and fits it (node-ID-relative: for every node-ID 1..127). */
+bool eds_value_fits(uint8_t type, const eds_value_t *v);
+
 /** Formats a value as CiA 306 text (hex for unsigned, decimal for signed, %.9g/%.17g for reals, hex bytes). */
 void eds_format_value(char *buf, size_t cap, uint8_t type, const eds_value_t *value);
 

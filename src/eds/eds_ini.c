@@ -147,7 +147,7 @@ static int casecmp_n(const char *a, const char *b, size_t n)
     return 0;
 }
 
-static int casecmp(const char *a, const char *b)
+int eds_casecmp(const char *a, const char *b)
 {
     for (;; a++, b++) {
         int d = tolower((unsigned char)*a) - tolower((unsigned char)*b);
@@ -182,11 +182,11 @@ static void classify(ini_section_t *s)
         }
         s->sub = (uint8_t)(len == 1U ? hexval((unsigned char)d[0]) : hexval((unsigned char)d[0]) * 16 + hexval((unsigned char)d[1]));
         s->kind = INI_SUB;
-    } else if (casecmp(rest, "Name") == 0) {
+    } else if (eds_casecmp(rest, "Name") == 0) {
         s->kind = INI_NAME;
-    } else if (casecmp(rest, "Value") == 0) {
+    } else if (eds_casecmp(rest, "Value") == 0) {
         s->kind = INI_VALUE;
-    } else if (casecmp(rest, "ObjectLinks") == 0) {
+    } else if (eds_casecmp(rest, "ObjectLinks") == 0) {
         s->kind = INI_LINKS;
     }
 }
@@ -197,7 +197,7 @@ static int section_cmp(const ini_section_t *a, const ini_section_t *b)
         return (int)a->kind - (int)b->kind;
     }
     if (a->kind == INI_OTHER) {
-        return casecmp(a->name, b->name);
+        return eds_casecmp(a->name, b->name);
     }
     if (a->index != b->index) {
         return (int)a->index - (int)b->index;
@@ -217,7 +217,7 @@ static int key_qsort(const void *pa, const void *pb)
     if (a->section != b->section) {
         return a->section < b->section ? -1 : 1;
     }
-    int d = casecmp(a->key, b->key);
+    int d = eds_casecmp(a->key, b->key);
     if (d != 0) {
         return d;
     }
@@ -371,8 +371,10 @@ bool ini_parse(eds_file_t *f, ini_t *ini, char *text, size_t len)
     for (size_t i = 0; i < secs.n; i++) {
         sv[i].first = (uint32_t)i; /* remember the original position through the sort */
     }
-    memcpy(sorted, sv, secs.n * sizeof(ini_section_t));
-    qsort(sorted, secs.n, sizeof(ini_section_t), section_qsort);
+    if (secs.n > 0U) { /* memcpy and qsort take no NULL, even for 0 bytes */
+        memcpy(sorted, sv, secs.n * sizeof(ini_section_t));
+        qsort(sorted, secs.n, sizeof(ini_section_t), section_qsort);
+    }
     uint32_t n_unique = 0U;
     for (size_t i = 0; i < secs.n; i++) {
         if (n_unique > 0U && section_cmp(&sorted[n_unique - 1U], &sorted[i]) == 0) {
@@ -387,11 +389,13 @@ bool ini_parse(eds_file_t *f, ini_t *ini, char *text, size_t len)
     for (size_t i = 0; i < keys.n; i++) {
         kv[i].section = slot[kv[i].section];
     }
-    qsort(kv, keys.n, sizeof(ini_key_t), key_qsort);
+    if (keys.n > 0U) {
+        qsort(kv, keys.n, sizeof(ini_key_t), key_qsort);
+    }
     /* Drop duplicate keys, keeping the later one. */
     size_t n_keys = 0U;
     for (size_t i = 0; i < keys.n; i++) {
-        if (i + 1U < keys.n && kv[i + 1U].section == kv[i].section && casecmp(kv[i + 1U].key, kv[i].key) == 0) {
+        if (i + 1U < keys.n && kv[i + 1U].section == kv[i].section && eds_casecmp(kv[i + 1U].key, kv[i].key) == 0) {
             eds_warn(f, kv[i].line, "key %s appears again in [%s] (line %lu); the later value is used", kv[i].key,
                      sorted[kv[i].section].name, (unsigned long)kv[i + 1U].line);
             continue;
@@ -413,9 +417,11 @@ bool ini_parse(eds_file_t *f, ini_t *ini, char *text, size_t len)
         ok = false;
     } else {
         memcpy(ini->sections, sorted, n_unique * sizeof(ini_section_t));
-        memcpy(ini->keys, kv, n_keys * sizeof(ini_key_t));
-        memcpy(ini->file_order, kv, n_keys * sizeof(ini_key_t));
-        qsort(ini->file_order, n_keys, sizeof(ini_key_t), line_qsort);
+        if (n_keys > 0U) {
+            memcpy(ini->keys, kv, n_keys * sizeof(ini_key_t));
+            memcpy(ini->file_order, kv, n_keys * sizeof(ini_key_t));
+            qsort(ini->file_order, n_keys, sizeof(ini_key_t), line_qsort);
+        }
         ini->n_sections = n_unique;
         ini->n_keys = (uint32_t)n_keys;
     }
@@ -455,7 +461,7 @@ const ini_section_t *ini_find(const ini_t *ini, ini_kind_t kind, uint16_t index,
 const ini_section_t *ini_find_named(const ini_t *ini, const char *name)
 {
     for (uint32_t i = 0U; i < ini->n_sections && ini->sections[i].kind == INI_OTHER; i++) {
-        if (casecmp(ini->sections[i].name, name) == 0) {
+        if (eds_casecmp(ini->sections[i].name, name) == 0) {
             return &ini->sections[i];
         }
     }
@@ -470,7 +476,7 @@ const ini_key_t *ini_get(const ini_t *ini, const ini_section_t *s, const char *k
     size_t lo = s->first, hi = (size_t)s->first + s->count;
     while (lo < hi) {
         size_t mid = (lo + hi) / 2U;
-        int d = casecmp(ini->keys[mid].key, key);
+        int d = eds_casecmp(ini->keys[mid].key, key);
         if (d == 0) {
             return &ini->keys[mid];
         }

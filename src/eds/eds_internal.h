@@ -60,6 +60,8 @@ typedef struct ini {
 bool ini_parse(eds_file_t *f, ini_t *ini, char *text, size_t len);
 const ini_section_t *ini_find(const ini_t *ini, ini_kind_t kind, uint16_t index, uint8_t sub);
 const ini_section_t *ini_find_named(const ini_t *ini, const char *name);
+/* ASCII case-insensitive strcmp (section and key names). */
+int eds_casecmp(const char *a, const char *b);
 const ini_key_t *ini_get(const ini_t *ini, const ini_section_t *s, const char *key);
 
 /* ---- Values ------------------------------------------------------------------------------------------------ */
@@ -77,12 +79,8 @@ typedef enum eds_parse {
 bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bool *nodeid, bool *octal_like);
 /* Parses text as a value of type (DefaultValue, LowLimit, HighLimit, ParameterValue). */
 eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_value_t *out, char *why, size_t why_cap);
-/* -1, 0, 1: a <=> b for two integer/real values of one type (nodeid ignored). */
-int eds_value_cmp(const eds_value_t *a, const eds_value_t *b);
 /* The type's smallest or largest value. */
 void eds_type_bound(uint8_t type, bool high, eds_value_t *out);
-/* True when the value (with node-ID 1..127 added if node-ID-relative) fits the type. */
-bool eds_value_fits(uint8_t type, const eds_value_t *v);
 /* Reads a whole unsigned number (object lists, SubNumber, DeviceInfo): CiA 306 forms, no $NODEID. */
 bool eds_parse_unsigned(const char *text, uint64_t max, uint64_t *out);
 

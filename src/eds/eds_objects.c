@@ -371,6 +371,24 @@ static const char *value_text(builder_t *b, const ini_key_t *k, uint8_t type)
     return eds_type_is_bytes(type) ? k->value : ini_number_text(b->f, k);
 }
 
+/* A value outside the limits would be refused when stored and loaded again: it is moved into them. */
+static void into_limits(eds_file_t *f, const ini_section_t *s, const eds_entry_t *e, eds_value_t *v, const char *key,
+                        uint32_t line, bool empty)
+{
+    for (int i = 0; i < 2 && !eds_type_is_bytes(e->type) && !v->nodeid; i++) {
+        const eds_value_t *lim = i == 0 ? &e->low : &e->high;
+        if (lim->kind == EDS_V_NONE || (i == 0 ? eds_value_cmp(v, lim) >= 0 : eds_value_cmp(v, lim) <= 0)) {
+            continue;
+        }
+        char was[64], now[64];
+        eds_format_value(was, sizeof was, e->type, v);
+        *v = *lim;
+        eds_format_value(now, sizeof now, e->type, v);
+        eds_warn(f, line, "[%s] %s %s is outside LowLimit..HighLimit; %s (the %s) used", s->name, key,
+                 empty ? "(none, so 0)" : was, now, i == 0 ? "LowLimit" : "HighLimit");
+    }
+}
+
 /*
  * Reads an entry from section s; keys it lacks come from parent (CompactSubObj objects). name overrides
  * ParameterName (compact sub-objects). value_key, if not NULL, is the [xxxxValue] key of a compact sub-object.
@@ -455,24 +473,13 @@ static bool read_entry(builder_t *b, const ini_section_t *s, const ini_section_t
     } else {
         eds_parse_value(f, e->type, "", &e->def, (char[8]){0}, 8U);
     }
-    /* A default outside the limits would be refused when stored and loaded again: it is moved into them. */
     bool empty = k == NULL || k->value[0] == '\0';
-    for (int i = 0; i < 2 && !eds_type_is_bytes(e->type) && !e->def.nodeid; i++) {
-        const eds_value_t *lim = i == 0 ? &e->low : &e->high;
-        if (lim->kind == EDS_V_NONE || (i == 0 ? eds_value_cmp(&e->def, lim) >= 0 : eds_value_cmp(&e->def, lim) <= 0)) {
-            continue;
-        }
-        char was[64], now[64];
-        eds_format_value(was, sizeof was, e->type, &e->def);
-        e->def = *lim;
-        eds_format_value(now, sizeof now, e->type, &e->def);
-        eds_warn(f, k != NULL ? k->line : s->line, "[%s] DefaultValue %s%s is outside LowLimit..HighLimit; %s (the %s) used",
-                 s->name, empty ? "(none, so 0) " : "", empty ? "" : was, now, i == 0 ? "LowLimit" : "HighLimit");
-    }
+    into_limits(f, s, e, &e->def, "DefaultValue", k != NULL ? k->line : s->line, empty);
     k = value_key != NULL ? value_key : ini_get(b->ini, s, "ParameterValue");
     if (k != NULL) {
         f->is_dcf = true;
         read_value(b, s, k, value_text(b, k, e->type), e->type, &e->param, true);
+        into_limits(f, s, e, &e->param, k->key, k->line, false);
     }
     return true;
 }
@@ -701,7 +708,9 @@ void eds_read_model(eds_file_t *f, const ini_t *ini)
         eds_error(f, 0U, "out of memory");
         return;
     }
-    qsort(f->entries, f->n_entries, sizeof *f->entries, entry_cmp);
+    if (f->n_entries > 0U) {
+        qsort(f->entries, f->n_entries, sizeof *f->entries, entry_cmp);
+    }
     uint32_t e = 0U;
     for (uint32_t i = 0; i < f->n_objects; i++) { /* objects were read in index order */
         eds_object_t *o = &f->objects[i];

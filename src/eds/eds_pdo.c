@@ -60,11 +60,12 @@ static void disable(eds_file_t *f, uint16_t comm, uint16_t map)
 {
     eds_entry_t *cob = eds_find_mut(f, comm, 1U);
     eds_entry_t *count = eds_find_mut(f, map, 0U);
-    if (cob != NULL && cob->def.kind == EDS_V_UINT) {
+    if (cob != NULL && cob->type == 0x07U) {
         cob->def.u |= 0x80000000U;
         if (cob->param.kind == EDS_V_UINT) {
             cob->param.u |= 0x80000000U;
         }
+        cob->high.kind = EDS_V_NONE; /* a HighLimit below bit 31 would refuse the disabled COB-ID */
     }
     if (count != NULL) {
         count->def.u = 0U;
@@ -81,7 +82,7 @@ static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool recei
         return;
     }
     for (int pass = 0; pass < 2; pass++) { /* the default, then a DCF's ParameterValue */
-        eds_value_t *n = pass == 0 ? &count->def : &count->param;
+        eds_value_t *n = pass == 0 ? &count->def : effective(count);
         if (n->kind != EDS_V_UINT) {
             continue;
         }
@@ -126,8 +127,8 @@ static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool recei
         }
         eds_entry_t *cob = eds_find_mut(f, comm, 1U);
         if (pass == 0 && cob != NULL && cob->def.kind == EDS_V_UINT && (cob->def.u & 0x80000000U) == 0U && n->u == 0U) {
-            eds_warn(f, cob->line, "[%04Xsub1] a valid PDO (bit 31 clear) with an empty mapping; it sends or takes "
-                                   "no data", (unsigned)comm);
+            eds_warn(f, cob->line, "[%04Xsub1] a valid PDO (bit 31 clear) with an empty mapping; kept (it sends or "
+                                   "takes no data)", (unsigned)comm);
         }
     }
 }
@@ -150,6 +151,30 @@ static void drop_object(eds_file_t *f, uint16_t index)
     }
 }
 
+/* The types CiA 301 gives the sub-indices of PDO communication and mapping objects (the core relies on them). */
+static bool pdo_types_ok(const eds_file_t *f, const eds_object_t *c, const eds_object_t *m, char *why, size_t cap)
+{
+    static const uint8_t comm_types[7] = {0x05, 0x07, 0x05, 0x06, 0x05, 0x06, 0x05};
+    for (uint32_t i = 0; i < c->count; i++) {
+        const eds_entry_t *e = &f->entries[c->first + i];
+        uint8_t want = e->sub < 7U ? comm_types[e->sub] : 0U;
+        if (want != 0U && e->type != want) {
+            snprintf(why, cap, "sub-index %u is %s, not %s", (unsigned)e->sub, eds_type_name(e->type), eds_type_name(want));
+            return false;
+        }
+    }
+    for (uint32_t i = 0; i < m->count; i++) {
+        const eds_entry_t *e = &f->entries[m->first + i];
+        uint8_t want = e->sub == 0U ? 0x05U : 0x07U;
+        if (e->type != want) {
+            snprintf(why, cap, "mapping 0x%04X sub-index %u is %s, not %s", (unsigned)m->index, (unsigned)e->sub,
+                     eds_type_name(e->type), eds_type_name(want));
+            return false;
+        }
+    }
+    return true;
+}
+
 void eds_check_pdos(eds_file_t *f)
 {
     static const struct {
@@ -170,6 +195,14 @@ void eds_check_pdos(eds_file_t *f)
                 eds_warn(f, lone->line, "[%04X] has no %s object 0x%04X; left out", (unsigned)lone->index,
                          c != NULL ? "mapping" : "communication", (unsigned)(c != NULL ? map : comm));
                 drop_object(f, lone->index);
+                continue;
+            }
+            char why[96];
+            if (!pdo_types_ok(f, c, m, why, sizeof why)) {
+                eds_warn(f, c->line, "[%04X] %s; the PDO (0x%04X and 0x%04X) is left out", (unsigned)comm, why,
+                         (unsigned)comm, (unsigned)map);
+                drop_object(f, comm);
+                drop_object(f, map);
                 continue;
             }
             pdos++;

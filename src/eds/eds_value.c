@@ -428,7 +428,8 @@ eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_v
         }
         out->r = strtod(text, NULL);
         if (t->size == 4U) {
-            if (!(fabs(out->r) <= (double)FLT_MAX)) {
+            /* below FLT_MAX + half its ULP a value rounds to a finite float (the writer's "3.4028235e+38") */
+            if (!(fabs(out->r) < (double)FLT_MAX + 0x1p103)) {
                 out->r = out->r < 0 ? -(double)FLT_MAX : (double)FLT_MAX;
                 snprintf(why, why_cap, "does not fit %s", t->name);
                 return EDS_PARSE_RANGE;

@@ -124,21 +124,50 @@ static void write_list(FILE *out, const eds_file_t *f, const char *name, int whi
     }
 }
 
+/* [DeviceInfo] keys the model holds (written from it, so repairs are kept); the rest are written as read. */
+static const char *const MODEL_KEYS[] = {"VendorName", "VendorNumber", "ProductName", "ProductNumber",
+                                         "RevisionNumber", "NrOfRXPDO", "NrOfTXPDO", "LSS_Supported", "Granularity"};
+
+static const uint16_t CIA305_KBIT[] = {1000, 800, 500, 250, 125, 0, 50, 20, 10};
+
+static bool model_key(const char *key)
+{
+    char prefix[10];
+    snprintf(prefix, sizeof prefix, "%s", key);
+    if (eds_casecmp(prefix, "BaudRate_") == 0) {
+        return true;
+    }
+    for (size_t i = 0; i < sizeof MODEL_KEYS / sizeof MODEL_KEYS[0]; i++) {
+        if (eds_casecmp(key, MODEL_KEYS[i]) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
+
 static void write_info(FILE *out, const eds_file_t *f, const char *section, const eds_write_options_t *o)
 {
     fprintf(out, "%s[%s]\n", strcmp(section, "FileInfo") == 0 ? "" : "\n", section);
     bool is_device = strcmp(section, "DeviceInfo") == 0;
+    if (is_device) {
+        fprintf(out, "VendorName=%s\nVendorNumber=0x%08lX\nProductName=%s\nProductNumber=0x%08lX\n"
+                     "RevisionNumber=0x%08lX\nNrOfRXPDO=%u\nNrOfTXPDO=%u\nLSS_Supported=%d\nGranularity=%u\n",
+                f->vendor_name, (unsigned long)f->vendor_number, f->product_name, (unsigned long)f->product_number,
+                (unsigned long)f->revision_number, (unsigned)f->nr_of_rxpdo, (unsigned)f->nr_of_txpdo,
+                f->lss_supported ? 1 : 0, (unsigned)f->granularity);
+        for (unsigned i = sizeof CIA305_KBIT / sizeof CIA305_KBIT[0]; i-- > 0U;) {
+            if (CIA305_KBIT[i] != 0U) {
+                fprintf(out, "BaudRate_%u=%d\n", (unsigned)CIA305_KBIT[i], (f->baud_rates >> i) & 1U);
+            }
+        }
+    }
     for (uint32_t i = 0; i < f->n_info; i++) {
         const eds_info_key_t *k = &f->info[i];
-        if (strcmp(k->section, section) != 0) {
+        if (strcmp(k->section, section) != 0 || (is_device && model_key(k->key))) {
             continue;
         }
-        if (strcmp(section, "FileInfo") == 0 && o->file_name != NULL && strcmp(k->key, "FileName") == 0) {
+        if (strcmp(section, "FileInfo") == 0 && o->file_name != NULL && eds_casecmp(k->key, "FileName") == 0) {
             put(out, k->key, o->file_name);
-        } else if (is_device && strcmp(k->key, "NrOfRXPDO") == 0) {
-            fprintf(out, "NrOfRXPDO=%u\n", (unsigned)f->nr_of_rxpdo);
-        } else if (is_device && strcmp(k->key, "NrOfTXPDO") == 0) {
-            fprintf(out, "NrOfTXPDO=%u\n", (unsigned)f->nr_of_txpdo);
         } else {
             put(out, k->key, k->value);
         }

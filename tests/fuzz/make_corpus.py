@@ -873,6 +873,35 @@ def control_seeds():
     ])
 
 
+def eds_seeds():
+    """The reader's feature files (tests/eds/files/) and small fragments of the forms real files use."""
+    files = os.path.join(HERE, "..", "eds", "files")
+    seeds = {name: open(os.path.join(files, name), "rb").read() for name in sorted(os.listdir(files))}
+    device = ("[DeviceInfo]\nVendorNumber=1\nNrOfRXPDO=1\nNrOfTXPDO=1\n[DummyUsage]\nDummy0005=1\n"
+              "[MandatoryObjects]\nSupportedObjects=3\n1=0x1000\n2=0x1001\n3=0x1018\n"
+              "[1000]\nParameterName=t\nDataType=7\nAccessType=ro\nDefaultValue=0\n"
+              "[1001]\nParameterName=e\nDataType=5\nAccessType=ro\n"
+              "[1018]\nParameterName=id\nObjectType=9\nSubNumber=2\n"
+              "[1018sub0]\nParameterName=n\nDataType=5\nAccessType=ro\nDefaultValue=1\n"
+              "[1018sub1]\nParameterName=v\nDataType=7\nAccessType=ro\nDefaultValue=1\n")
+    seeds["fragment-pdos"] = (device + "[OptionalObjects]\nSupportedObjects=4\n1=0x1400\n2=0x1600\n3=0x1800\n4=0x1A00\n"
+        "[1400]\nParameterName=r\nObjectType=9\nSubNumber=2\n[1400sub0]\nParameterName=n\nDataType=5\nAccessType=ro\n"
+        "DefaultValue=1\n[1400sub1]\nParameterName=c\nDataType=7\nAccessType=rw\nDefaultValue=$NODEID+0x200\n"
+        "[1600]\nParameterName=m\nObjectType=8\nSubNumber=3\n[1600sub0]\nParameterName=n\nDataType=5\nAccessType=rw\n"
+        "DefaultValue=2\n[1600sub1]\nParameterName=a\nDataType=7\nAccessType=rw\nDefaultValue=0x00050008\n"
+        "[1600sub2]\nParameterName=b\nDataType=7\nAccessType=rw\nDefaultValue=0x10010008\nParameterValue=0x00050008\n"
+        "[1800]\nParameterName=t\nObjectType=9\nSubNumber=2\n[1800sub0]\nParameterName=n\nDataType=5\nAccessType=ro\n"
+        "DefaultValue=1\n[1800sub1]\nParameterName=c\nDataType=7\nAccessType=rw\nDefaultValue=0x80000000+$NODEID+0x180\n"
+        "[1A00]\nParameterName=m\nCompactSubObj=2\nObjectType=8\nDataType=7\nAccessType=rw\nDefaultValue=0x10010008\n"
+        "[1A00Value]\nNrOfEntries=1\n2=0x10180120\n").encode()
+    seeds["fragment-values"] = (device + "[ManufacturerObjects]\nSupportedObjects=3\n1=0x2000\n2=0x2001\n3=0x2002\n"
+        "[2000]\nParameterName=r\nDataType=8\nAccessType=rw\nDefaultValue=0x3F800000\nLowLimit=-1e38\nHighLimit=3.5\n"
+        "[2001]\nParameterName=u\nDataType=0x0B\nAccessType=rw\nDefaultValue=\xc3\xa4\xf0\x9f\x98\x80 ;x\n"
+        "[2002]\nParameterName=i\nDataType=0x12\nAccessType=rw\nDefaultValue=-010 ; c\nLowLimit=-0x8000000000\n"
+        "[DeviceComissioning]\nNodeID=0x7F\nBaudrate=1000\n").encode()
+    return seeds
+
+
 def targets():
     out = {}
     out["core"] = vector_seeds((0, OWN, 0, 0), (0, 0xFF, 0, 0))
@@ -885,6 +914,7 @@ def targets():
     out["nvm_file"] = nvm_file_seeds()
     out["script"] = script_seeds()
     out["control"] = control_seeds()
+    out["eds"] = eds_seeds()
     return out
 
 
