@@ -88,7 +88,18 @@ static co_status_t boot(device_t *dev, co_time_us_t now)
     nc.bit_timing = dev->cls->default_bit_timing;
     nc.bit_rates_kbit = dev->cls->bit_rates_kbit;
     nc.options = dev->cls->core_options;
+    if (dev->cls->rpdo_count > 0U || dev->cls->tpdo_count > 0U) {
+        nc.rpdo = (co_rpdo_t *)dev->model;
+        nc.rpdo_count = dev->cls->rpdo_count;
+        nc.tpdo = (co_tpdo_t *)((uint8_t *)dev->model + (size_t)dev->cls->rpdo_count * sizeof(co_rpdo_t));
+        nc.tpdo_count = dev->cls->tpdo_count;
+    }
     return co_node_init(&dev->node, &nc, now);
+}
+
+size_t device_pdo_state_size(const device_class_t *cls)
+{
+    return (size_t)cls->rpdo_count * sizeof(co_rpdo_t) + (size_t)cls->tpdo_count * sizeof(co_tpdo_t);
 }
 
 co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, void *model, const device_cfg_t *cfg,
@@ -298,19 +309,33 @@ static void print_value(device_t *dev, uint16_t index, uint8_t sub)
         device_printf(dev, "0x%04X:%02X = %g", index, sub, (double)f);
         break;
     }
-    case CO_T_INTEGER8:
-    case CO_T_INTEGER16:
-    case CO_T_INTEGER32:
-    case CO_T_INTEGER64: {
-        const unsigned bits = (unsigned)len * 8U;
-        int64_t v = (int64_t)u;
-        if (bits < 64U && (u >> (bits - 1U)) != 0U) {
-            v = (int64_t)(u | ~((UINT64_C(1) << bits) - 1U));
+    case CO_T_REAL64: {
+        double d;
+        memcpy(&d, &u, sizeof d);
+        device_printf(dev, "0x%04X:%02X = %.17g", index, sub, d);
+        break;
+    }
+    case CO_T_OCTET_STRING:
+    case CO_T_UNICODE_STRING:
+    case CO_T_DOMAIN: {
+        char hex[2U * sizeof buf + 1U];
+        for (size_t i = 0U; i < len; i++) {
+            (void)snprintf(hex + 2U * i, 3U, "%02X", buf[i]);
         }
-        device_printf(dev, "0x%04X:%02X = %lld", index, sub, (long long)v);
+        hex[2U * len] = '\0';
+        device_printf(dev, "0x%04X:%02X = %s (%u bytes)", index, sub, hex, (unsigned)len);
         break;
     }
     default:
+        if (device_type_is_signed(e->type) && len > 0U) {
+            const unsigned bits = (unsigned)len * 8U;
+            int64_t v = (int64_t)u;
+            if (bits < 64U && (u >> (bits - 1U)) != 0U) {
+                v = (int64_t)(u | ~((UINT64_C(1) << bits) - 1U));
+            }
+            device_printf(dev, "0x%04X:%02X = %lld", index, sub, (long long)v);
+            break;
+        }
         device_printf(dev, "0x%04X:%02X = %llu (0x%llX)", index, sub, (unsigned long long)u, (unsigned long long)u);
         break;
     }
@@ -318,23 +343,32 @@ static void print_value(device_t *dev, uint16_t index, uint8_t sub)
 
 const char *device_type_name(uint8_t type)
 {
-    switch (type) {
-    case CO_T_BOOLEAN: return "BOOLEAN";
-    case CO_T_INTEGER8: return "INTEGER8";
-    case CO_T_INTEGER16: return "INTEGER16";
-    case CO_T_INTEGER32: return "INTEGER32";
-    case CO_T_INTEGER64: return "INTEGER64";
-    case CO_T_UNSIGNED8: return "UNSIGNED8";
-    case CO_T_UNSIGNED16: return "UNSIGNED16";
-    case CO_T_UNSIGNED32: return "UNSIGNED32";
-    case CO_T_UNSIGNED64: return "UNSIGNED64";
-    case CO_T_REAL32: return "REAL32";
-    case CO_T_REAL64: return "REAL64";
-    case CO_T_VISIBLE_STRING: return "VISIBLE_STRING";
-    case CO_T_OCTET_STRING: return "OCTET_STRING";
-    case CO_T_DOMAIN: return "DOMAIN";
-    default: return "type";
+    static const struct {
+        uint8_t type;
+        const char *name;
+    } names[] = {
+        {CO_T_BOOLEAN, "BOOLEAN"}, {CO_T_INTEGER8, "INTEGER8"}, {CO_T_INTEGER16, "INTEGER16"},
+        {CO_T_INTEGER32, "INTEGER32"}, {CO_T_UNSIGNED8, "UNSIGNED8"}, {CO_T_UNSIGNED16, "UNSIGNED16"},
+        {CO_T_UNSIGNED32, "UNSIGNED32"}, {CO_T_REAL32, "REAL32"}, {CO_T_VISIBLE_STRING, "VISIBLE_STRING"},
+        {CO_T_OCTET_STRING, "OCTET_STRING"}, {CO_T_UNICODE_STRING, "UNICODE_STRING"}, {CO_T_TIME_OF_DAY, "TIME_OF_DAY"},
+        {CO_T_TIME_DIFFERENCE, "TIME_DIFFERENCE"}, {CO_T_DOMAIN, "DOMAIN"}, {CO_T_INTEGER24, "INTEGER24"},
+        {CO_T_REAL64, "REAL64"}, {CO_T_INTEGER40, "INTEGER40"}, {CO_T_INTEGER48, "INTEGER48"},
+        {CO_T_INTEGER56, "INTEGER56"}, {CO_T_INTEGER64, "INTEGER64"}, {CO_T_UNSIGNED24, "UNSIGNED24"},
+        {CO_T_UNSIGNED40, "UNSIGNED40"}, {CO_T_UNSIGNED48, "UNSIGNED48"}, {CO_T_UNSIGNED56, "UNSIGNED56"},
+        {CO_T_UNSIGNED64, "UNSIGNED64"},
+    };
+    for (size_t i = 0U; i < sizeof names / sizeof names[0]; i++) {
+        if (names[i].type == type) {
+            return names[i].name;
+        }
     }
+    return "type";
+}
+
+bool device_type_is_signed(uint8_t type)
+{
+    return type == CO_T_INTEGER8 || type == CO_T_INTEGER16 || type == CO_T_INTEGER24 || type == CO_T_INTEGER32 ||
+           type == CO_T_INTEGER40 || type == CO_T_INTEGER48 || type == CO_T_INTEGER56 || type == CO_T_INTEGER64;
 }
 
 /* The values an integer object of at most 8 bytes holds: for the signed types -2^(n-1)..2^(n-1)-1, for BOOLEAN 0..1,
@@ -351,7 +385,7 @@ static integer_range_t integer_range(const co_od_entry_t *e)
     const unsigned bits = 8U * e->size;
     const unsigned long long all_ones = bits >= 64U ? ULLONG_MAX : (1ULL << bits) - 1U;
     integer_range_t r = {false, 0U, e->type == CO_T_BOOLEAN ? 1U : all_ones};
-    if (e->type == CO_T_INTEGER8 || e->type == CO_T_INTEGER16 || e->type == CO_T_INTEGER32 || e->type == CO_T_INTEGER64) {
+    if (device_type_is_signed(e->type)) {
         r.is_signed = true;
         r.highest = all_ones >> 1;
         r.most_negative = r.highest + 1U;

@@ -163,6 +163,20 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
     node->default_node_id = cfg->node_id;
     node->default_bit_timing = cfg->bit_timing;
     node->nmt_state = CO_NMT_INITIALISING;
+    if (cfg->rpdo != NULL) {
+        node->rpdo = cfg->rpdo;
+        node->rpdo_cap = cfg->rpdo_count;
+    } else {
+        node->rpdo = node->rpdo_own;
+        node->rpdo_cap = CO_RPDO_MAX;
+    }
+    if (cfg->tpdo != NULL) {
+        node->tpdo = cfg->tpdo;
+        node->tpdo_cap = cfg->tpdo_count;
+    } else {
+        node->tpdo = node->tpdo_own;
+        node->tpdo_cap = CO_TPDO_MAX;
+    }
     if (co_pdo_count(node) != CO_OK || co_od_sub_count(node->od, 0x1016U) > CO_HB_CONSUMER_MAX) {
         return CO_ERR_RANGE;
     }
@@ -199,6 +213,9 @@ bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
         return false;
     }
     if (frame->id == 0x7E5U) {
+        if ((node->options & CO_OPT_NO_LSS) != 0U) {
+            return false; /* a device without LSS (EDS LSS_Supported=0) ignores the master's requests */
+        }
         co_lss_rx(node, frame);
         return true;
     }

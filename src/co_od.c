@@ -74,6 +74,20 @@ uint16_t co_od_type_size(uint8_t type)
     case CO_T_UNSIGNED64:
     case CO_T_REAL64:
         return 8U;
+    case CO_T_INTEGER24:
+    case CO_T_UNSIGNED24:
+        return 3U;
+    case CO_T_INTEGER40:
+    case CO_T_UNSIGNED40:
+        return 5U;
+    case CO_T_INTEGER48:
+    case CO_T_UNSIGNED48:
+    case CO_T_TIME_OF_DAY:
+    case CO_T_TIME_DIFFERENCE:
+        return 6U;
+    case CO_T_INTEGER56:
+    case CO_T_UNSIGNED56:
+        return 7U;
     default:
         return 0U;
     }
@@ -81,12 +95,14 @@ uint16_t co_od_type_size(uint8_t type)
 
 static bool is_bytes(const co_od_entry_t *e)
 {
-    return e->type == CO_T_VISIBLE_STRING || e->type == CO_T_OCTET_STRING || e->type == CO_T_DOMAIN;
+    return e->type == CO_T_VISIBLE_STRING || e->type == CO_T_OCTET_STRING || e->type == CO_T_UNICODE_STRING ||
+           e->type == CO_T_DOMAIN;
 }
 
 static bool is_signed(uint8_t type)
 {
-    return type == CO_T_INTEGER8 || type == CO_T_INTEGER16 || type == CO_T_INTEGER32 || type == CO_T_INTEGER64;
+    return type == CO_T_INTEGER8 || type == CO_T_INTEGER16 || type == CO_T_INTEGER32 || type == CO_T_INTEGER64 ||
+           (type >= CO_T_INTEGER24 && type <= CO_T_INTEGER56 && type != CO_T_REAL64);
 }
 
 uint8_t *co_od_ptr(co_node_t *node, const co_od_entry_t *e) { return node->values + e->offset; }
@@ -110,13 +126,16 @@ static void native_to_wire(const co_od_entry_t *e, const uint8_t *src, uint8_t *
         co_put_u32(dst, v);
         break;
     }
-    default: {
+    case 8U: {
         uint64_t v;
         memcpy(&v, src, 8U);
         co_put_u32(dst, (uint32_t)v);
         co_put_u32(dst + 4, (uint32_t)(v >> 32));
         break;
     }
+    default: /* 3, 5, 6, 7 bytes: held as little-endian bytes already */
+        memcpy(dst, src, e->size);
+        break;
     }
 }
 
@@ -136,11 +155,14 @@ static void wire_to_native(const co_od_entry_t *e, const uint8_t *src, uint8_t *
         memcpy(dst, &v, 4U);
         break;
     }
-    default: {
+    case 8U: {
         const uint64_t v = (uint64_t)co_get_u32(src) | ((uint64_t)co_get_u32(src + 4) << 32);
         memcpy(dst, &v, 8U);
         break;
     }
+    default:
+        memcpy(dst, src, e->size);
+        break;
     }
 }
 
@@ -261,15 +283,36 @@ static int64_t wire_integer(const co_od_entry_t *e, const uint8_t *data)
 
 uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
-    if (e->limits == NULL || is_bytes(e) || e->type == CO_T_REAL32 || e->type == CO_T_REAL64 ||
-        e->type == CO_T_UNSIGNED64 || len < e->size) {
+    if (e->limits == NULL || is_bytes(e) || len < e->size) {
         return CO_ABORT_NONE;
     }
+    const co_od_limits_t *l = e->limits;
+    if (e->type == CO_T_REAL32 || e->type == CO_T_REAL64) {
+        double v;
+        const uint64_t bits = (uint64_t)wire_integer(e, data);
+        if (e->type == CO_T_REAL32) {
+            const uint32_t b32 = (uint32_t)bits;
+            float f;
+            memcpy(&f, &b32, sizeof f);
+            v = (double)f;
+        } else {
+            memcpy(&v, &bits, sizeof v);
+        }
+        if (v > l->high.r) {
+            return CO_ABORT_VALUE_HIGH;
+        }
+        /* NaN is inside no limits: refused as an invalid value (0x06090030) */
+        return v < l->low.r ? CO_ABORT_VALUE_LOW : (v == v ? CO_ABORT_NONE : CO_ABORT_INVALID_VALUE);
+    }
+    if (e->type == CO_T_UNSIGNED64) {
+        const uint64_t v = (uint64_t)wire_integer(e, data);
+        return v > l->high.u ? CO_ABORT_VALUE_HIGH : (v < l->low.u ? CO_ABORT_VALUE_LOW : CO_ABORT_NONE);
+    }
     const int64_t v = wire_integer(e, data);
-    if (v > e->limits->high) {
+    if (v > l->high.i) {
         return CO_ABORT_VALUE_HIGH;
     }
-    if (v < e->limits->low) {
+    if (v < l->low.i) {
         return CO_ABORT_VALUE_LOW;
     }
     return CO_ABORT_NONE;

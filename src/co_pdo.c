@@ -15,12 +15,12 @@
 
 static const uint8_t rpdo_msef[5] = {0x04U, 0U, 0U, 0U, 0U};
 
-static uint8_t highest_pdo(const co_od_t *od, uint16_t base)
+/* 1 + the number of the highest PDO whose communication object exists (CiA 301: up to 512 each way). */
+static uint16_t highest_pdo(const co_od_t *od, uint16_t base)
 {
-    uint8_t n = 0U;
+    uint16_t n = 0U;
     for (uint16_t i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U;) {
-        const uint16_t num = (uint16_t)(od->entries[i].index - base);
-        n = num >= 0xFFU ? 0xFFU : (uint8_t)(num + 1U);
+        n = (uint16_t)(od->entries[i].index - base + 1U);
         i = (uint16_t)(i + 1U);
     }
     return n;
@@ -28,9 +28,9 @@ static uint8_t highest_pdo(const co_od_t *od, uint16_t base)
 
 co_status_t co_pdo_count(co_node_t *node)
 {
-    const uint8_t nr = highest_pdo(node->od, RPDO_COMM);
-    const uint8_t nt = highest_pdo(node->od, TPDO_COMM);
-    if (nr > CO_RPDO_MAX || nt > CO_TPDO_MAX) {
+    const uint16_t nr = highest_pdo(node->od, RPDO_COMM);
+    const uint16_t nt = highest_pdo(node->od, TPDO_COMM);
+    if (nr > node->rpdo_cap || nt > node->tpdo_cap) {
         return CO_ERR_RANGE;
     }
     node->n_rpdo = nr;
@@ -50,6 +50,9 @@ static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_
     out->len = (uint8_t)(bits / 8U);
     out->entry = NULL;
     if (receive && index >= 0x0001U && index <= 0x0007U && sub == 0U) {
+        if ((node->od->dummy_usage & (1U << index)) == 0U) {
+            return CO_ABORT_NOT_MAPPABLE; /* the device does not take dummy entries of this type ([DummyUsage]) */
+        }
         return out->len <= 8U ? CO_ABORT_NONE : CO_ABORT_PDO_LENGTH; /* dummy entry: skips bytes */
     }
     const co_od_entry_t *e = co_od_find(node->od, index, sub);
@@ -85,7 +88,7 @@ static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, 
     return total;
 }
 
-static void configure_rpdo(co_node_t *node, uint8_t n)
+static void configure_rpdo(co_node_t *node, uint16_t n)
 {
     co_rpdo_t *p = &node->rpdo[n];
     const uint16_t comm = (uint16_t)(RPDO_COMM + n);
@@ -98,7 +101,7 @@ static void configure_rpdo(co_node_t *node, uint8_t n)
     p->deadline = CO_NEVER;
 }
 
-static void configure_tpdo(co_node_t *node, uint8_t n)
+static void configure_tpdo(co_node_t *node, uint16_t n)
 {
     co_tpdo_t *p = &node->tpdo[n];
     const uint16_t comm = (uint16_t)(TPDO_COMM + n);
@@ -120,12 +123,12 @@ static void configure_tpdo(co_node_t *node, uint8_t n)
 
 void co_pdo_reset(co_node_t *node)
 {
-    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
         node->rpdo[n].length_error = false;
         node->rpdo[n].timeout_error = false;
         configure_rpdo(node, n);
     }
-    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         configure_tpdo(node, n);
     }
 }
@@ -153,7 +156,7 @@ static void rpdo_length_error(co_node_t *node, co_rpdo_t *p, uint16_t code)
 
 bool co_pdo_rx(co_node_t *node, const co_frame_t *f)
 {
-    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (!p->valid || f->id != (p->cob_id & CO_COBID_CAN_ID)) {
             continue;
@@ -244,7 +247,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return next;
     }
-    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (!p->valid || p->deadline == CO_NEVER) {
             continue;
@@ -257,7 +260,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
             next = co_min_time(next, p->deadline);
         }
     }
-    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
         if (p->valid && p->type >= 254U) {
             next = co_min_time(next, tpdo_event_driven(node, p));
@@ -271,14 +274,14 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (p->valid && p->sync_pending) {
             p->sync_pending = false;
             rpdo_apply(node, p, p->sync_data);
         }
     }
-    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
         if (!p->valid || p->type > 240U) {
             continue;
@@ -313,7 +316,7 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
     }
     /* Entering or leaving Operational: timers and SYNC counts restart; on entering, every event-driven
      * TPDO is sent once at once (its first "change"), as CANopenNode does. */
-    for (uint8_t n = 0U; n < node->n_tpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
         p->sent_once = false;
         p->event = false;
@@ -322,13 +325,13 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
         p->sync_count = 0U;
         p->sync_started = p->sync_start == 0U;
     }
-    for (uint8_t n = 0U; n < node->n_rpdo; n++) {
+    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
         node->rpdo[n].sync_pending = false;
         node->rpdo[n].deadline = CO_NEVER;
     }
 }
 
-void co_tpdo_trigger(co_node_t *node, uint8_t n)
+void co_tpdo_trigger(co_node_t *node, uint16_t n)
 {
     if (n < node->n_tpdo) {
         node->tpdo[n].event = true;
@@ -449,8 +452,8 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
     const uint16_t base = (uint16_t)(e->index & 0xFE00U);
     const uint16_t n = (uint16_t)(e->index & 0x01FFU);
     if ((base == RPDO_COMM || base == RPDO_MAP) && n < node->n_rpdo) {
-        configure_rpdo(node, (uint8_t)n);
+        configure_rpdo(node, n);
     } else if ((base == TPDO_COMM || base == TPDO_MAP) && n < node->n_tpdo) {
-        configure_tpdo(node, (uint8_t)n);
+        configure_tpdo(node, n);
     }
 }

@@ -43,9 +43,23 @@ TYPES: dict[int, tuple[str, str, int, float, float]] = {
     0x11: ("REAL64", "double", 8, -sys.float_info.max, sys.float_info.max),
     0x15: ("INTEGER64", "int64_t", 8, -(2**63), 2**63 - 1),
     0x1B: ("UNSIGNED64", "uint64_t", 8, 0, 2**64 - 1),
+    # No C type of their size: held as little-endian bytes (co_od.h).
+    0x0C: ("TIME_OF_DAY", "uint8_t", 6, 0, 2**48 - 1),
+    0x0D: ("TIME_DIFFERENCE", "uint8_t", 6, 0, 2**48 - 1),
+    0x10: ("INTEGER24", "uint8_t", 3, -(2**23), 2**23 - 1),
+    0x12: ("INTEGER40", "uint8_t", 5, -(2**39), 2**39 - 1),
+    0x13: ("INTEGER48", "uint8_t", 6, -(2**47), 2**47 - 1),
+    0x14: ("INTEGER56", "uint8_t", 7, -(2**55), 2**55 - 1),
+    0x16: ("UNSIGNED24", "uint8_t", 3, 0, 2**24 - 1),
+    0x18: ("UNSIGNED40", "uint8_t", 5, 0, 2**40 - 1),
+    0x19: ("UNSIGNED48", "uint8_t", 6, 0, 2**48 - 1),
+    0x1A: ("UNSIGNED56", "uint8_t", 7, 0, 2**56 - 1),
+    0x0B: ("UNICODE_STRING", "uint8_t", 0, 0, 0),
+    0x0F: ("DOMAIN", "uint8_t", 0, 0, 0),
 }
-STRING_TYPES = (0x09, 0x0A)
+STRING_TYPES = (0x09, 0x0A, 0x0B, 0x0F)
 REAL_TYPES = (0x08, 0x11)
+BYTE_INTEGERS = (0x0C, 0x0D, 0x10, 0x12, 0x13, 0x14, 0x16, 0x18, 0x19, 0x1A)  # odd sizes: a byte array each
 
 # EDS AccessType -> (readable, writable, const, TPDO-mappable direction allowed, RPDO direction allowed)
 ACCESS = {
@@ -128,7 +142,7 @@ def read_eds(path: Path, reader: str) -> Od:
             raise OdError(str(path), f"{e['index']:04X}", "DataType",
                           f"data type {dtype:#06x} is read but the core's generated tables do not hold it yet")
         value = e["default"]
-        if dtype == 0x0A:
+        if dtype in (0x0A, 0x0B, 0x0F):
             value = bytes.fromhex(value)
         row = Row(e["index"], e["sub"], e["name"].strip(), dtype, e["access"], e["pdo_mapping"], value, e["nodeid"],
                   low=e["low"], high=e["high"], section=f"line {e['line']}")
@@ -223,6 +237,20 @@ def c_number(v: object, dtype: int) -> str:
     return f"0x{v:X}UL" if v > 9 else f"{v}U"
 
 
+def has_limits(r: Row) -> bool:
+    return (r.low is not None or r.high is not None) and r.dtype not in STRING_TYPES
+
+
+def c_limit(v: object, dtype: int) -> str:
+    """One member of a co_od_limit_t union, for the row's type."""
+    if dtype in REAL_TYPES:
+        return f"{{.r = {float(v)!r}}}"
+    if dtype == 0x1B:
+        return f"{{.u = 0x{int(v):X}ULL}}"
+    v = int(v)
+    return f"{{.i = {v}LL}}" if v > -(2**63) else "{.i = -9223372036854775807LL - 1}"
+
+
 def c_bytes(data: bytes, size: int) -> str:
     data = data + bytes(size - len(data))
     return "{" + ", ".join(f"0x{b:02X}" for b in data) + "}"
@@ -261,8 +289,11 @@ def flags(r: Row) -> str:
 
 TYPE_ENUM = {0x01: "CO_T_BOOLEAN", 0x02: "CO_T_INTEGER8", 0x03: "CO_T_INTEGER16", 0x04: "CO_T_INTEGER32",
              0x05: "CO_T_UNSIGNED8", 0x06: "CO_T_UNSIGNED16", 0x07: "CO_T_UNSIGNED32", 0x08: "CO_T_REAL32",
-             0x09: "CO_T_VISIBLE_STRING", 0x0A: "CO_T_OCTET_STRING", 0x11: "CO_T_REAL64",
-             0x15: "CO_T_INTEGER64", 0x1B: "CO_T_UNSIGNED64"}
+             0x09: "CO_T_VISIBLE_STRING", 0x0A: "CO_T_OCTET_STRING", 0x0B: "CO_T_UNICODE_STRING",
+             0x0C: "CO_T_TIME_OF_DAY", 0x0D: "CO_T_TIME_DIFFERENCE", 0x0F: "CO_T_DOMAIN", 0x10: "CO_T_INTEGER24",
+             0x11: "CO_T_REAL64", 0x12: "CO_T_INTEGER40", 0x13: "CO_T_INTEGER48", 0x14: "CO_T_INTEGER56",
+             0x15: "CO_T_INTEGER64", 0x16: "CO_T_UNSIGNED24", 0x18: "CO_T_UNSIGNED40", 0x19: "CO_T_UNSIGNED48",
+             0x1A: "CO_T_UNSIGNED56", 0x1B: "CO_T_UNSIGNED64"}
 
 
 def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str, str, str]:
@@ -274,7 +305,7 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     h.append(f"typedef struct {c_name}_od_values {{\n")
     for r in od.rows:
         ctype = TYPES[r.dtype][1]
-        arr = f"[{r.size}]" if r.dtype in STRING_TYPES else ""
+        arr = f"[{r.size}]" if r.dtype in STRING_TYPES + BYTE_INTEGERS else ""
         h.append(f"    {ctype} {r.member}{arr}; /* 0x{r.index:04X}:{r.sub:02X} {c_string(r.name)} */\n")
     h.append(f"}} {c_name}_od_values_t;\n\n")
     h.append(f"/** The object dictionary of {od.name}: {len(od.rows)} rows. */\n")
@@ -291,14 +322,13 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     c.append(f"#define V {c_name}_od_values_t\n")
     c.append("#define ROW(i, s, t, f, m, l) {i, s, t, f, (uint16_t)sizeof(((V *)0)->m), (uint32_t)offsetof(V, m), l}\n\n")
     for r in od.rows:
-        if (r.low is not None or r.high is not None) and r.dtype not in REAL_TYPES + STRING_TYPES and r.dtype != 0x1B:
+        if has_limits(r):
             lo = TYPES[r.dtype][3] if r.low is None else r.low
             hi = TYPES[r.dtype][4] if r.high is None else r.high
-            c.append(f"static const co_od_limits_t limits_{r.member} = {{{int(lo)}LL, {int(hi)}LL}};\n")
+            c.append(f"static const co_od_limits_t limits_{r.member} = {{{c_limit(lo, r.dtype)}, {c_limit(hi, r.dtype)}}};\n")
     c.append(f"\nstatic const co_od_entry_t rows[{len(od.rows)}] = {{\n")
     for r in od.rows:
-        has_limits = (r.low is not None or r.high is not None) and r.dtype not in REAL_TYPES + STRING_TYPES and r.dtype != 0x1B
-        lim = f"&limits_{r.member}" if has_limits else "NULL"
+        lim = f"&limits_{r.member}" if has_limits(r) else "NULL"
         c.append(f"    ROW(0x{r.index:04X}, 0x{r.sub:02X}, {TYPE_ENUM[r.dtype]}, {flags(r)}, {r.member}, {lim}),\n")
     c.append("};\n\n")
     c.append(f"static const {c_name}_od_values_t defaults = {{\n")
@@ -307,14 +337,19 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
             data = r.value.encode("ascii")
             if data:
                 c.append(f"    .{r.member} = {c_bytes(data, r.size)}, /* \"{c_string(r.value)}\" */\n")
-        elif r.dtype == 0x0A:
+        elif r.dtype in (0x0A, 0x0B, 0x0F):
             if r.value:
                 c.append(f"    .{r.member} = {c_bytes(r.value, r.size)},\n")
+        elif r.dtype in BYTE_INTEGERS:
+            if r.value:
+                c.append(f"    .{r.member} = {c_bytes(int(r.value).to_bytes(r.size, 'little', signed=r.value < 0), r.size)},"
+                         f"{' /* + node-ID */' if r.nodeid else ''}\n")
         elif r.value not in (0, 0.0):
             c.append(f"    .{r.member} = {c_number(r.value, r.dtype)},{' /* + node-ID */' if r.nodeid else ''}\n")
     c.append("};\n\n")
     c.append(f"const co_od_t {c_name}_od = {{\n    \"{od.name}\", rows, {len(od.rows)}U, &defaults,\n"
-             f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n}};\n")
+             f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n"
+             f"    0x{od.device_info['dummy_usage']:02X}U, /* [DummyUsage] */\n}};\n")
     # The names in an object file of their own: a firmware that links the table does not link them.
     n = [banner, f"#include \"{c_name}_od.h\"\n\n#include <stddef.h>\n\n"]
     n.append(f"const char *const {c_name}_od_names[{len(od.rows)}] = {{\n")
@@ -349,6 +384,12 @@ def main(argv: list[str]) -> int:
         if args.check:
             print(f"{eds_path}: OK ({len(od.rows)} rows)")
             return 0
+        for r in od.rows:  # C has no zero-size arrays
+            if r.dtype in STRING_TYPES and r.size == 0:
+                if r.dtype != 0x09:
+                    raise OdError(str(profile), "strings", f"0x{r.index:04X}:{r.sub:02X}",
+                                  f"an empty {TYPES[r.dtype][0]} needs a capacity here")
+                r.size = 1  # an empty VISIBLE_STRING: one NUL, read as 0 bytes
         header, source, names = generate(od, c_name, eds_path.name, profile.name)
     except OdError as e:
         print(f"odgen: error: {e}", file=sys.stderr)

@@ -106,10 +106,10 @@ static uint32_t local_limits(const co_od_entry_t *e, const uint8_t *data, size_t
     } else {
         v = (int64_t)u;
     }
-    if (v > e->limits->high) {
+    if (v > e->limits->high.i) {
         return CO_ABORT_VALUE_HIGH;
     }
-    return v < e->limits->low ? CO_ABORT_VALUE_LOW : 0U;
+    return v < e->limits->low.i ? CO_ABORT_VALUE_LOW : 0U;
 }
 
 /* ---- Persistent data (E13) -------------------------------------------------------------------------------------

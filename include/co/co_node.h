@@ -108,8 +108,9 @@ enum co_node_option {
     CO_OPT_NMT_ACCEPT_LONG = 0x01U,   /**< Accept NMT frames with DLC > 2 (extra bytes ignored). Default: DLC == 2 only. */
     CO_OPT_SDO_SEGMENTED = 0x02U,     /**< Segmented SDO transfer (needs CO_CONFIG_SDO_SEGMENTED). */
     CO_OPT_LSS_NO_UNCONFIGURE = 0x04U, /**< LSS configure node-ID refuses 0xFF (only 1..127), as Bürkert devices do. */
-    CO_OPT_TPDO_NO_COS = 0x08U         /**< Event-driven TPDOs go out on co_tpdo_trigger() and the event timer only,
+    CO_OPT_TPDO_NO_COS = 0x08U,        /**< Event-driven TPDOs go out on co_tpdo_trigger() and the event timer only,
                                             not when a mapped value changes (devices that send cyclically). */
+    CO_OPT_NO_LSS = 0x10U              /**< No LSS slave: LSS requests (0x7E5) are ignored (EDS LSS_Supported=0). */
 };
 
 /** Number of entries of an LSS bit-timing table (CiA 305 indices 0..9). */
@@ -127,6 +128,14 @@ typedef struct co_node_cfg {
     /** kbit/s per LSS bit-timing index (0 = not supported); NULL = the CiA 305 table without index 9. */
     const uint16_t *bit_rates_kbit;
     uint32_t options;           /**< co_node_option bits. */
+    /**
+     * PDO state for an OD with more PDOs than CO_RPDO_MAX/CO_TPDO_MAX (CiA 301 allows 512 each way): caller-owned
+     * arrays of rpdo_count/tpdo_count entries, used instead of the node's own. NULL: the node's own arrays.
+     */
+    struct co_rpdo *rpdo;
+    uint16_t rpdo_count;
+    struct co_tpdo *tpdo;
+    uint16_t tpdo_count;
 } co_node_cfg_t;
 
 /** What the last load of the parameter area found. */
@@ -296,10 +305,14 @@ struct co_node {
 #if CO_CONFIG_SYNC
     co_sync_t sync;
 #endif
-    uint8_t n_rpdo;
-    uint8_t n_tpdo;
-    co_rpdo_t rpdo[CO_RPDO_MAX];
-    co_tpdo_t tpdo[CO_TPDO_MAX];
+    uint16_t n_rpdo;            /**< PDOs the OD declares (1 + the highest 0x1400+n / 0x1800+n present). */
+    uint16_t n_tpdo;
+    uint16_t rpdo_cap;          /**< Entries of rpdo[] / tpdo[]: co_node_cfg_t's arrays, or the node's own. */
+    uint16_t tpdo_cap;
+    co_rpdo_t *rpdo;            /**< co_node_cfg_t.rpdo, or rpdo_own. */
+    co_tpdo_t *tpdo;
+    co_rpdo_t rpdo_own[CO_RPDO_MAX];
+    co_tpdo_t tpdo_own[CO_TPDO_MAX];
     co_lss_slave_t lss;
 };
 
@@ -308,7 +321,8 @@ struct co_node {
  * every object, and (when the node-ID is configured) sends the boot-up frame and enters Pre-operational.
  * An unconfigured node (0xFF) runs only the LSS slave until a master gives it a node-ID.
  * @return CO_OK, CO_ERR_ARG (NULL pointers, node-ID 0 or 128..254, no send function), CO_ERR_RANGE (the
- *         OD declares more PDOs or heartbeat-consumer entries than co_config.h allows).
+ *         OD declares more PDOs than the PDO arrays hold (co_node_cfg_t.rpdo/tpdo, else CO_RPDO_MAX/CO_TPDO_MAX)
+ *         or more heartbeat-consumer entries than co_config.h allows).
  */
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now);
 
@@ -358,7 +372,7 @@ bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef);
 bool co_emcy_is_active(const co_node_t *node, uint16_t code);
 
 /** Asks TPDO n (0-based) to be sent: at once for event-driven types (inhibit time permitting), at the next SYNC for type 0. */
-void co_tpdo_trigger(co_node_t *node, uint8_t n);
+void co_tpdo_trigger(co_node_t *node, uint16_t n);
 
 /** Sets the pending node-ID (as LSS configure node-ID does); it becomes active at the next communication reset. */
 bool co_lss_set_pending_node_id(co_node_t *node, uint8_t node_id);

@@ -29,9 +29,20 @@ typedef enum co_od_type {
     CO_T_REAL32 = 0x08,
     CO_T_VISIBLE_STRING = 0x09,
     CO_T_OCTET_STRING = 0x0A,
+    CO_T_UNICODE_STRING = 0x0B,
+    CO_T_TIME_OF_DAY = 0x0C,      /**< 6 bytes (ms after midnight, days since 1984), little-endian bytes. */
+    CO_T_TIME_DIFFERENCE = 0x0D,  /**< 6 bytes, little-endian bytes. */
     CO_T_DOMAIN = 0x0F,
+    CO_T_INTEGER24 = 0x10,        /**< The 24/40/48/56-bit integers are held as little-endian bytes. */
     CO_T_REAL64 = 0x11,
+    CO_T_INTEGER40 = 0x12,
+    CO_T_INTEGER48 = 0x13,
+    CO_T_INTEGER56 = 0x14,
     CO_T_INTEGER64 = 0x15,
+    CO_T_UNSIGNED24 = 0x16,
+    CO_T_UNSIGNED40 = 0x18,
+    CO_T_UNSIGNED48 = 0x19,
+    CO_T_UNSIGNED56 = 0x1A,
     CO_T_UNSIGNED64 = 0x1B
 } co_od_type_t;
 
@@ -47,10 +58,17 @@ enum co_od_flag {
     CO_OD_KEEP = 0x0080U       /**< Survives 0x1011 restore-defaults (e.g. a node-ID or bit-timing parameter). */
 };
 
-/** Optional value limits of an integer row (inclusive). REAL rows carry none: a device hook checks them. */
+/** One limit, in the member of the row's type: r for REAL32/REAL64, u for UNSIGNED64, i for every other integer. */
+typedef union co_od_limit {
+    int64_t i;
+    uint64_t u;
+    double r;
+} co_od_limit_t;
+
+/** Optional value limits of a numeric row (inclusive): a write outside is answered 0x06090031/0x06090032. */
 typedef struct co_od_limits {
-    int64_t low;
-    int64_t high;
+    co_od_limit_t low;
+    co_od_limit_t high;
 } co_od_limits_t;
 
 /** One sub-index of the object dictionary. */
@@ -72,6 +90,7 @@ typedef struct co_od {
     const void *defaults;          /**< Default values image, values_size bytes, node-ID-relative rows without the ID. */
     uint32_t values_size;          /**< Size of the values block each node must provide. */
     uint32_t signature;            /**< Hash of the table's layout; stored blobs of another layout are not loaded. */
+    uint8_t dummy_usage;           /**< Bit n (1..7): RPDOs may map dummy entries of data type n (EDS [DummyUsage]). */
 } co_od_t;
 
 /** Who is accessing an object: decides which access checks apply and is passed to the write hook. */
@@ -91,7 +110,7 @@ const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub);
 /** True when any row of the object exists (decides 0x06020000 against 0x06090011). */
 bool co_od_has_index(const co_od_t *od, uint16_t index);
 
-/** Size in bytes of a fixed-size type, or 0 for strings/domains. */
+/** Size in bytes of a fixed-size type, or 0 for strings/domains (and types the core does not know). */
 uint16_t co_od_type_size(uint8_t type);
 
 /**

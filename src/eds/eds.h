@@ -162,6 +162,8 @@ typedef struct eds_write_options {
 /** Writes the model as an EDS (or DCF): every object with explicit sub-index sections. 0, or -1 on a write error. */
 int eds_write(FILE *out, const eds_file_t *file, const eds_write_options_t *options);
 
+/** The type's smallest (high false) or largest value. */
+void eds_type_bound(uint8_t type, bool high, eds_value_t *out);
 /** -1, 0, 1: a <=> b for two integer or real values of one type ($NODEID ignored). */
 int eds_value_cmp(const eds_value_t *a, const eds_value_t *b);
 /** True when the value is of the type's kind and fits it (node-ID-relative: for every node-ID 1..127). */

@@ -9,11 +9,13 @@
 #define _GNU_SOURCE
 #include <getopt.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "emu.h"
 #include "emu_cmdline.h"
+#include "emu_eds_class.h"
 #include "emu_output.h"
 #include "emu_runtime.h"
 #include "emu_script.h"
@@ -56,11 +58,11 @@ static bool add_interface(emu_config_t *cfg, const char *name)
 }
 
 /* Every spec parsed before anything starts, so a bad one fails first; a node-ID is unique per bus. */
-static bool parse_specs(emu_config_t *cfg, int argc, char **argv)
+static bool parse_specs(emu_config_t *cfg, int argc, char **argv, bool quiet)
 {
     for (int a = 0; a < argc; a++) {
         node_spec_t *s = &cfg->specs[cfg->n_specs];
-        if (!parse_spec(argv[a], s)) {
+        if (!parse_spec(argv[a], s, quiet)) {
             return false;
         }
         if (s->iface[0] == '\0' || strcmp(s->iface, cfg->ifaces[0]) == 0) {
@@ -168,7 +170,8 @@ int main(int argc, char **argv)
     if (config.n_ifaces == 0U) {
         config.ifaces[config.n_ifaces++] = "vcan0";
     }
-    if (!parse_specs(&config, argc - optind, &argv[optind])) {
+    atexit(eds_class_free_all); /* the classes read from EDS files outlive every node */
+    if (!parse_specs(&config, argc - optind, &argv[optind], emu.log_level == LOG_QUIET)) {
         return 2;
     }
     if (config.nvm_dir == NULL) {

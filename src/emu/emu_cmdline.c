@@ -2,14 +2,19 @@
 #define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
 #include "emu_cmdline.h"
 
+#include <limits.h>
 #include <stdlib.h>
+
+#include "emu_eds_class.h"
 #include <string.h>
 
 void usage(FILE *out)
 {
     fprintf(out,
             "usage: canopen-emu [-i IFACE]... [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID][@IFACE] ...\n"
-            "Emulates CANopen devices on SocketCAN interfaces (default vcan0).\n\n"
+            "       canopen-emu [options] FILE.eds:NODE-ID[@IFACE] FILE.dcf[:NODE-ID][@IFACE] ...\n"
+            "Emulates CANopen devices on SocketCAN interfaces (default vcan0): the built-in ones (--list-devices)\n"
+            "and any device from its EDS or DCF (docs/eds.md), in any mix.\n\n"
             "  -i, --interface IFACE   CAN interface (default vcan0); repeat it for several buses: nodes\n"
             "                          without @IFACE go to the first\n"
             "      --nvm-dir DIR       where stored parameters live (default $XDG_STATE_HOME/canopen-emu\n"
@@ -24,7 +29,7 @@ void usage(FILE *out)
             "  -h, --help              this help\n"
             "      --version           the version (and the git revision it was built from) and exit\n\n"
             "NODE-ID is 1..127, decimal or 0x-hex; default: the device's own (see --list-devices); unique per bus.\n"
-            "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12\n"
+            "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12 drive.eds:20\n"
             "         canopen-emu -i vcan0 -i vcan1 sds:16 sds:16@vcan1\n");
 }
 
@@ -44,11 +49,22 @@ void list_devices(FILE *out)
     }
 }
 
-/* DEVICE[/VARIANT][:NODE-ID][@IFACE] */
-bool parse_spec(const char *arg, node_spec_t *spec)
+static bool parse_node_id(const char *text, const char *arg, node_spec_t *spec)
 {
-    char text[128];
-    char name[64];
+    long long v;
+    if (!device_parse_int(text, 1, 127, &v)) {
+        fprintf(stderr, "canopen-emu: bad node-ID '%s' in '%s': use 1..127 (decimal or 0x-hex)\n", text, arg);
+        return false;
+    }
+    spec->id = (uint8_t)v;
+    return true;
+}
+
+/* DEVICE[/VARIANT][:NODE-ID][@IFACE], or FILE.eds|FILE.dcf[:NODE-ID][@IFACE] */
+bool parse_spec(const char *arg, node_spec_t *spec, bool quiet)
+{
+    char text[PATH_MAX + 64];
+    char name[PATH_MAX];
     memset(spec, 0, sizeof *spec);
     if (strlen(arg) >= sizeof text) {
         fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID][@IFACE]\n", arg);
@@ -72,6 +88,19 @@ bool parse_spec(const char *arg, node_spec_t *spec)
     }
     memcpy(name, text, nlen);
     name[nlen] = '\0';
+    if (eds_class_is_file(name)) {
+        spec->cls = eds_class_load(name, stderr, quiet);
+        if (spec->cls == NULL) {
+            return false;
+        }
+        spec->id = spec->cls->default_node_id;
+        if (colon == NULL && spec->id == 0U) {
+            fprintf(stderr, "canopen-emu: %s: give the node-ID (%s:ID): the file has no [DeviceComissioning] NodeID\n",
+                    arg, name);
+            return false;
+        }
+        return colon == NULL || parse_node_id(colon + 1, arg, spec);
+    }
     char *slash = strchr(name, '/');
     if (slash != NULL) {
         *slash = '\0';
@@ -84,13 +113,8 @@ bool parse_spec(const char *arg, node_spec_t *spec)
         return false;
     }
     spec->id = spec->cls->default_node_id;
-    if (colon != NULL) {
-        long long v;
-        if (!device_parse_int(colon + 1, 1, 127, &v)) {
-            fprintf(stderr, "canopen-emu: bad node-ID '%s' in '%s': use 1..127 (decimal or 0x-hex)\n", colon + 1, arg);
-            return false;
-        }
-        spec->id = (uint8_t)v;
+    if (colon != NULL && !parse_node_id(colon + 1, arg, spec)) {
+        return false;
     }
     if (spec->variant[0] != '\0') {
         bool found = false;

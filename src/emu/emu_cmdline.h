@@ -19,8 +19,10 @@ void usage(FILE *out);
 void list_devices(FILE *out);
 
 /** DEVICE[/VARIANT][:NODE-ID][@IFACE]: the class, the variant ("" for the default), the node-ID (the class's default
- *  when none is given) and the interface ("" for the first). false, with a message, when the argument is not one. */
-bool parse_spec(const char *arg, node_spec_t *spec);
+ *  when none is given) and the interface ("" for the first). DEVICE may be an EDS or DCF file (FILE.eds, FILE.dcf):
+ *  its class is built once (emu_eds_class.h); the reader's warnings go to stderr unless quiet. false, with a
+ *  message, when the argument is not one or the file cannot be emulated. */
+bool parse_spec(const char *arg, node_spec_t *spec, bool quiet);
 
 /** $XDG_STATE_HOME/canopen-emu, ~/.local/state/canopen-emu, or ./canopen-emu-nvm, written to buf. */
 const char *default_nvm_dir(char *buf, size_t len);

@@ -251,7 +251,7 @@ static json_t *hex_string(const uint8_t *b, size_t len)
 
 /* The value as JSON: integers as numbers (an UNSIGNED64 above 2^63-1 as a decimal string), BOOLEAN as true/false,
  * REAL32 as a number (NaN and infinities, which JSON lacks, as "nan", "inf", "-inf"), VISIBLE_STRING as a string,
- * OCTET_STRING and DOMAIN as hex. */
+ * OCTET_STRING, UNICODE_STRING and DOMAIN as hex. */
 static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len)
 {
     uint64_t u = 0U;
@@ -261,16 +261,6 @@ static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len
     switch (e->type) {
     case CO_T_BOOLEAN:
         return json_boolean(u != 0U);
-    case CO_T_INTEGER8:
-    case CO_T_INTEGER16:
-    case CO_T_INTEGER32:
-    case CO_T_INTEGER64: {
-        const unsigned bits = (unsigned)len * 8U;
-        if (bits > 0U && bits < 64U && (u >> (bits - 1U)) != 0U) {
-            u |= ~((UINT64_C(1) << bits) - 1U);
-        }
-        return json_integer((json_int_t)(int64_t)u);
-    }
     case CO_T_REAL32:
     case CO_T_REAL64: {
         double d;
@@ -298,9 +288,17 @@ static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len
         return jstr(text);
     }
     case CO_T_OCTET_STRING:
+    case CO_T_UNICODE_STRING:
     case CO_T_DOMAIN:
         return hex_string(buf, len);
     default:
+        if (device_type_is_signed(e->type)) {
+            const unsigned bits = (unsigned)len * 8U;
+            if (bits > 0U && bits < 64U && (u >> (bits - 1U)) != 0U) {
+                u |= ~((UINT64_C(1) << bits) - 1U);
+            }
+            return json_integer((json_int_t)(int64_t)u);
+        }
         if (u > (uint64_t)LLONG_MAX) {
             char text[24];
             (void)snprintf(text, sizeof text, "%llu", (unsigned long long)u);

@@ -13,8 +13,8 @@
 #define RWS (CO_OD_READ | CO_OD_WRITE | CO_OD_STORE)
 #define CONST (CO_OD_READ | CO_OD_CONST)
 
-static const co_od_limits_t lim_2000 = {100, 60000};
-static const co_od_limits_t lim_2001 = {-100, 100};
+static const co_od_limits_t lim_2000 = {{.i = 100}, {.i = 60000}};
+static const co_od_limits_t lim_2001 = {{.i = -100}, {.i = 100}};
 
 static const co_od_entry_t entries[] = {
     E(0x1000, 0x00, CO_T_UNSIGNED32, RO, x1000_device_type),
@@ -139,4 +139,5 @@ static const test_od_values_t defaults = {
 const co_od_t test_od = {
     "test-device", entries, (uint16_t)(sizeof entries / sizeof entries[0]), &defaults,
     (uint32_t)sizeof(test_od_values_t), 0x7E570D01UL,
+    1U << CO_T_UNSIGNED8, /* dummy UNSIGNED8 entries in RPDOs (test_pdo) */
 };

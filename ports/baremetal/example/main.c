@@ -43,7 +43,7 @@ int main(void)
     const bool have_nvm = co_bm_nvm_init(&nvm, &flash, areas, nvm_stage, sizeof nvm_stage) == CO_OK;
     co_bm_port_init(&port, &can, have_nvm ? &nvm : NULL, &clock_us);
     const co_node_cfg_t cfg = {&sds_od, &values, &port.port, &port, NULL, NULL, 0x10U, 4U /* 125 kbit/s */,
-                               NULL, CO_OPT_NMT_ACCEPT_LONG};
+                               NULL, CO_OPT_NMT_ACCEPT_LONG, NULL, 0U, NULL, 0U};
     if (co_node_init(&node, &cfg, co_bm_clock_now(&clock_us)) != CO_OK) {
         for (;;) {
         }

@@ -1,0 +1,303 @@
+/* A device class from an EDS/DCF: see emu_eds_class.h and docs/eds.md ("How a file becomes a device"). */
+#define _GNU_SOURCE
+#include "emu_eds_class.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "eds.h"
+
+typedef struct eds_class {
+    device_class_t cls;
+    co_od_t od;
+    eds_file_t *file;        /* owns the names */
+    co_od_entry_t *rows;
+    co_od_limits_t *limits;
+    uint8_t *defaults;
+    const char **names;
+    char *path;
+    char *name;
+    char *summary;
+    struct eds_class *next;
+} eds_class_t;
+
+static eds_class_t *loaded; /* the program's classes, one per file */
+
+bool eds_class_is_file(const char *name)
+{
+    const size_t n = strlen(name);
+    return n > 4U && (strcasecmp(name + n - 4U, ".eds") == 0 || strcasecmp(name + n - 4U, ".dcf") == 0);
+}
+
+/* The value a node starts with: a DCF's ParameterValue where it has one. */
+static const eds_value_t *start_value(const eds_entry_t *e)
+{
+    return e->param.kind != EDS_V_NONE ? &e->param : &e->def;
+}
+
+static bool writable(const eds_entry_t *e)
+{
+    return e->access == EDS_WO || e->access == EDS_RW || e->access == EDS_RWR || e->access == EDS_RWW;
+}
+
+/* Bytes of a row: its type's, or for strings and domains a capacity (docs/eds.md): what the file's value needs,
+ * and for a writable one at least what one SDO transfer of the core moves; never more than that. */
+static uint16_t capacity(const eds_entry_t *e, FILE *log, const char *path, bool quiet)
+{
+    const size_t fixed = eds_type_size(e->type);
+    if (fixed > 0U) {
+        return (uint16_t)fixed;
+    }
+    size_t len = start_value(e)->len;
+    if (len > CO_SDO_BUF_SIZE) {
+        if (!quiet) {
+            fprintf(log, "%s:%lu: warning: 0x%04X:%02X holds %lu bytes; the SDO server moves at most %u: cut to %u\n",
+                    path, (unsigned long)e->line, (unsigned)e->index, (unsigned)e->sub, (unsigned long)len,
+                    (unsigned)CO_SDO_BUF_SIZE, (unsigned)CO_SDO_BUF_SIZE);
+        }
+        len = CO_SDO_BUF_SIZE;
+    }
+    if (writable(e) && len < CO_SDO_BUF_SIZE) {
+        len = CO_SDO_BUF_SIZE;
+    }
+    return (uint16_t)(len > 0U ? len : 1U);
+}
+
+static uint16_t flags_of(const eds_entry_t *e)
+{
+    uint16_t f = 0U;
+    const bool w = writable(e);
+    if (e->access != EDS_WO) {
+        f |= CO_OD_READ;
+    }
+    if (w) {
+        f |= CO_OD_WRITE;
+    }
+    if (e->access == EDS_CONST) {
+        f |= CO_OD_CONST;
+    }
+    if (e->pdo_mapping && (e->access == EDS_RO || e->access == EDS_CONST || e->access == EDS_RW || e->access == EDS_RWR)) {
+        f |= CO_OD_TPDO;
+    }
+    if (e->pdo_mapping && (e->access == EDS_WO || e->access == EDS_RW || e->access == EDS_RWW)) {
+        f |= CO_OD_RPDO;
+    }
+    if (start_value(e)->nodeid) {
+        f |= CO_OD_NODEID;
+    }
+    /* 0x1010 saves every writable parameter but the command objects, the error history and program data. */
+    if (w && e->index != 0x1010U && e->index != 0x1011U && e->index != 0x1003U && e->type != CO_T_DOMAIN &&
+        !(e->index >= 0x1F50U && e->index <= 0x1F5FU)) {
+        f |= CO_OD_STORE;
+    }
+    return f;
+}
+
+static void put_default(uint8_t *dst, const co_od_entry_t *row, const eds_value_t *v)
+{
+    switch (v->kind) {
+    case EDS_V_BYTES:
+        memcpy(dst, v->bytes, v->len < row->size ? v->len : row->size);
+        return;
+    case EDS_V_REAL:
+        if (row->size == 4U) {
+            const float f = (float)v->r;
+            memcpy(dst, &f, sizeof f);
+        } else {
+            memcpy(dst, &v->r, sizeof v->r);
+        }
+        return;
+    default: {
+        const uint64_t u = v->kind == EDS_V_INT ? (uint64_t)v->i : v->u;
+        if (row->size == 1U || row->size == 2U || row->size == 4U || row->size == 8U) {
+            const uint8_t u8 = (uint8_t)u;
+            const uint16_t u16 = (uint16_t)u;
+            const uint32_t u32 = (uint32_t)u;
+            memcpy(dst, row->size == 1U ? (const void *)&u8 : row->size == 2U ? (const void *)&u16
+                        : row->size == 4U ? (const void *)&u32 : (const void *)&u, row->size);
+        } else {
+            for (uint16_t i = 0U; i < row->size; i++) { /* odd sizes: little-endian bytes (co_od.h) */
+                dst[i] = (uint8_t)(u >> (8U * i));
+            }
+        }
+        return;
+    }
+    }
+}
+
+static co_od_limit_t limit_of(const eds_entry_t *e, const eds_value_t *v, bool high)
+{
+    eds_value_t bound;
+    if (v->kind == EDS_V_NONE) {
+        eds_type_bound(e->type, high, &bound);
+        v = &bound;
+    }
+    co_od_limit_t l;
+    if (v->kind == EDS_V_REAL) {
+        l.r = v->r;
+    } else if (v->kind == EDS_V_UINT && e->type == CO_T_UNSIGNED64) {
+        l.u = v->u;
+    } else {
+        l.i = v->kind == EDS_V_INT ? v->i : (int64_t)v->u;
+    }
+    return l;
+}
+
+static uint8_t bit_timing_of(const eds_file_t *f)
+{
+    static const uint16_t kbit[] = {1000, 800, 500, 250, 125, 0, 50, 20, 10};
+    for (uint8_t i = 0U; i < sizeof kbit / sizeof kbit[0]; i++) {
+        if (f->comm.baudrate_kbit != 0U && kbit[i] == f->comm.baudrate_kbit) {
+            return i;
+        }
+    }
+    return 4U; /* 125 kbit/s */
+}
+
+static uint16_t pdo_count(const eds_file_t *f, uint16_t base)
+{
+    uint16_t n = 0U;
+    for (uint32_t i = 0; i < f->n_objects; i++) {
+        const uint16_t x = f->objects[i].index;
+        if (x >= base && x < base + 0x200U) {
+            n = (uint16_t)(x - base + 1U);
+        }
+    }
+    return n;
+}
+
+static void free_class(eds_class_t *c)
+{
+    if (c == NULL) {
+        return;
+    }
+    free(c->rows);
+    free(c->limits);
+    free(c->defaults);
+    free(c->names);
+    free(c->path);
+    free(c->name);
+    free(c->summary);
+    eds_free(c->file);
+    free(c);
+}
+
+/* Builds the table of a file read without errors. */
+static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet)
+{
+    eds_class_t *c = calloc(1U, sizeof *c);
+    if (c == NULL) {
+        return NULL;
+    }
+    const uint32_t n = f->n_entries; /* c->file is set at the end: until then the caller owns f */
+    c->rows = calloc(n, sizeof *c->rows);
+    c->limits = calloc(n, sizeof *c->limits);
+    c->names = calloc(n, sizeof *c->names);
+    c->path = strdup(path);
+    const char *base = strrchr(path, '/');
+    c->name = strdup(base != NULL ? base + 1 : path);
+    if (c->rows == NULL || c->limits == NULL || c->names == NULL || c->path == NULL || c->name == NULL || n > 0xFFFFU) {
+        free_class(c);
+        return NULL;
+    }
+    uint32_t offset = 0U, hash = 2166136261U; /* FNV-1a of the layout: stored values of another layout are refused */
+    for (uint32_t i = 0; i < n; i++) {
+        const eds_entry_t *e = &f->entries[i];
+        co_od_entry_t *r = &c->rows[i];
+        r->index = e->index;
+        r->sub = e->sub;
+        r->type = e->type;
+        r->flags = flags_of(e);
+        r->size = capacity(e, log, path, quiet);
+        const uint32_t align = (r->size == 2U || r->size == 4U || r->size == 8U) ? r->size : 1U;
+        offset = (offset + align - 1U) / align * align;
+        r->offset = offset;
+        offset += r->size;
+        if (e->low.kind != EDS_V_NONE || e->high.kind != EDS_V_NONE) {
+            c->limits[i].low = limit_of(e, &e->low, false);
+            c->limits[i].high = limit_of(e, &e->high, true);
+            r->limits = &c->limits[i];
+        }
+        c->names[i] = e->name;
+        const uint8_t key[6] = {(uint8_t)e->index, (uint8_t)(e->index >> 8), e->sub, e->type, (uint8_t)r->size,
+                                (uint8_t)(r->size >> 8)};
+        for (size_t k = 0; k < sizeof key; k++) {
+            hash = (hash ^ key[k]) * 16777619U;
+        }
+    }
+    c->defaults = calloc(1U, offset > 0U ? offset : 1U);
+    if (c->defaults == NULL) {
+        free_class(c);
+        return NULL;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        put_default(c->defaults + c->rows[i].offset, &c->rows[i], start_value(&f->entries[i]));
+    }
+    char summary[256];
+    snprintf(summary, sizeof summary, "%s%s%s (from %s)", f->vendor_name, f->vendor_name[0] != '\0' ? " " : "",
+             f->product_name[0] != '\0' ? f->product_name : "device", c->name);
+    c->summary = strdup(summary);
+    c->file = f;
+    c->od.name = c->name;
+    c->od.entries = c->rows;
+    c->od.count = (uint16_t)n;
+    c->od.defaults = c->defaults;
+    c->od.values_size = offset;
+    c->od.signature = hash;
+    c->od.dummy_usage = f->dummy_usage;
+    device_class_t *cls = &c->cls;
+    cls->name = c->name;
+    cls->summary = c->summary != NULL ? c->summary : c->name;
+    cls->od = &c->od;
+    cls->od_names = c->names;
+    cls->default_node_id = f->comm.node_id; /* 0: the command line must give one */
+    cls->default_bit_timing = bit_timing_of(f);
+    cls->core_options = CO_OPT_SDO_SEGMENTED | (f->lss_supported ? 0U : CO_OPT_NO_LSS);
+    cls->rpdo_count = pdo_count(f, 0x1400U);
+    cls->tpdo_count = pdo_count(f, 0x1800U);
+    cls->model_size = device_pdo_state_size(cls);
+    return c;
+}
+
+const device_class_t *eds_class_load(const char *path, FILE *log, bool quiet)
+{
+    for (eds_class_t *c = loaded; c != NULL; c = c->next) {
+        if (strcmp(c->path, path) == 0) {
+            return &c->cls;
+        }
+    }
+    eds_file_t *f = eds_read_file(path);
+    if (f == NULL) {
+        fprintf(log, "canopen-emu: %s: out of memory\n", path);
+        return NULL;
+    }
+    for (uint32_t i = 0; i < f->n_diagnostics; i++) {
+        if (!quiet || f->errors > 0U) {
+            fprintf(log, "%s\n", f->diagnostics[i]);
+        }
+    }
+    if (f->errors > 0U) {
+        fprintf(log, "canopen-emu: %s cannot be emulated (%lu errors)\n", path, (unsigned long)f->errors);
+        eds_free(f);
+        return NULL;
+    }
+    eds_class_t *c = build(f, path, log, quiet);
+    if (c == NULL) {
+        fprintf(log, "canopen-emu: %s: out of memory\n", path);
+        eds_free(f);
+        return NULL;
+    }
+    c->next = loaded;
+    loaded = c;
+    return &c->cls;
+}
+
+void eds_class_free_all(void)
+{
+    while (loaded != NULL) {
+        eds_class_t *next = loaded->next;
+        free_class(loaded);
+        loaded = next;
+    }
+}

@@ -1,0 +1,114 @@
+"""canopen-emu FILE.eds:ID and FILE.dcf: a device from its description, served by the core as the file declares,
+with python-canopen as the master reading the same file (tests/eds/files/, our own)."""
+import struct
+import subprocess
+import time
+
+import canopen
+import pytest
+from canopen.sdo.exceptions import SdoAbortedError
+
+from conftest import EMU, SRC
+
+FILES = SRC / "tests" / "eds" / "files"
+
+
+def eds_node(network, path, node_id):
+    node = canopen.RemoteNode(node_id, str(path))
+    node.sdo.RESPONSE_TIMEOUT = 5.0
+    network.add_node(node)
+    return node
+
+
+def test_every_type_read_and_written_as_the_file_says(emulator, network, capture):
+    emulator(f"{FILES / 'all-types.eds'}:0x31")
+    capture.wait_for(0x731, data=b"\x00", timeout=3)
+    node = eds_node(network, FILES / "all-types.eds", 0x31)
+    # the defaults, through python-canopen's decoding of the same file
+    assert node.sdo[0x2002].raw == -300
+    assert node.sdo.upload(0x200E, 0) == struct.pack("<i", -(2 ** 23))[:3]         # INTEGER24, 3 bytes
+    assert node.sdo.upload(0x2011, 0) == (2 ** 47 - 1).to_bytes(6, "little")      # INTEGER48
+    assert node.sdo.upload(0x2017, 0) == (2 ** 56 - 1).to_bytes(7, "little")      # UNSIGNED56
+    assert node.sdo.upload(0x200B, 0) == (0xA5A5A5A5).to_bytes(6, "little")       # TIME_OF_DAY
+    assert node.sdo.upload(0x2009, 0) == bytes.fromhex("0102A0FF") + bytes(60)   # OCTET_STRING, capacity 64
+    assert node.sdo.upload(0x2008, 0).rstrip(b"\0") == b"hello world"
+    assert node.sdo[0x2007].raw == pytest.approx(2.5)
+    # limits of every kind: INTEGER16, REAL32 (dropped before), UNSIGNED64
+    node.sdo[0x2002].raw = 1000
+    with pytest.raises(SdoAbortedError) as e:
+        node.sdo[0x2002].raw = 1001
+    assert e.value.code == 0x06090031
+    node.sdo[0x2007].raw = 10.0
+    with pytest.raises(SdoAbortedError) as e:
+        node.sdo[0x2007].raw = 100.0
+    assert e.value.code == 0x06090031
+    with pytest.raises(SdoAbortedError) as e:
+        node.sdo.download(0x2018, 0, struct.pack("<Q", 0x0F))
+    assert e.value.code == 0x06090032
+    assert node.sdo[0x2007].raw == pytest.approx(10.0)
+
+
+def test_twenty_pdos_of_a_file(emulator, network, capture):
+    emu = emulator(f"{FILES / 'many-pdos.eds'}:0x32")
+    capture.wait_for(0x732, data=b"\x00", timeout=3)
+    node = eds_node(network, FILES / "many-pdos.eds", 0x32)
+    node.nmt.state = "OPERATIONAL"
+    # TPDOs are event-driven (254): one goes out when a mapped value changes. TPDO 1 (0x180 + node-ID) maps 0x2200.
+    since = time.time()
+    emu.command("set 0x32 0x2200 0x1234", expect="0x2200")
+    assert capture.wait_for(0x1B2, timeout=3, since=since)[-1].data == b"\x34\x12"
+    # TPDO 12, invalid in the file (bit 31), made valid on 0x38B: the twelfth PDO, beyond the core's own 4
+    node.sdo.download(0x180B, 1, struct.pack("<I", 0x38B))
+    since = time.time()
+    emu.command("set 0x32 0x220B 0x0BAD", expect="0x220B")
+    assert capture.wait_for(0x38B, timeout=3, since=since)[-1].data == b"\xad\x0b"
+    # RPDO 8 (invalid in the file) made valid on 0x300 writes its input word 0x2107
+    node.sdo.download(0x1407, 1, struct.pack("<I", 0x300))
+    network.send_message(0x300, b"\x99\x88")
+    time.sleep(0.2)
+    assert node.sdo[0x2107].raw == 0x8899
+
+
+def test_dcf_values_node_id_and_commissioning(emulator, network, capture):
+    emulator(str(FILES / "device.dcf"))  # no :ID: the DCF's NodeID 5
+    capture.wait_for(0x705, data=b"\x00", timeout=3)
+    hb = capture.wait_for(0x705, count=3, timeout=3, data=b"\x7f")  # ParameterValue 500 ms heartbeat
+    gaps = [b.timestamp - a.timestamp for a, b in zip(hb, hb[1:])]
+    assert all(0.45 < g < 0.6 for g in gaps), gaps
+    node = eds_node(network, FILES / "device.dcf", 5)
+    assert node.sdo[0x2000].raw == 1200                       # ParameterValue, not DefaultValue 0
+    assert node.sdo.upload(0x2100, 1) == struct.pack("<h", -5)   # [2100Value] of a compact array
+    assert node.sdo.upload(0x2100, 2) == struct.pack("<h", 0)
+
+
+def test_lss_only_where_supported(emulator, network, capture):
+    # LSS_Supported=0 in all-types.eds: an LSS inquiry gets no answer; the Buerkert (LSS) answers
+    emulator(f"{FILES / 'all-types.eds'}:0x33", "buerkert:0x34")
+    capture.wait_for(0x734, data=b"\x00", timeout=3)
+    since = time.time()
+    network.send_message(0x7E5, b"\x04\x01" + bytes(6))  # switch state global: configuration
+    network.send_message(0x7E5, b"\x5E" + bytes(7))      # inquire node-ID
+    answers = capture.wait_for(0x7E4, timeout=2, since=since)
+    assert [m.data[1] for m in answers] == [0x34]
+
+
+def test_dummy_mapping_follows_the_file(emulator, network, capture):
+    emulator(f"{FILES / 'dummy-usage.eds'}:0x35")
+    capture.wait_for(0x735, data=b"\x00", timeout=3)
+    node = eds_node(network, FILES / "dummy-usage.eds", 0x35)
+    node.sdo.download(0x1400, 1, struct.pack("<I", 0x80000235))
+    node.sdo.download(0x1600, 0, b"\x00")
+    node.sdo.download(0x1600, 1, struct.pack("<I", 0x00050008))  # Dummy0005=1: taken
+    with pytest.raises(SdoAbortedError) as e:
+        node.sdo.download(0x1600, 1, struct.pack("<I", 0x00070020))  # Dummy0007=0: refused
+    assert e.value.code == 0x06040041
+
+
+def test_files_that_cannot_be_emulated_exit_2(tmp_path):
+    bad = tmp_path / "bad.eds"
+    bad.write_bytes(b"\x00\x01binary")
+    r = subprocess.run([EMU, f"{bad}:5"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2
+    assert f"{bad}:1: error: a NUL byte" in r.stderr and f"{bad} cannot be emulated" in r.stderr
+    r = subprocess.run([EMU, str(FILES / "minimal.eds")], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "give the node-ID" in r.stderr
