@@ -4,6 +4,7 @@
 
 #include <string.h>
 
+#include "emu_eds_class.h"
 #include "emu_output.h"
 
 /* The words of a line into argv; -1 when there are more than MAX_ARGS (the rest was ignored and the command then
@@ -53,6 +54,7 @@ static void help(void)
           "  fault NODE KIND [ARGS]       make the node misbehave on the bus (kinds: fault NODE)\n"
           "  fault-clear NODE [KIND]      end its faults (all when no KIND is given)\n"
           "  faults NODE                  the node's faults and their effect\n"
+          "  export-dcf NODE FILE         a node read from an EDS/DCF, its current values as a DCF\n"
           "  help [NODE]                  this text, or the device commands of NODE\n"
           "  subscribe KIND[,KIND...] [NODE...]  events of these kinds (or all) to this session\n"
           "  subscribe frame COB-ID[/MASK]  the frames whose identifier matches, as events\n"
@@ -144,6 +146,24 @@ int select_nodes_any_bus(emu_t *emu, char *word, emu_node_t **out, size_t max)
     return select_on(emu, word, out, max, true);
 }
 
+/* export-dcf NODE FILE: one node's current values as a DCF (emu_eds_class.h). */
+static command_result_t export_dcf(emu_t *emu, int argc, char **argv, emu_node_t **nodes, int n_sel)
+{
+    (void)emu;
+    if (argc != 3 || n_sel != 1) {
+        reply("error: export-dcf takes one node and a file: export-dcf NODE FILE");
+        return COMMAND_ERROR;
+    }
+    char why[512];
+    emu_node_t *n = nodes[0];
+    if (!eds_class_export(&n->dev, argv[2], why, sizeof why)) {
+        reply("node %u: error: export-dcf: %s", co_node_id(&n->dev.node), why);
+        return COMMAND_ERROR;
+    }
+    reply("node %u: DCF written to %s", co_node_id(&n->dev.node), argv[2]);
+    return COMMAND_OK;
+}
+
 command_result_t run_command(emu_t *emu, char *line)
 {
     char *argv[MAX_ARGS];
@@ -190,6 +210,9 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
     if (n_sel == 0) {
         reply("error: no node %s", argv[1]);
         return COMMAND_ERROR;
+    }
+    if (strcmp(argv[0], "export-dcf") == 0) {
+        return export_dcf(emu, argc, argv, nodes, n_sel);
     }
     command_result_t result = COMMAND_OK;
     const char *const cmd = argv[0];

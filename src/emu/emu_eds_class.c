@@ -2,9 +2,11 @@
 #define _GNU_SOURCE
 #include "emu_eds_class.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 #include "eds.h"
 
@@ -291,6 +293,61 @@ const device_class_t *eds_class_load(const char *path, FILE *log, bool quiet)
     c->next = loaded;
     loaded = c;
     return &c->cls;
+}
+
+/* The current value of an entry: what an SDO upload would give, without access rights. */
+static long current_value(void *ctx, const eds_entry_t *e, uint8_t *buf, size_t cap)
+{
+    device_t *dev = ctx;
+    size_t len = 0U;
+    if (co_od_read(&dev->node, e->index, e->sub, buf, cap, &len, CO_ORIGIN_LOCAL) != 0U) {
+        return -1;
+    }
+    return (long)len;
+}
+
+bool eds_class_export(device_t *dev, const char *path, char *why, size_t cap)
+{
+    const eds_class_t *c = loaded;
+    while (c != NULL && &c->cls != dev->cls) {
+        c = c->next;
+    }
+    if (c == NULL) {
+        snprintf(why, cap, "%s is a built-in device: export-dcf writes devices read from an EDS or DCF (its EDS is "
+                           "od/ in the sources)", dev->cls->name);
+        return false;
+    }
+    char tmp[4096];
+    if ((size_t)snprintf(tmp, sizeof tmp, "%s.tmp", path) >= sizeof tmp) {
+        snprintf(why, cap, "path too long");
+        return false;
+    }
+    FILE *out = fopen(tmp, "w");
+    if (out == NULL) {
+        snprintf(why, cap, "%s: %s", tmp, strerror(errno));
+        return false;
+    }
+    eds_write_options_t o;
+    memset(&o, 0, sizeof o);
+    o.dcf = true;
+    o.node_id = co_node_id(&dev->node) <= 127U ? co_node_id(&dev->node) : 0U;
+    const char *base = strrchr(path, '/');
+    o.file_name = base != NULL ? base + 1 : path;
+    o.current = current_value;
+    o.ctx = dev;
+    const int written = eds_write(out, c->file, &o);
+    const bool closed = fflush(out) == 0 && fsync(fileno(out)) == 0;
+    if (fclose(out) != 0 || written != 0 || !closed) {
+        snprintf(why, cap, "%s: %s", tmp, strerror(errno != 0 ? errno : EIO));
+        (void)unlink(tmp);
+        return false;
+    }
+    if (rename(tmp, path) != 0) {
+        snprintf(why, cap, "%s: %s", path, strerror(errno));
+        (void)unlink(tmp);
+        return false;
+    }
+    return true;
 }
 
 void eds_class_free_all(void)

@@ -20,6 +20,13 @@ bool eds_class_is_file(const char *name);
  */
 const device_class_t *eds_class_load(const char *path, FILE *log, bool quiet);
 
+/**
+ * Writes a node of a class read from a file as a DCF (export-dcf): the file's objects, each with its current value
+ * as ParameterValue, [DeviceComissioning] with the node's node-ID. The file appears whole or not at all (written
+ * beside, then renamed). false with the reason in why (also for a built-in device: it has no file model here).
+ */
+bool eds_class_export(device_t *dev, const char *path, char *why, size_t cap);
+
 /** Frees every class loaded (at exit, after the nodes are gone). */
 void eds_class_free_all(void);
 

@@ -1,5 +1,7 @@
 """canopen-emu FILE.eds:ID and FILE.dcf: a device from its description, served by the core as the file declares,
 with python-canopen as the master reading the same file (tests/eds/files/, our own)."""
+import json
+import os
 import struct
 import subprocess
 import time
@@ -8,9 +10,12 @@ import canopen
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
+from pathlib import Path
+
 from conftest import EMU, SRC
 
 FILES = SRC / "tests" / "eds" / "files"
+EDS_TOOL = os.environ.get("CO_EDS_TOOL", str(Path(EMU).parent / "canopen-eds"))
 
 
 def eds_node(network, path, node_id):
@@ -112,3 +117,33 @@ def test_files_that_cannot_be_emulated_exit_2(tmp_path):
     assert f"{bad}:1: error: a NUL byte" in r.stderr and f"{bad} cannot be emulated" in r.stderr
     r = subprocess.run([EMU, str(FILES / "minimal.eds")], capture_output=True, text=True, timeout=30)
     assert r.returncode == 2 and "give the node-ID" in r.stderr
+
+
+def test_export_dcf_reads_back_with_the_current_values(emulator, network, capture, tmp_path):
+    emu = emulator(f"{FILES / 'all-types.eds'}:0x36", "sds:0x37")
+    capture.wait_for(0x736, data=b"\x00", timeout=3)
+    node = eds_node(network, FILES / "all-types.eds", 0x36)
+    node.sdo[0x2002].raw = -123
+    node.sdo[0x2007].raw = 7.25
+    node.sdo.download(0x2008, 0, b"changed")
+    emu.command("set 0x36 0x2012 -5", expect="0x2012")  # INTEGER56, set by the device
+    out = tmp_path / "node36.dcf"
+    assert emu.command(f"export-dcf 0x36 {out}", expect="DCF") == f"node 54: DCF written to {out}"
+    od = canopen.import_od(str(out), node_id=0x36)
+    assert od[0x2002].value == -123 and od[0x2007].value == pytest.approx(7.25)
+    assert od[0x2008].value == "changed"
+    reread = json.loads(subprocess.run([EDS_TOOL, "json", str(out)], capture_output=True, text=True,
+                                       check=True).stdout)
+    values = {(e["index"], e["sub"]): e["param"] for e in reread["entries"]}
+    assert values[(0x2002, 0)] == -123 and values[(0x2012, 0)] == -5 and values[(0x2008, 0)] == "changed"
+    assert reread["commissioning"]["node_id"] == 0x36 and reread["warnings"] == 0
+    assert emu.command(f"export-dcf 0x37 {tmp_path / 'x.dcf'}", expect="error") == \
+        "node 55: error: export-dcf: sds is a built-in device: export-dcf writes devices read from an EDS or DCF " \
+        "(its EDS is od/ in the sources)"
+    assert not (tmp_path / "x.dcf").exists()
+    # the exported DCF runs as a device of its own (node-ID from the DCF), with those values
+    emu.stop()
+    since = time.time()
+    emulator(str(out))
+    capture.wait_for(0x736, data=b"\x00", timeout=3, since=since)
+    assert node.sdo[0x2002].raw == -123 and node.sdo.upload(0x2008, 0).rstrip(b"\0") == b"changed"
