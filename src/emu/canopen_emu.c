@@ -97,7 +97,10 @@ int main(int argc, char **argv)
         {"list-devices", no_argument, NULL, 'l'},    {"verbose", no_argument, NULL, 'v'},
         {"quiet", no_argument, NULL, 'q'},           {"help", no_argument, NULL, 'h'},
         {"version", no_argument, NULL, 'V'},         {"control-socket", required_argument, NULL, 'u'},
-        {"control-tcp", required_argument, NULL, 't'}, {NULL, 0, NULL, 0}};
+        {"control-tcp", required_argument, NULL, 't'}, {"rules", required_argument, NULL, 'r'},
+        {NULL, 0, NULL, 0}};
+    const char *rules[16];
+    size_t n_rules = 0U;
     int opt;
     while ((opt = getopt_long(argc, argv, "i:vqh", opts, NULL)) != -1) {
         switch (opt) {
@@ -122,6 +125,13 @@ int main(int argc, char **argv)
             break;
         case 's':
             config.script = optarg;
+            break;
+        case 'r':
+            if (n_rules == sizeof rules / sizeof rules[0]) {
+                fprintf(stderr, "canopen-emu: at most %zu --rules files\n", sizeof rules / sizeof rules[0]);
+                return 2;
+            }
+            rules[n_rules++] = optarg;
             break;
         case 'u':
             config.control_socket = optarg;
@@ -173,6 +183,11 @@ int main(int argc, char **argv)
     atexit(eds_class_free_all); /* the classes read from EDS files outlive every node */
     if (!parse_specs(&config, argc - optind, &argv[optind], emu.log_level == LOG_QUIET)) {
         return 2;
+    }
+    for (size_t i = 0U; i < n_rules; i++) {
+        if (!eds_class_attach_rules(rules[i], stderr)) {
+            return 2;
+        }
     }
     if (config.nvm_dir == NULL) {
         config.nvm_dir = default_nvm_dir(nvm_default, sizeof nvm_default);

@@ -23,6 +23,7 @@ void usage(FILE *out)
             "      --control-socket PATH  accept control clients on a Unix socket (mode 0600)\n"
             "      --control-tcp HOST:PORT  accept control clients on TCP (127.0.0.1:5020; port 0: any free one)\n"
             "      --script FILE       run control commands from FILE ('@MS command' lines, see canopen-emu(1))\n"
+            "      --rules FILE        behaviour rules (YAML) for a device read from an EDS/DCF (docs/eds.md)\n"
             "      --list-devices      list the device types and exit\n"
             "  -v, --verbose           log every frame sent and received as well\n"
             "  -q, --quiet             log only problems\n"

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "eds.h"
+#include "emu_rules.h"
 
 typedef struct eds_class {
     device_class_t cls;
@@ -21,6 +22,7 @@ typedef struct eds_class {
     char *path;
     char *name;
     char *summary;
+    rules_t *rules;          /* --rules, or NULL */
     struct eds_class *next;
 } eds_class_t;
 
@@ -181,6 +183,7 @@ static void free_class(eds_class_t *c)
     free(c->path);
     free(c->name);
     free(c->summary);
+    rules_free(c->rules);
     eds_free(c->file);
     free(c);
 }
@@ -347,6 +350,78 @@ bool eds_class_export(device_t *dev, const char *path, char *why, size_t cap)
         (void)unlink(tmp);
         return false;
     }
+    return true;
+}
+
+/* ---- Rules: the class's hooks when a rules file is attached ---------------------------------------------------- */
+
+static const eds_class_t *class_of(const device_t *dev) { return (const eds_class_t *)(const void *)dev->cls; }
+
+static void *rules_state(device_t *dev) { return (uint8_t *)dev->model + device_pdo_state_size(dev->cls); }
+
+static co_time_us_t rules_hook_step(device_t *dev, co_time_us_t now)
+{
+    return rules_step(class_of(dev)->rules, rules_state(dev), dev, now);
+}
+
+static uint32_t rules_hook_write(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len,
+                                 co_od_origin_t origin)
+{
+    (void)origin;
+    return rules_on_write(class_of(dev)->rules, rules_state(dev), dev, e, data, len);
+}
+
+/* The rules start (again) when the application area has its values: at power-on after NVM is loaded, and at an NMT
+ * reset application; not in power_on, which runs before the node exists. */
+static void rules_hook_reset(device_t *dev, co_reset_t what)
+{
+    if (what == CO_RESET_APPLICATION) {
+        rules_power_on(class_of(dev)->rules, rules_state(dev), dev, dev->now);
+    }
+}
+
+bool eds_class_attach_rules(const char *path, FILE *log)
+{
+    if (loaded == NULL) {
+        fprintf(log, "%s: error: --rules is for devices read from an EDS/DCF; none is on the command line\n", path);
+        return false;
+    }
+    /* parsed against the first class first: the file's device: key may then name another */
+    const char *device = NULL;
+    rules_t *r = rules_load(path, &loaded->od, log, &device);
+    eds_class_t *c = loaded;
+    if (r != NULL && device != NULL) {
+        for (c = loaded; c != NULL && strcmp(c->name, device) != 0; c = c->next) {
+        }
+        if (c == NULL) {
+            fprintf(log, "%s: error: device: %s is not an EDS/DCF on the command line\n", path, device);
+            rules_free(r);
+            return false;
+        }
+        if (c != loaded) { /* resolved against the wrong table: again against its own */
+            rules_free(r);
+            r = rules_load(path, &c->od, log, &device);
+        }
+    } else if (r != NULL && loaded->next != NULL) {
+        fprintf(log, "%s: error: several EDS/DCF devices are on the command line: say which with 'device: NAME'\n",
+                path);
+        rules_free(r);
+        return false;
+    }
+    if (r == NULL) {
+        return false;
+    }
+    if (c->rules != NULL) {
+        fprintf(log, "%s: error: %s has rules already\n", path, c->name);
+        rules_free(r);
+        return false;
+    }
+    c->rules = r;
+    device_class_t *cls = &c->cls;
+    cls->step = rules_hook_step;
+    cls->on_write = rules_hook_write;
+    cls->on_reset = rules_hook_reset;
+    cls->model_size = device_pdo_state_size(cls) + rules_state_size(r);
     return true;
 }
 

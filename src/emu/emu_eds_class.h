@@ -27,6 +27,12 @@ const device_class_t *eds_class_load(const char *path, FILE *log, bool quiet);
  */
 bool eds_class_export(device_t *dev, const char *path, char *why, size_t cap);
 
+/**
+ * Attaches a rules file (--rules, docs/eds.md "Rules") to the class it names (its `device:` key, the file name of an
+ * EDS/DCF on the command line) or, without one, to the only such class. false after printing why.
+ */
+bool eds_class_attach_rules(const char *path, FILE *log);
+
 /** Frees every class loaded (at exit, after the nodes are gone). */
 void eds_class_free_all(void);
 

@@ -42,6 +42,7 @@ EXPECTED_DIAGNOSTICS = {
     "all-types.eds": [],
     "compact.eds": [],
     "device.dcf": [],
+    "drive.eds": [],
     "domain-links.eds": [],
     "many-pdos.eds": [],
     "numbers.eds": ["numbers.eds:145: warning: [2003] DefaultValue: '08' has a leading 0 but is not octal: read as decimal"],
