@@ -615,9 +615,13 @@ co_time_us_t rules_step(const rules_t *r, void *state, device_t *dev, co_time_us
     rule_state_t *rs = rule_states(state);
     for (uint32_t i = 0U; i < r->n_rules; i++) {
         const rule_t *rule = &r->rules[i];
-        /* a walk or a counter catches up at most a day of its ticks; beyond, it restarts its grid */
-        if ((rule->kind == B_WALK || rule->kind == B_COUNTER) && now > rs[i].next + 86400000000ULL) {
-            rs[i].next = now;
+        /* After a long stall (a suspended host, a jump of the clock) a walk or a counter simulates only its last
+         * 1000 ticks: the grid moves on, and the node is never held up by a catch-up linear in the gap. */
+        if ((rule->kind == B_WALK || rule->kind == B_COUNTER) && now >= rs[i].next) {
+            const uint64_t behind = (now - rs[i].next) / rule->every_us;
+            if (behind > 1000U) {
+                rs[i].next += (behind - 1000U) * rule->every_us;
+            }
         }
         rules_set(&dev->node, rule->row, rule_value(rule, &rs[i], dev, t, dt, now));
         const co_time_us_t due = rule->kind == B_CONSTANT ? CO_NEVER

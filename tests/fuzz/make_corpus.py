@@ -902,6 +902,30 @@ def eds_seeds():
     return seeds
 
 
+def rules_seeds():
+    """The rules of tests/eds/rules/drive.yaml and small ones, each with records that drive the CiA 402 drive."""
+    import struct
+    drive = open(os.path.join(HERE, "..", "eds", "rules", "drive.yaml"), "rb").read()
+    wait = lambda ms: bytes([0x00]) + struct.pack("<H", ms - 1) + b"\0\0"            # noqa: E731
+    control = lambda cw: bytes([0x40]) + struct.pack("<H", cw) + b"\0\0"              # noqa: E731
+    write = lambda sel, v: bytes([0x80, sel]) + struct.pack("<i", v)[:3]               # noqa: E731
+    pp = (write(4, 50000) + write(2, 4000) + control(0x06) + control(0x0F) + control(0x1F) + wait(200)
+          + control(0x0F) + control(0x02) + wait(50))
+    velocity = write(1, 3) + write(5, 1500) + control(0x06) + control(0x0F) + wait(300) + bytes([0xE0, 0x10, 0, 0, 0])
+    return {
+        "drive-position": drive + b"\0" + pp,
+        "drive-velocity": drive + b"\0" + velocity + wait(1000),
+        "walk-counter": b'objects:\n  "0x2002": {random_walk: {start: 480, step: 2, min: 470, max: 490, seed: 3, '
+                        b'every_ms: 1}}\n  "0x2001": {counter: {start: 5, step: 2, every_ms: 10, wrap: 40}}\n'
+                        b"\0" + wait(500) + bytes([0xE0, 0xFF, 0xFF, 0, 0]) + wait(20),
+        "follow-steps-alarm": b'objects:\n  "0x2006": {follow: {object: "0x2005", lag_ms: 50, gain: 2}}\n'
+                              b'  "0x2004": {steps: [[1, 5], [7, 10]]}\nalarms:\n  - {object: "0x2006", above: 5, '
+                              b'hysteresis: 1, emcy: 0x2310}\n\0' + write(0, 0x410000) + wait(400),
+        "bad-yaml": b"objects: [\n",
+        "bad-keys": b'profile: cia402\nobjects:\n  "0x6064": {sine: {amplitude: x}}\n',
+    }
+
+
 def targets():
     out = {}
     out["core"] = vector_seeds((0, OWN, 0, 0), (0, 0xFF, 0, 0))
@@ -915,6 +939,7 @@ def targets():
     out["script"] = script_seeds()
     out["control"] = control_seeds()
     out["eds"] = eds_seeds()
+    out["rules"] = rules_seeds()
     return out
 
 

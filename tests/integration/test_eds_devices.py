@@ -147,3 +147,25 @@ def test_export_dcf_reads_back_with_the_current_values(emulator, network, captur
     emulator(str(out))
     capture.wait_for(0x736, data=b"\x00", timeout=3, since=since)
     assert node.sdo[0x2002].raw == -123 and node.sdo.upload(0x2008, 0).rstrip(b"\0") == b"changed"
+
+
+def test_store_and_restore_of_a_file_device(emulator, network, capture, tmp_path):
+    drive = FILES / "drive.eds"
+    nvm = tmp_path / "nvm"
+    emu = emulator(f"{drive}:0x38", nvm_dir=nvm)
+    capture.wait_for(0x738, data=b"\x00", timeout=3)
+    node = eds_node(network, drive, 0x38)
+    node.sdo[0x2005].raw = 3.5
+    node.sdo[0x1017].raw = 250
+    node.sdo.download(0x1010, 1, b"save")
+    assert sorted(p.name for p in nvm.iterdir() if p.name.endswith(".params")) == ["drive.eds-56.params"]
+    emu.stop()
+    since = time.time()
+    emu = emulator(f"{drive}:0x38", nvm_dir=nvm)
+    capture.wait_for(0x738, data=b"\x00", timeout=3, since=since)
+    assert node.sdo[0x2005].raw == pytest.approx(3.5) and node.sdo[0x1017].raw == 250  # loaded at power-on
+    node.sdo.download(0x1011, 1, b"load")
+    since = time.time()
+    node.nmt.state = "RESET"
+    capture.wait_for(0x738, data=b"\x00", timeout=3, since=since)
+    assert node.sdo[0x2005].raw == 0.0 and node.sdo[0x1017].raw == 0               # the file's defaults again
