@@ -106,6 +106,8 @@ static void start_motion(const cia402_objects_t *o, cia402_state_t *s, device_t 
 
 void cia402_control(const cia402_objects_t *o, cia402_state_t *s, device_t *dev, uint16_t control)
 {
+    /* Motion starts now: the axis must not cover the time since its last step (it may have rested for minutes). */
+    (void)cia402_step(o, s, dev, dev->now);
     const bool reset_edge = (control & CW_FAULT_RESET) != 0U && (s->last_control & CW_FAULT_RESET) == 0U;
     const bool setpoint_edge = (control & CW_NEW_SETPOINT) != 0U && (s->last_control & CW_NEW_SETPOINT) == 0U;
     s->last_control = control;

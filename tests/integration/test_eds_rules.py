@@ -121,6 +121,7 @@ def test_cia402_state_machine_and_profile_position(emulator, network, capture):
     # profile position at 50000/s: a move of 5000 takes 100 ms
     node.sdo[0x6081].raw = 50000
     node.sdo[0x607A].raw = 5000
+    time.sleep(0.6)  # the axis rests: the move must start at the set-point, not cover the rest (it did, now and then)
     since = time.time()
     node.sdo[0x6040].raw = 0x1F                      # new set-point
     # set-point acknowledged (bit 12) while moving (bit 10 clear), then reached (bit 10) at 5000
@@ -181,3 +182,31 @@ def test_bad_rules_are_refused_with_their_line(tmp_path, case):
 def test_rules_need_an_eds_device():
     r = subprocess.run([EMU, "--rules", str(RULES), "sds:5"], capture_output=True, text=True, timeout=30)
     assert r.returncode == 2 and "--rules is for devices read from an EDS/DCF" in r.stderr
+
+
+def test_cia402_alone_moves_from_the_set_point_after_a_rest(emulator, network, capture, tmp_path):
+    """With the profile alone nothing else steps the device while the axis rests: a move must still start at its
+    set-point (it once covered the whole rest at once and arrived with the first frame)."""
+    rules = tmp_path / "drive-402.yaml"
+    rules.write_text("profile: cia402\n")
+    since = time.time()
+    emulator("--rules", str(rules), f"{DRIVE}:{ID:#x}")
+    capture.wait_for(0x700 + ID, data=b"\x00", timeout=3, since=since)
+    node = canopen.RemoteNode(ID, str(DRIVE))
+    node.sdo.RESPONSE_TIMEOUT = 5.0
+    network.add_node(node)
+    node.nmt.state = "OPERATIONAL"
+    for control in (0x06, 0x0F):
+        node.sdo[0x6040].raw = control
+    node.sdo[0x6081].raw = 20000
+    node.sdo[0x607A].raw = 4000                      # 200 ms of travel
+    time.sleep(0.8)
+    since = time.time()
+    node.sdo[0x6040].raw = 0x1F
+    capture.wait_for(0x180 + ID, timeout=3, since=since, data=struct.pack("<Hi", 0x1637, 4000))
+    frames = capture.matching(0x180 + ID, since)
+    moving = [m for m in frames if struct.unpack("<Hi", bytes(m.data))[0] == 0x1237]  # acknowledged, not reached
+    assert moving and struct.unpack("<Hi", bytes(moving[0].data))[1] < 100, frames
+    start_frame = moving[0]
+    done = [m for m in frames if struct.unpack("<Hi", bytes(m.data))[1] == 4000][0]
+    assert done.timestamp - start_frame.timestamp >= 0.19, done.timestamp - start_frame.timestamp
