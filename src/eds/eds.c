@@ -118,6 +118,31 @@ static char *decode(eds_file_t *f, const char *data, size_t len, size_t *out_len
     return text;
 }
 
+/* The line of a diagnostic ("PATH:LINE: ..."), or UINT32_MAX for one about the whole file (those go last). */
+static unsigned long diagnostic_line(const eds_file_t *f, const char *d)
+{
+    const char *p = d + strlen(f->path);
+    if (*p != ':' || p[1] < '0' || p[1] > '9') {
+        return UINT32_MAX;
+    }
+    return strtoul(p + 1, NULL, 10);
+}
+
+/* In the order of their lines, as a reader of the file goes (insertion sort: stable, at most 201 of them). */
+static void sort_diagnostics(eds_file_t *f)
+{
+    for (uint32_t i = 1U; i < f->n_diagnostics; i++) {
+        char *d = f->diagnostics[i];
+        const unsigned long line = diagnostic_line(f, d);
+        uint32_t j = i;
+        while (j > 0U && diagnostic_line(f, f->diagnostics[j - 1U]) > line) {
+            f->diagnostics[j] = f->diagnostics[j - 1U];
+            j--;
+        }
+        f->diagnostics[j] = d;
+    }
+}
+
 eds_file_t *eds_read_buffer(const char *name, const char *data, size_t len)
 {
     eds_file_t *f = new_file(name);
@@ -144,6 +169,7 @@ eds_file_t *eds_read_buffer(const char *name, const char *data, size_t len)
     if (f->errors == 0U) {
         eds_check_pdos(f);
     }
+    sort_diagnostics(f);
     return f;
 }
 

@@ -355,9 +355,9 @@ static void read_value(builder_t *b, const ini_section_t *s, const ini_key_t *k,
     }
     if (type == 0x09) {
         for (size_t i = 0; i < out->len; i++) {
-            if (out->bytes[i] >= 0x80U) {
-                eds_warn(b->f, k->line, "[%s] %s: VISIBLE_STRING with non-ASCII text (ISO 646); kept as UTF-8 bytes",
-                         s->name, k->key);
+            if (out->bytes[i] >= 0x7FU || out->bytes[i] < 0x20U) {
+                eds_warn(b->f, k->line, "[%s] %s: VISIBLE_STRING with %s (ISO 646 has neither); kept as it is",
+                         s->name, k->key, out->bytes[i] >= 0x80U ? "non-ASCII text" : "a control character");
                 break;
             }
         }

@@ -81,7 +81,14 @@ static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool recei
     if (count == NULL || count->type != 0x05U) {
         return;
     }
-    for (int pass = 0; pass < 2; pass++) { /* the default, then a DCF's ParameterValue */
+    /* A DCF's mapping (ParameterValue, [xxxxValue]) is the one a node starts with: when it has one, it alone is
+     * checked (a Lely-style DCF leaves the defaults 0); otherwise the defaults. */
+    bool dcf = count->param.kind != EDS_V_NONE;
+    for (unsigned sub = 1U; sub <= 0x40U && !dcf; sub++) {
+        const eds_entry_t *e = eds_find(f, map, (uint8_t)sub);
+        dcf = e != NULL && e->param.kind != EDS_V_NONE;
+    }
+    for (int pass = dcf ? 1 : 0; pass < 2; pass++) { /* the default, or a DCF's ParameterValue */
         eds_value_t *n = pass == 0 ? &count->def : effective(count);
         if (n->kind != EDS_V_UINT) {
             continue;
@@ -124,11 +131,6 @@ static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool recei
                      (unsigned)map, key, bits);
             disable(f, comm, map);
             return;
-        }
-        eds_entry_t *cob = eds_find_mut(f, comm, 1U);
-        if (pass == 0 && cob != NULL && cob->def.kind == EDS_V_UINT && (cob->def.u & 0x80000000U) == 0U && n->u == 0U) {
-            eds_warn(f, cob->line, "[%04Xsub1] a valid PDO (bit 31 clear) with an empty mapping; kept (it sends or "
-                                   "takes no data)", (unsigned)comm);
         }
     }
 }

@@ -51,11 +51,11 @@ EXPECTED_DIAGNOSTICS = {
                             "(CiA 306 has comments on lines of their own)"],
     "limits.eds": ["limits.eds:113: warning: [2000] DefaultValue (none, so 0) is outside LowLimit..HighLimit; 0x5 "
                    "(the LowLimit) used"],
-    "unsorted-lists.eds": [
-        "unsorted-lists.eds:105: warning: [ManufacturerObjects] 2: object 0x2000 out of order (after 0x2001); the "
-        "objects are sorted",
+    "unsorted-lists.eds": [  # in the order of their lines
         "unsorted-lists.eds:102: warning: [ManufacturerObjects] SupportedObjects=3 but 2 entries are listed; the "
-        "listed ones are read"],
+        "listed ones are read",
+        "unsorted-lists.eds:105: warning: [ManufacturerObjects] 2: object 0x2000 out of order (after 0x2001); the "
+        "objects are sorted"],
     "missing-info.eds": [
         "missing-info.eds:9: warning: [DeviceInfo] has no VendorNumber; taken from object 0x1018 (or 0)",
         "missing-info.eds:9: warning: [DeviceInfo] has no ProductName; left empty",
@@ -63,13 +63,13 @@ EXPECTED_DIAGNOSTICS = {
     "dummy-usage.eds": ["dummy-usage.eds:210: warning: [1601sub1] DefaultValue 0x00070020 maps dummy 0x0007 while "
                         "[DummyUsage] Dummy0007 is not 1; the PDO is disabled"],
     "broken-refs.eds": [
-        "broken-refs.eds:112: warning: [2000] SubNumber: '99999' is not a number from 0 to 65535; 2 used",
-        "broken-refs.eds:134: warning: [2001] CompactSubObj: '1000' is not a number from 0 to 254; 0 used",
-        "broken-refs.eds:128: warning: [2001] an ARRAY without sub-index sections; left out",
         "broken-refs.eds:106: warning: object 0x2002 is listed but has no section [2002]; left out",
+        "broken-refs.eds:112: warning: [2000] SubNumber: '99999' is not a number from 0 to 65535; 2 used",
+        "broken-refs.eds:128: warning: [2001] an ARRAY without sub-index sections; left out",
+        "broken-refs.eds:134: warning: [2001] CompactSubObj: '1000' is not a number from 0 to 254; 0 used",
+        "broken-refs.eds:136: warning: [2003sub1] belongs to no object of the device; ignored",
         "broken-refs.eds:146: warning: [2004] DataType=0x0040 is not a CiA 301 basic data type this reader knows; "
-        "the entry is left out",
-        "broken-refs.eds:136: warning: [2003sub1] belongs to no object of the device; ignored"],
+        "the entry is left out"],
 }
 
 

@@ -6,8 +6,8 @@
  *  - a file read without errors is a model the emulator can use: entries sorted by (index, sub) and unique, each of
  *    a known type, its default (and DCF value) of the type's kind and representable in it (node-ID-relative ones
  *    for every node-ID 1..127), limits ordered; objects in index order, each owning exactly its entries; every
- *    PDO's mapping (default and DCF value) names existing, mappable objects of the right size and direction or
- *    allowed dummies, at most 64 bits;
+ *    PDO's mapping as a node starts with it (a DCF's values where it has them, else the defaults) names existing,
+ *    mappable objects of the right size and direction or allowed dummies, at most 64 bits;
  *  - the model written back as a DCF (eds_write) reads again without an error or a warning (except those of what
  *    the reader keeps as it is: "; kept"), as the same model
  *    (every entry's type, access, mapping flag, name, default, limits, DCF value), and written again gives the
@@ -149,8 +149,7 @@ static void check_model(const eds_file_t *f)
         const eds_entry_t *e = &f->entries[i];
         bool rx = e->index >= 0x1600U && e->index <= 0x17FFU, tx = e->index >= 0x1A00U && e->index <= 0x1BFFU;
         if ((rx || tx) && e->sub == 0U && e->type == 0x05U) {
-            check_mapping(f, e, rx, false);
-            check_mapping(f, e, rx, true);
+            check_mapping(f, e, rx, true); /* the mapping a node starts with (a DCF's values where it has them) */
         }
     }
 }
