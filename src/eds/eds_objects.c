@@ -293,12 +293,9 @@ static uint16_t *object_indices(builder_t *b, uint32_t *count)
 
 /* ---- Entries ------------------------------------------------------------------------------------------------------- */
 
-static bool read_access(builder_t *b, const ini_section_t *s, const ini_section_t *fallback, eds_access_t *out)
+static bool read_access(builder_t *b, const ini_section_t *s, eds_access_t *out)
 {
     const ini_key_t *k = ini_get(b->ini, s, "AccessType");
-    if (k == NULL && fallback != NULL) {
-        k = ini_get(b->ini, fallback, "AccessType");
-    }
     if (k == NULL) {
         eds_warn(b->f, s->line, "[%s] has no AccessType; ro used", s->name);
         *out = EDS_RO;
@@ -332,7 +329,6 @@ static void read_value(builder_t *b, const ini_section_t *s, const ini_key_t *k,
 {
     char why[160];
     eds_parse_t r = eds_parse_value(b->f, type, text, out, why, sizeof why);
-    const char *name = eds_type_name(type);
     char used[96];
     if (r == EDS_PARSE_BAD) {
         eds_parse_value(b->f, type, "", out, why + strlen(why), 0U);
@@ -362,7 +358,6 @@ static void read_value(builder_t *b, const ini_section_t *s, const ini_key_t *k,
             }
         }
     }
-    (void)name;
 }
 
 /* The value text of a key: strings verbatim, numbers without an inline comment. */
@@ -390,12 +385,12 @@ static void into_limits(eds_file_t *f, const ini_section_t *s, const eds_entry_t
 }
 
 /*
- * Reads an entry from section s; keys it lacks come from parent (CompactSubObj objects). name overrides
+ * Reads an entry from section s (for CompactSubObj objects, the object's own section). name overrides
  * ParameterName (compact sub-objects). value_key, if not NULL, is the [xxxxValue] key of a compact sub-object.
  * Returns false when the entry cannot be emulated (unknown data type): the caller leaves it out.
  */
-static bool read_entry(builder_t *b, const ini_section_t *s, const ini_section_t *parent, uint16_t index, uint8_t sub,
-                       const char *name, const ini_key_t *value_key, uint8_t default_type, eds_entry_t *e)
+static bool read_entry(builder_t *b, const ini_section_t *s, uint16_t index, uint8_t sub, const char *name,
+                       const ini_key_t *value_key, uint8_t default_type, eds_entry_t *e)
 {
     eds_file_t *f = b->f;
     memset(e, 0, sizeof *e);
@@ -412,9 +407,6 @@ static bool read_entry(builder_t *b, const ini_section_t *s, const ini_section_t
     }
     e->denotation = text_of(b, s, "Denotation");
     k = ini_get(b->ini, s, "DataType");
-    if (k == NULL && parent != NULL) {
-        k = ini_get(b->ini, parent, "DataType");
-    }
     uint64_t type = default_type;
     if (k == NULL && default_type == 0U) {
         eds_warn(f, s->line, "[%s] has no DataType; the entry is left out", s->name);
@@ -427,11 +419,8 @@ static bool read_entry(builder_t *b, const ini_section_t *s, const ini_section_t
         return false;
     }
     e->type = (uint8_t)type;
-    read_access(b, s, parent, &e->access);
+    read_access(b, s, &e->access);
     k = ini_get(b->ini, s, "PDOMapping");
-    if (k == NULL && parent != NULL) {
-        k = ini_get(b->ini, parent, "PDOMapping");
-    }
     if (k != NULL) {
         const char *t = ini_number_text(f, k);
         if (strcmp(t, "1") == 0 || strcmp(t, "0") == 0 || *t == '\0') {
@@ -444,9 +433,6 @@ static bool read_entry(builder_t *b, const ini_section_t *s, const ini_section_t
     static const char *const limit_keys[] = {"LowLimit", "HighLimit"};
     for (int i = 0; i < 2; i++) {
         k = ini_get(b->ini, s, limit_keys[i]);
-        if (k == NULL && parent != NULL) {
-            k = ini_get(b->ini, parent, limit_keys[i]);
-        }
         if (k == NULL || k->value[0] == '\0') {
             continue;
         }
@@ -465,9 +451,6 @@ static bool read_entry(builder_t *b, const ini_section_t *s, const ini_section_t
         e->high.kind = EDS_V_NONE;
     }
     k = ini_get(b->ini, s, "DefaultValue");
-    if (k == NULL && parent != NULL) {
-        k = ini_get(b->ini, parent, "DefaultValue");
-    }
     if (k != NULL) {
         read_value(b, s, k, value_text(b, k, e->type), e->type, &e->def, true);
     } else {
@@ -517,7 +500,7 @@ static void read_compact(builder_t *b, const ini_section_t *s, eds_object_t *o, 
             name = eds_strndup(f, formed, strlen(formed));
         }
         eds_entry_t tmp;
-        if (!read_entry(b, s, NULL, o->index, (uint8_t)sub, name, ini_get(b->ini, values, key), 0U, &tmp)) {
+        if (!read_entry(b, s, o->index, (uint8_t)sub, name, ini_get(b->ini, values, key), 0U, &tmp)) {
             f->n_entries = first; /* the object goes: sub-index 0 too */
             return;
         }
@@ -584,7 +567,7 @@ static void read_object(builder_t *b, uint16_t index)
         }
         eds_entry_t tmp;
         /* a DOMAIN object may omit its data type */
-        if (read_entry(b, s, NULL, index, 0U, o->name, NULL, otype == 0x2U ? 0x0FU : 0U, &tmp)) {
+        if (read_entry(b, s, index, 0U, o->name, NULL, otype == 0x2U ? 0x0FU : 0U, &tmp)) {
             eds_entry_t *e = push_entry(b);
             if (e != NULL) {
                 *e = tmp;
@@ -600,7 +583,7 @@ static void read_object(builder_t *b, uint16_t index)
                 continue;
             }
             eds_entry_t tmp;
-            if (read_entry(b, ss, NULL, index, (uint8_t)sub, NULL, NULL, 0U, &tmp)) {
+            if (read_entry(b, ss, index, (uint8_t)sub, NULL, NULL, 0U, &tmp)) {
                 eds_entry_t *e = push_entry(b);
                 if (e == NULL) {
                     return;
