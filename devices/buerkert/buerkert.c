@@ -491,8 +491,10 @@ static void bk_on_reset(device_t *dev, co_reset_t what)
         (void)co_lss_set_pending_node_id(&dev->node, values_of(dev)->x2001_02);
         return;
     }
-    /* Communication reset: the core dropped every active EMCY; persisting faults are raised again
-     * (sent after the boot-up). */
+    /* Communication reset: 0x1018 holds the node's serial number now (the runner may give each node its own):
+     * 0x2000:07 is the same number (decision 30). */
+    (void)co_od_set_u32(&dev->node, 0x2000U, 7U, co_od_get_u32(&dev->node, 0x1018U, 4U));
+    /* The core dropped every active EMCY; persisting faults are raised again (sent after the boot-up). */
     memset(m->active, 0, sizeof m->active);
     values_of(dev)->x2001_02 = dev->node.lss.pending_node_id;
     evaluate(dev);

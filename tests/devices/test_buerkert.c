@@ -51,6 +51,22 @@ static void start(uint8_t node_id)
     (void)process();
 }
 
+/* start() with a per-node serial number, as canopen-emu gives every node (distinct serials for LSS fastscan). */
+static void start_with_serial(uint8_t node_id, uint32_t serial)
+{
+    now = 0U;
+    fake_port_init(&port, &now);
+    device_cfg_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.node_id = node_id;
+    cfg.serial = serial;
+    cfg.port = &port.port;
+    cfg.port_ctx = &port;
+    cfg.print = on_print;
+    TEST_ASSERT_EQUAL_INT(CO_OK, device_init(&dev, &buerkert_class, &values, model_mem.bytes, &cfg, now));
+    (void)process();
+}
+
 static void power_cycle(void)
 {
     TEST_ASSERT_EQUAL_INT(CO_OK, device_power_cycle(&dev, now));
@@ -944,9 +960,24 @@ static void operating_time_counts_and_is_saved_every_minute(void)
     TEST_ASSERT_EQUAL_UINT32(0U, sdo_read(0x2004U, 4U));
 }
 
+/* Decision 30 (docs/devices/buerkert-flow-controller.md): 0x2000:07 is the serial number of 0x1018:04, also when the
+ * emulator gives the node its own (a master read 0x00000001 from 0x2000:07 next to 0x13 in 0x1018:04). */
+static void serial_number_of_0x2000_07_is_that_of_0x1018_04(void)
+{
+    start_with_serial(18U, 0x13U);
+    TEST_ASSERT_EQUAL_HEX32(0x13U, sdo_read(0x1018U, 4U));
+    TEST_ASSERT_EQUAL_HEX32(0x13U, sdo_read(0x2000U, 7U));
+    TEST_ASSERT_EQUAL_HEX32(sdo_read(0x1018U, 2U), sdo_read(0x2000U, 8U));
+    RX(0x000U, 0x81U, 18U); /* after a reset application (0x2000 re-initialised) as well */
+    TEST_ASSERT_EQUAL_HEX32(0x13U, sdo_read(0x2000U, 7U));
+    power_cycle();
+    TEST_ASSERT_EQUAL_HEX32(0x13U, sdo_read(0x2000U, 7U));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
+    RUN_TEST(serial_number_of_0x2000_07_is_that_of_0x1018_04);
     RUN_TEST(first_order_response_of_the_flow);
     RUN_TEST(stored_write_answers_only_what_was_stored);
     RUN_TEST(setpoint_is_clamped_to_the_range_and_checked);
