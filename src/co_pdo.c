@@ -53,7 +53,8 @@ static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_
         if ((node->od->dummy_usage & (1U << index)) == 0U) {
             return CO_ABORT_NOT_MAPPABLE; /* the device does not take dummy entries of this type ([DummyUsage]) */
         }
-        return out->len <= 8U ? CO_ABORT_NONE : CO_ABORT_PDO_LENGTH; /* dummy entry: skips bytes */
+        /* a dummy entry skips the bytes of its type, exactly: 8 bits of a 32-bit dummy are no dummy */
+        return out->len == co_od_type_size((uint8_t)index) ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
     const co_od_entry_t *e = co_od_find(node->od, index, sub);
     if (e == NULL) {

@@ -28,6 +28,11 @@ static long entry_bits(const eds_file_t *f, uint64_t v, bool receive, char *why,
             snprintf(why, cap, "maps dummy 0x%04X while [DummyUsage] Dummy%04X is not 1", (unsigned)index, (unsigned)index);
             return -1;
         }
+        if (bits != eds_type_size((uint8_t)index) * 8U) {
+            snprintf(why, cap, "maps %u bits of dummy 0x%04X, a %u-bit type", (unsigned)bits, (unsigned)index,
+                     (unsigned)(eds_type_size((uint8_t)index) * 8U));
+            return -1;
+        }
         return bits;
     }
     const eds_entry_t *t = eds_find(f, index, sub);

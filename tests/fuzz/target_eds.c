@@ -91,8 +91,8 @@ static void check_mapping(const eds_file_t *f, const eds_entry_t *count, bool re
         uint16_t index = (uint16_t)(v->u >> 16);
         uint8_t sub = (uint8_t)(v->u >> 8), len = (uint8_t)v->u;
         if (index >= 1U && index <= 7U && sub == 0U) {
-            if (!receive || (f->dummy_usage & (1U << index)) == 0U) {
-                fail("a dummy mapping [DummyUsage] does not allow", e);
+            if (!receive || (f->dummy_usage & (1U << index)) == 0U || eds_type_size((uint8_t)index) * 8U != len) {
+                fail("a dummy mapping [DummyUsage] does not allow, or of another length than its type", e);
             }
         } else {
             const eds_entry_t *t = eds_find(f, index, sub);

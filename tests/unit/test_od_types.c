@@ -227,6 +227,9 @@ static void dummy_entries_follow_dummy_usage(void)
     TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x1600, 1, (uint8_t[]){0x10, 0, 0x06, 0}, 4U)); /* dummy U16: allowed */
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NOT_MAPPABLE, sdo_write(0x1600, 1, (uint8_t[]){0x08, 0, 0x05, 0}, 4U)); /* U8: not */
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NOT_MAPPABLE, sdo_write(0x1600, 1, (uint8_t[]){0x20, 0, 0x07, 0}, 4U));
+    /* a dummy is as long as its type (issue 15: 8 bits of a 16- or 32-bit dummy were taken) */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NOT_MAPPABLE, sdo_write(0x1600, 1, (uint8_t[]){0x08, 0, 0x06, 0}, 4U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NOT_MAPPABLE, sdo_write(0x1600, 1, (uint8_t[]){0x20, 0, 0x06, 0}, 4U));
     /* the RPDO with its allowed dummy works: bytes 0-1 skipped, 2-3 into 0x2007 */
     TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x1600, 0, (uint8_t[]){2}, 1U));
     TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x1400, 1, (uint8_t[]){0x05, 0x02, 0, 0}, 4U));
