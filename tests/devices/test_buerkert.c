@@ -974,9 +974,36 @@ static void serial_number_of_0x2000_07_is_that_of_0x1018_04(void)
     TEST_ASSERT_EQUAL_HEX32(0x13U, sdo_read(0x2000U, 7U));
 }
 
+/* Decision 26: TPDO sub-index 4 is reserved by CiA 301 (not implemented: 0x06090011), whatever the manual's
+ * "Compatibility Entry" row says; decision 53: the mapping entries have distinct names. */
+static void tpdo_sub_index_4_is_reserved_and_mapping_entries_have_distinct_names(void)
+{
+    start(5U);
+    for (uint16_t n = 0U; n < 4U; n++) {
+        const uint8_t req[8] = {0x40, 0x00, (uint8_t)(0x18U + (n >> 8)), 4, 0, 0, 0, 0};
+        uint8_t r[8];
+        memcpy(r, req, sizeof r);
+        r[1] = (uint8_t)n;
+        const co_frame_t *f = sdo(r);
+        TEST_ASSERT_EQUAL_HEX8(0x80, f->data[0]);
+        TEST_ASSERT_EQUAL_HEX32(0x06090011UL, le32(&f->data[4]));
+        TEST_ASSERT_EQUAL_HEX32(0x00000005UL, sdo_read((uint16_t)(0x1800U + n), 0U)); /* highest sub-index: 5 */
+    }
+    const co_od_t *od = buerkert_class.od;
+    char expect[32];
+    for (uint16_t i = 0U; i < od->count; i++) {
+        const co_od_entry_t *e = &od->entries[i];
+        if (((e->index >= 0x1600U && e->index <= 0x1603U) || (e->index >= 0x1A00U && e->index <= 0x1A03U)) && e->sub > 0U) {
+            snprintf(expect, sizeof expect, "PDO Mapping Entry %u", (unsigned)e->sub);
+            TEST_ASSERT_EQUAL_STRING(expect, buerkert_class.od_names[i]);
+        }
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
+    RUN_TEST(tpdo_sub_index_4_is_reserved_and_mapping_entries_have_distinct_names);
     RUN_TEST(serial_number_of_0x2000_07_is_that_of_0x1018_04);
     RUN_TEST(first_order_response_of_the_flow);
     RUN_TEST(stored_write_answers_only_what_was_stored);
