@@ -228,7 +228,7 @@ static double key_number(parse_t *p, const yaml_node_t *map, const char *key, do
 static uint32_t key_ms(parse_t *p, const yaml_node_t *map, const char *key, double dflt, const char *what)
 {
     const double ms = key_number(p, map, key, dflt, false, what);
-    if (ms < 1.0 || ms > 86400000.0) {
+    if (!(ms >= 1.0 && ms <= 86400000.0)) {
         fail(p, lookup(p, map, key), "%s: %s must be 1 ms .. 1 day", what, key);
         return 1000U;
     }
@@ -321,7 +321,12 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         r->b = fabs(key_number(p, v, "step", 0.0, true, "random_walk"));
         r->lo = key_number(p, v, "min", -INFINITY, false, "random_walk");
         r->hi = key_number(p, v, "max", INFINITY, false, "random_walk");
-        r->seed = (uint64_t)key_number(p, v, "seed", 1.0, false, "random_walk");
+        const double seed = key_number(p, v, "seed", 1.0, false, "random_walk");
+        if (!(seed >= 0.0 && seed <= 9007199254740992.0)) {
+            fail(p, lookup(p, v, "seed"), "random_walk: seed must be 0 .. 2^53%s%s", NULL, NULL);
+        } else {
+            r->seed = (uint64_t)seed;
+        }
         r->every_us = key_ms(p, v, "every_ms", 100.0, "random_walk");
         if (r->lo > r->hi) {
             fail(p, v, "random_walk: min > max%s%s", NULL, NULL);
@@ -365,8 +370,9 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
             }
             r->values[i] = number(p, node_at(p, item->data.sequence.items.start[0]), "steps");
             const double ms = number(p, node_at(p, item->data.sequence.items.start[1]), "steps");
-            if (ms < 1.0 || ms > 86400000.0) {
+            if (!(ms >= 1.0 && ms <= 86400000.0)) {
                 fail(p, item, "steps: a step lasts 1 ms .. 1 day%s%s", NULL, NULL);
+                break;
             }
             r->durations_us[i] = (uint32_t)(ms * 1000.0);
             r->n_steps++;
@@ -390,8 +396,9 @@ static void parse_alarm(parse_t *p, alarm_t *a, const yaml_node_t *n)
     if (!a->has_above && !a->has_below) {
         fail(p, n, "alarms: give 'above' or 'below' (or both)%s%s", NULL, NULL);
     }
-    if (code < 0x1000 || code > 0xFFFF || reg < 1 || reg > 0xFF) {
+    if (!(code >= 0x1000 && code <= 0xFFFF && reg >= 1 && reg <= 0xFF)) {
         fail(p, n, "alarms: emcy is an error code 0x1000..0xFFFF, register the 0x1001 bits 0x01..0xFF%s%s", NULL, NULL);
+        return; /* no cast of a number out of range (undefined behaviour: found by fuzz_rules) */
     }
     a->code = (uint16_t)code;
     a->reg = (uint8_t)((unsigned)reg | 0x01U); /* CiA 301: bit 0 (generic error) with every error */

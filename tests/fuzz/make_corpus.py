@@ -906,7 +906,7 @@ def rules_seeds():
     """The rules of tests/eds/rules/drive.yaml and small ones, each with records that drive the CiA 402 drive."""
     import struct
     drive = open(os.path.join(HERE, "..", "eds", "rules", "drive.yaml"), "rb").read()
-    wait = lambda ms: bytes([0x00]) + struct.pack("<H", ms - 1) + b"\0\0"            # noqa: E731
+    wait = lambda ms: bytes([0x00, min(255, ms // 10 - 1), 0, 0, 0])                     # noqa: E731  10 ms units
     control = lambda cw: bytes([0x40]) + struct.pack("<H", cw) + b"\0\0"              # noqa: E731
     write = lambda sel, v: bytes([0x80, sel]) + struct.pack("<i", v)[:3]               # noqa: E731
     pp = (write(4, 50000) + write(2, 4000) + control(0x06) + control(0x0F) + control(0x1F) + wait(200)

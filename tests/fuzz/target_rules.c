@@ -4,7 +4,8 @@
  *
  * Input: the rules file's text up to the first NUL byte (all of it when there is none), then records until the input
  * ends (at most 64): [0] kind, then its bytes:
- *   0x00-0x3F time passes by (u16 + 1) x 1 ms, in steps at the deadlines the rules return, like the program's loop;
+ *   0x00-0x3F time passes by (u8 + 1) x 10 ms, in steps at the deadlines the rules return, like the program's loop
+ *             (at most 2.56 s a record: with 1 ms ticks that is 2,560 steps; longer spans are the clock jumps' job);
  *   0x40-0x7F a controlword written by SDO (u16), as a master drives the CiA 402 machine;
  *   0x80-0xBF an SDO write to one of the drive's writable objects (u8 selects it) of the next 3 bytes (a 4-byte
  *             object gets a zero high byte);
@@ -86,7 +87,7 @@ static void run_once(const rules_t *rules, const uint8_t *p, size_t n, run_t *r)
         }
         const uint16_t u16 = (uint16_t)(b[0] | (b[1] << 8));
         if (kind < 0x40U) {
-            const co_time_us_t end = r->now + ((co_time_us_t)u16 + 1U) * 1000U;
+            const co_time_us_t end = r->now + ((co_time_us_t)b[0] + 1U) * 10000U;
             while (r->now < end) {
                 const co_time_us_t next = rules_step(rules, st, &r->dev, r->now);
                 if (next <= r->now) {
