@@ -144,6 +144,14 @@ size_t eds_type_size(uint8_t type);
 bool eds_type_is_bytes(uint8_t type);
 /** EDS spelling of an access type ("rw"). */
 const char *eds_access_name(eds_access_t access);
+/** True when an SDO client may write an entry of this access type (wo, rw, rwr, rww). */
+bool eds_access_writable(eds_access_t access);
+/** True when an entry of this access type (and PDOMapping=1) may be mapped into an RPDO (receive) or a TPDO. */
+bool eds_access_maps(eds_access_t access, bool receive);
+
+/** kbit/s of each CiA 305 bit-timing index (0 for index 5, which EDS files have no BaudRate_ key for). */
+#define EDS_CIA305_RATES 9U
+extern const uint16_t eds_cia305_kbit[EDS_CIA305_RATES];
 
 /** What eds_write() writes. */
 typedef struct eds_write_options {

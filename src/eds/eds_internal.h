@@ -79,6 +79,8 @@ typedef enum eds_parse {
 bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bool *nodeid, bool *octal_like);
 /* Parses text as a value of type (DefaultValue, LowLimit, HighLimit, ParameterValue). */
 eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_value_t *out, char *why, size_t why_cap);
+/* The REAL32 (size 4) or REAL64 of IEEE 754 bits. */
+double eds_real_from_bits(uint64_t bits, size_t size);
 /* Reads a whole unsigned number (object lists, SubNumber, DeviceInfo): CiA 306 forms, no $NODEID. */
 bool eds_parse_unsigned(const char *text, uint64_t max, uint64_t *out);
 

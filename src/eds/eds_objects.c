@@ -82,8 +82,6 @@ static uint64_t number_of(builder_t *b, const ini_section_t *s, const char *key,
 
 /* ---- [DeviceInfo], [DummyUsage], [DeviceComissioning], and the keys kept for the writer ----------------------- */
 
-static const uint16_t CIA305_KBIT[] = {1000, 800, 500, 250, 125, 0, 50, 20, 10};
-
 static void read_device_info(builder_t *b)
 {
     eds_file_t *f = b->f;
@@ -114,10 +112,10 @@ static void read_device_info(builder_t *b)
     f->nr_of_txpdo = (uint16_t)number_of(b, s, "NrOfTXPDO", 512U, 0xFFFFU);
     f->granularity = (uint8_t)number_of(b, s, "Granularity", 64U, 8U);
     f->lss_supported = number_of(b, s, "LSS_Supported", 1U, 0U) != 0U;
-    for (unsigned i = 0; i < sizeof CIA305_KBIT / sizeof CIA305_KBIT[0]; i++) {
+    for (unsigned i = 0; i < EDS_CIA305_RATES; i++) {
         char key[24];
-        snprintf(key, sizeof key, "BaudRate_%u", (unsigned)CIA305_KBIT[i]);
-        if (CIA305_KBIT[i] != 0U && number_of(b, s, key, 1U, 0U) != 0U) {
+        snprintf(key, sizeof key, "BaudRate_%u", (unsigned)eds_cia305_kbit[i]);
+        if (eds_cia305_kbit[i] != 0U && number_of(b, s, key, 1U, 0U) != 0U) {
             f->baud_rates = (uint16_t)(f->baud_rates | (1U << i));
         }
     }

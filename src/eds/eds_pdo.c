@@ -44,9 +44,7 @@ static long entry_bits(const eds_file_t *f, uint64_t v, bool receive, char *why,
         snprintf(why, cap, "maps 0x%04X:%02X, which has PDOMapping=0", (unsigned)index, (unsigned)sub);
         return -1;
     }
-    bool ok = receive ? (t->access == EDS_WO || t->access == EDS_RW || t->access == EDS_RWW)
-                      : (t->access != EDS_WO && t->access != EDS_RWW);
-    if (!ok) {
+    if (!eds_access_maps(t->access, receive)) {
         snprintf(why, cap, "maps 0x%04X:%02X (AccessType=%s) into a %cPDO", (unsigned)index, (unsigned)sub,
                  eds_access_name(t->access), receive ? 'R' : 'T');
         return -1;

@@ -67,6 +67,32 @@ bool eds_type_is_bytes(uint8_t type)
     return t != NULL && t->kind == EDS_V_BYTES;
 }
 
+const uint16_t eds_cia305_kbit[EDS_CIA305_RATES] = {1000, 800, 500, 250, 125, 0, 50, 20, 10};
+
+bool eds_access_writable(eds_access_t access)
+{
+    return access == EDS_WO || access == EDS_RW || access == EDS_RWR || access == EDS_RWW;
+}
+
+bool eds_access_maps(eds_access_t access, bool receive)
+{
+    return receive ? (access == EDS_WO || access == EDS_RW || access == EDS_RWW)
+                   : (access == EDS_RO || access == EDS_CONST || access == EDS_RW || access == EDS_RWR);
+}
+
+double eds_real_from_bits(uint64_t bits, size_t size)
+{
+    if (size == 4U) {
+        const uint32_t b32 = (uint32_t)bits;
+        float f;
+        memcpy(&f, &b32, sizeof f);
+        return (double)f;
+    }
+    double d;
+    memcpy(&d, &bits, sizeof d);
+    return d;
+}
+
 const char *eds_access_name(eds_access_t access)
 {
     static const char *const names[] = {"ro", "wo", "rw", "rwr", "rww", "const"};
@@ -406,14 +432,7 @@ eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_v
                 snprintf(why, why_cap, "is not a number");
                 return EDS_PARSE_BAD;
             }
-            if (t->size == 4U) {
-                uint32_t b32 = (uint32_t)bits;
-                float fv;
-                memcpy(&fv, &b32, sizeof fv);
-                out->r = (double)fv;
-            } else {
-                memcpy(&out->r, &bits, sizeof out->r);
-            }
+            out->r = eds_real_from_bits(bits, t->size);
             if (!isfinite(out->r)) {
                 out->r = 0.0;
                 snprintf(why, why_cap, "is the bit pattern of a non-finite number");

@@ -40,14 +40,7 @@ static bool decode_raw(eds_file_t *scratch, uint8_t type, const uint8_t *raw, si
         u = (u << 8) | raw[i];
     }
     if (lo.kind == EDS_V_REAL) {
-        if (size == 4U) {
-            uint32_t b = (uint32_t)u;
-            float fv;
-            memcpy(&fv, &b, sizeof fv);
-            out->r = (double)fv;
-        } else {
-            memcpy(&out->r, &u, sizeof out->r);
-        }
+        out->r = eds_real_from_bits(u, size);
     } else if (lo.kind == EDS_V_INT) {
         if (size < 8U && (u >> (size * 8U - 1U)) != 0U) {
             u |= ~0ULL << (size * 8U); /* sign-extend */
@@ -128,8 +121,6 @@ static void write_list(FILE *out, const eds_file_t *f, const char *name, int whi
 static const char *const MODEL_KEYS[] = {"VendorName", "VendorNumber", "ProductName", "ProductNumber",
                                          "RevisionNumber", "NrOfRXPDO", "NrOfTXPDO", "LSS_Supported", "Granularity"};
 
-static const uint16_t CIA305_KBIT[] = {1000, 800, 500, 250, 125, 0, 50, 20, 10};
-
 static bool model_key(const char *key)
 {
     char prefix[10];
@@ -155,9 +146,9 @@ static void write_info(FILE *out, const eds_file_t *f, const char *section, cons
                 f->vendor_name, (unsigned long)f->vendor_number, f->product_name, (unsigned long)f->product_number,
                 (unsigned long)f->revision_number, (unsigned)f->nr_of_rxpdo, (unsigned)f->nr_of_txpdo,
                 f->lss_supported ? 1 : 0, (unsigned)f->granularity);
-        for (unsigned i = sizeof CIA305_KBIT / sizeof CIA305_KBIT[0]; i-- > 0U;) {
-            if (CIA305_KBIT[i] != 0U) {
-                fprintf(out, "BaudRate_%u=%d\n", (unsigned)CIA305_KBIT[i], (f->baud_rates >> i) & 1U);
+        for (unsigned i = EDS_CIA305_RATES; i-- > 0U;) {
+            if (eds_cia305_kbit[i] != 0U) {
+                fprintf(out, "BaudRate_%u=%d\n", (unsigned)eds_cia305_kbit[i], (f->baud_rates >> i) & 1U);
             }
         }
     }

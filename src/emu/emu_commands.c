@@ -147,9 +147,8 @@ int select_nodes_any_bus(emu_t *emu, char *word, emu_node_t **out, size_t max)
 }
 
 /* export-dcf NODE FILE: one node's current values as a DCF (emu_eds_class.h). */
-static command_result_t export_dcf(emu_t *emu, int argc, char **argv, emu_node_t **nodes, int n_sel)
+static command_result_t export_dcf(int argc, char **argv, emu_node_t **nodes, int n_sel)
 {
-    (void)emu;
     if (argc != 3 || n_sel != 1) {
         reply("error: export-dcf takes one node and a file: export-dcf NODE FILE");
         return COMMAND_ERROR;
@@ -212,7 +211,7 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         return COMMAND_ERROR;
     }
     if (strcmp(argv[0], "export-dcf") == 0) {
-        return export_dcf(emu, argc, argv, nodes, n_sel);
+        return export_dcf(argc, argv, nodes, n_sel);
     }
     command_result_t result = COMMAND_OK;
     const char *const cmd = argv[0];

@@ -40,11 +40,6 @@ static const eds_value_t *start_value(const eds_entry_t *e)
     return e->param.kind != EDS_V_NONE ? &e->param : &e->def;
 }
 
-static bool writable(const eds_entry_t *e)
-{
-    return e->access == EDS_WO || e->access == EDS_RW || e->access == EDS_RWR || e->access == EDS_RWW;
-}
-
 /* Bytes of a row: its type's, or for strings and domains a capacity (docs/eds.md): what the file's value needs,
  * and for a writable one at least what one SDO transfer of the core moves; never more than that. */
 static uint16_t capacity(const eds_entry_t *e, FILE *log, const char *path, bool quiet)
@@ -62,7 +57,7 @@ static uint16_t capacity(const eds_entry_t *e, FILE *log, const char *path, bool
         }
         len = CO_SDO_BUF_SIZE;
     }
-    if (writable(e) && len < CO_SDO_BUF_SIZE) {
+    if (eds_access_writable(e->access) && len < CO_SDO_BUF_SIZE) {
         len = CO_SDO_BUF_SIZE;
     }
     return (uint16_t)(len > 0U ? len : 1U);
@@ -71,7 +66,7 @@ static uint16_t capacity(const eds_entry_t *e, FILE *log, const char *path, bool
 static uint16_t flags_of(const eds_entry_t *e)
 {
     uint16_t f = 0U;
-    const bool w = writable(e);
+    const bool w = eds_access_writable(e->access);
     if (e->access != EDS_WO) {
         f |= CO_OD_READ;
     }
@@ -81,10 +76,10 @@ static uint16_t flags_of(const eds_entry_t *e)
     if (e->access == EDS_CONST) {
         f |= CO_OD_CONST;
     }
-    if (e->pdo_mapping && (e->access == EDS_RO || e->access == EDS_CONST || e->access == EDS_RW || e->access == EDS_RWR)) {
+    if (e->pdo_mapping && eds_access_maps(e->access, false)) {
         f |= CO_OD_TPDO;
     }
-    if (e->pdo_mapping && (e->access == EDS_WO || e->access == EDS_RW || e->access == EDS_RWW)) {
+    if (e->pdo_mapping && eds_access_maps(e->access, true)) {
         f |= CO_OD_RPDO;
     }
     if (start_value(e)->nodeid) {
@@ -150,9 +145,8 @@ static co_od_limit_t limit_of(const eds_entry_t *e, const eds_value_t *v, bool h
 
 static uint8_t bit_timing_of(const eds_file_t *f)
 {
-    static const uint16_t kbit[] = {1000, 800, 500, 250, 125, 0, 50, 20, 10};
-    for (uint8_t i = 0U; i < sizeof kbit / sizeof kbit[0]; i++) {
-        if (f->comm.baudrate_kbit != 0U && kbit[i] == f->comm.baudrate_kbit) {
+    for (uint8_t i = 0U; i < EDS_CIA305_RATES; i++) {
+        if (f->comm.baudrate_kbit != 0U && eds_cia305_kbit[i] == f->comm.baudrate_kbit) {
             return i;
         }
     }

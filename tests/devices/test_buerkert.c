@@ -36,22 +36,7 @@ static void on_print(void *ctx, const device_t *d, const char *line)
 
 static co_time_us_t process(void) { return device_process(&dev, now); }
 
-static void start(uint8_t node_id)
-{
-    now = 0U;
-    fake_port_init(&port, &now);
-    device_cfg_t cfg;
-    memset(&cfg, 0, sizeof cfg);
-    cfg.node_id = node_id;
-    cfg.port = &port.port;
-    cfg.port_ctx = &port;
-    cfg.print = on_print;
-    TEST_ASSERT_TRUE(buerkert_class.model_size <= sizeof model_mem.bytes);
-    TEST_ASSERT_EQUAL_INT(CO_OK, device_init(&dev, &buerkert_class, &values, model_mem.bytes, &cfg, now));
-    (void)process();
-}
-
-/* start() with a per-node serial number, as canopen-emu gives every node (distinct serials for LSS fastscan). */
+/* Powers a node on; serial: 0x1018:04 as canopen-emu gives every node its own (0: the OD default). */
 static void start_with_serial(uint8_t node_id, uint32_t serial)
 {
     now = 0U;
@@ -63,9 +48,12 @@ static void start_with_serial(uint8_t node_id, uint32_t serial)
     cfg.port = &port.port;
     cfg.port_ctx = &port;
     cfg.print = on_print;
+    TEST_ASSERT_TRUE(buerkert_class.model_size <= sizeof model_mem.bytes);
     TEST_ASSERT_EQUAL_INT(CO_OK, device_init(&dev, &buerkert_class, &values, model_mem.bytes, &cfg, now));
     (void)process();
 }
+
+static void start(uint8_t node_id) { start_with_serial(node_id, 0U); }
 
 static void power_cycle(void)
 {
