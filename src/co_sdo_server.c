@@ -1,15 +1,15 @@
 /*
  * SDO server (CiA 301 §7.2.4): expedited upload/download always; segmented transfer when compiled in
- * (CO_CONFIG_SDO_SEGMENTED) and switched on for the node (CO_OPT_SDO_SEGMENTED). Block transfer is not
- * supported and answered with 0x05040001. Requests: 0x600+node-ID, responses: 0x580+node-ID, DLC 8.
- * Processing order follows docs/decisions.md (DLC, client abort, NMT state, command, object, access,
- * length, value).
+ * (CO_CONFIG_SDO_SEGMENTED) and switched on for the node (CO_OPT_SDO_SEGMENTED); block transfer likewise
+ * (CO_CONFIG_SDO_BLOCK, CO_OPT_SDO_BLOCK; co_sdo_block.c), otherwise answered with 0x05040001.
+ * Requests: 0x600+node-ID, responses: 0x580+node-ID, DLC 8. Processing order follows docs/decisions.md
+ * (DLC, client abort, NMT state, command, object, access, length, value).
  */
 #include "priv/co_priv.h"
 
-enum { SDO_IDLE = 0, SDO_SEG_DOWNLOAD = 1, SDO_SEG_UPLOAD = 2 };
+enum { SDO_IDLE = CO_SDO_IDLE, SDO_SEG_DOWNLOAD = CO_SDO_SEG_DOWNLOAD, SDO_SEG_UPLOAD = CO_SDO_SEG_UPLOAD };
 
-static void respond(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data, size_t len)
+void co_sdo_respond(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data, size_t len)
 {
     co_frame_t f = {0x580U + node->node_id, 8U, 0U, {0U}};
     f.data[0] = cmd;
@@ -21,12 +21,12 @@ static void respond(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, c
     co_node_send(node, &f);
 }
 
-static void sdo_abort(co_node_t *node, uint16_t index, uint8_t sub, uint32_t code)
+void co_sdo_abort(co_node_t *node, uint16_t index, uint8_t sub, uint32_t code)
 {
     uint8_t d[4];
     co_put_u32(d, code);
-    respond(node, 0x80U, index, sub, d, 4U);
-    node->sdo.state = SDO_IDLE;
+    node->sdo.state = SDO_IDLE; /* before the frame goes out: the port sees no transfer open behind an abort */
+    co_sdo_respond(node, 0x80U, index, sub, d, 4U);
     node->stats.sdo_aborts++;
     co_node_event(node, CO_EV_SDO_ABORT, index, sub, 0U, code);
 }
@@ -55,47 +55,56 @@ static void download_expedited(co_node_t *node, uint8_t cmd, uint16_t index, uin
             len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
         }
         if (len > 4U) {
-            sdo_abort(node, index, sub, CO_ABORT_LENGTH_HIGH);
+            co_sdo_abort(node, index, sub, CO_ABORT_LENGTH_HIGH);
             return;
         }
     }
     const uint32_t r = co_od_write(node, index, sub, data, len, CO_ORIGIN_SDO);
     if (r != CO_ABORT_NONE) {
-        sdo_abort(node, index, sub, r);
+        co_sdo_abort(node, index, sub, r);
         return;
     }
-    respond(node, 0x60U, index, sub, NULL, 0U);
+    co_sdo_respond(node, 0x60U, index, sub, NULL, 0U);
 }
 
-static void upload_initiate(co_node_t *node, uint16_t index, uint8_t sub)
+/* Reads the object into the transfer buffer. False (and the abort sent) when it cannot be read. */
+bool co_sdo_read_object(co_node_t *node, uint16_t index, uint8_t sub, size_t *len)
 {
-    size_t len = 0U;
-    uint8_t *buf = node->sdo.buf;
-    const uint32_t r = co_od_read(node, index, sub, buf, sizeof node->sdo.buf, &len, CO_ORIGIN_SDO);
+    *len = 0U;
+    const uint32_t r = co_od_read(node, index, sub, node->sdo.buf, sizeof node->sdo.buf, len, CO_ORIGIN_SDO);
     if (r == CO_ABORT_LENGTH_HIGH) { /* larger than any transfer buffer */
-        sdo_abort(node, index, sub, segmented_enabled(node) ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_UNSUPPORTED_ACCESS);
-        return;
+        const bool large_transfers = segmented_enabled(node) || (node->options & CO_OPT_SDO_BLOCK) != 0U;
+        co_sdo_abort(node, index, sub, large_transfers ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_UNSUPPORTED_ACCESS);
+        return false;
     }
     if (r != CO_ABORT_NONE) {
-        sdo_abort(node, index, sub, r);
-        return;
+        co_sdo_abort(node, index, sub, r);
+        return false;
     }
+    return true;
+}
+
+/* The answer to an upload initiate for len bytes read into the buffer: expedited, or the start of a segmented
+ * upload. Also the protocol switch of a block upload initiate (CiA 301 §7.2.4.3.13). */
+void co_sdo_upload_answer(co_node_t *node, uint16_t index, uint8_t sub, size_t len)
+{
+    const uint8_t *buf = node->sdo.buf;
     if (len >= 1U && len <= 4U) {
-        respond(node, (uint8_t)(0x43U | ((4U - len) << 2)), index, sub, buf, len);
+        co_sdo_respond(node, (uint8_t)(0x43U | ((4U - len) << 2)), index, sub, buf, len);
         return;
     }
     if (!segmented_enabled(node)) {
         if (len == 0U) { /* an empty string: one NUL byte is the shortest expedited answer */
             const uint8_t nul = 0U;
-            respond(node, 0x4FU, index, sub, &nul, 1U);
+            co_sdo_respond(node, 0x4FU, index, sub, &nul, 1U);
             return;
         }
-        sdo_abort(node, index, sub, CO_ABORT_UNSUPPORTED_ACCESS); /* > 4 bytes need segmented transfer */
+        co_sdo_abort(node, index, sub, CO_ABORT_UNSUPPORTED_ACCESS); /* > 4 bytes need segmented transfer */
         return;
     }
     uint8_t size[4];
     co_put_u32(size, (uint32_t)len);
-    respond(node, 0x41U, index, sub, size, 4U);
+    co_sdo_respond(node, 0x41U, index, sub, size, 4U);
     node->sdo.state = SDO_SEG_UPLOAD;
     node->sdo.index = index;
     node->sdo.sub = sub;
@@ -105,11 +114,10 @@ static void upload_initiate(co_node_t *node, uint16_t index, uint8_t sub)
     node->sdo.deadline = node->now + CO_SDO_TIMEOUT_US;
 }
 
-/* The checks of a segmented download initiate before the transfer (the object's existence, access and the size
- * indicated), also where segmented transfer is off: they come first, so a missing object answers 0x06020000
- * rather than 0x06010000 (docs/decisions.md). 0 or the abort code. */
-static uint32_t download_initiate_checks(const co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub,
-                                         const uint8_t *data)
+/* The checks of a segmented or block download initiate before the transfer (the object's existence, access and
+ * the size indicated, if sized), also where the transfer type is off: they come first, so a missing object answers
+ * 0x06020000 rather than 0x06010000 (docs/decisions.md). 0 or the abort code. */
+uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size)
 {
     const co_od_entry_t *e = co_od_find(node->od, index, sub);
     if (e == NULL) {
@@ -118,18 +126,18 @@ static uint32_t download_initiate_checks(const co_node_t *node, uint8_t cmd, uin
     if ((e->flags & CO_OD_WRITE) == 0U || (e->flags & CO_OD_CONST) != 0U) {
         return (e->flags & CO_OD_READ) != 0U ? CO_ABORT_READ_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
-    return ((cmd & 0x01U) != 0U && co_get_u32(data) > e->size) ? CO_ABORT_LENGTH_HIGH : CO_ABORT_NONE;
+    return (sized && size > e->size) ? CO_ABORT_LENGTH_HIGH : CO_ABORT_NONE;
 }
 
 #if CO_CONFIG_SDO_SEGMENTED
-/* After download_initiate_checks passed. */
+/* After co_sdo_download_checks passed. */
 static void download_initiate_segmented(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub,
                                         const uint8_t *data)
 {
     const co_od_entry_t *e = co_od_find(node->od, index, sub);
     const uint32_t size = (cmd & 0x01U) != 0U ? co_get_u32(data) : 0U;
     if (size > sizeof node->sdo.buf || e->size > sizeof node->sdo.buf) {
-        sdo_abort(node, index, sub, CO_ABORT_OUT_OF_MEMORY);
+        co_sdo_abort(node, index, sub, CO_ABORT_OUT_OF_MEMORY);
         return;
     }
     node->sdo.state = SDO_SEG_DOWNLOAD;
@@ -139,7 +147,7 @@ static void download_initiate_segmented(co_node_t *node, uint8_t cmd, uint16_t i
     node->sdo.pos = 0U;
     node->sdo.toggle = 0U;
     node->sdo.deadline = node->now + CO_SDO_TIMEOUT_US;
-    respond(node, 0x60U, index, sub, NULL, 0U);
+    co_sdo_respond(node, 0x60U, index, sub, NULL, 0U);
 }
 
 static void download_segment(co_node_t *node, uint8_t cmd, const uint8_t *seg)
@@ -147,12 +155,12 @@ static void download_segment(co_node_t *node, uint8_t cmd, const uint8_t *seg)
     co_sdo_server_t *s = &node->sdo;
     const uint8_t toggle = (uint8_t)((cmd >> 4) & 1U);
     if (toggle != s->toggle) {
-        sdo_abort(node, s->index, s->sub, CO_ABORT_TOGGLE);
+        co_sdo_abort(node, s->index, s->sub, CO_ABORT_TOGGLE);
         return;
     }
     const uint32_t n = 7U - ((cmd >> 1) & 0x07U);
     if (s->pos + n > sizeof s->buf) {
-        sdo_abort(node, s->index, s->sub, CO_ABORT_LENGTH_HIGH);
+        co_sdo_abort(node, s->index, s->sub, CO_ABORT_LENGTH_HIGH);
         return;
     }
     memcpy(&s->buf[s->pos], seg, n);
@@ -160,20 +168,20 @@ static void download_segment(co_node_t *node, uint8_t cmd, const uint8_t *seg)
     s->toggle ^= 1U;
     s->deadline = node->now + CO_SDO_TIMEOUT_US;
     if ((cmd & 0x01U) == 0U) {
-        respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
+        co_sdo_respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
         return;
     }
     if (s->size != 0U && s->pos != s->size) {
-        sdo_abort(node, s->index, s->sub, s->pos > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
+        co_sdo_abort(node, s->index, s->sub, s->pos > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
         return;
     }
     const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, s->pos, CO_ORIGIN_SDO);
     if (r != CO_ABORT_NONE) {
-        sdo_abort(node, s->index, s->sub, r);
+        co_sdo_abort(node, s->index, s->sub, r);
         return;
     }
     s->state = SDO_IDLE;
-    respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
+    co_sdo_respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
 }
 
 static void upload_segment(co_node_t *node, uint8_t cmd)
@@ -181,7 +189,7 @@ static void upload_segment(co_node_t *node, uint8_t cmd)
     co_sdo_server_t *s = &node->sdo;
     const uint8_t toggle = (uint8_t)((cmd >> 4) & 1U);
     if (toggle != s->toggle) {
-        sdo_abort(node, s->index, s->sub, CO_ABORT_TOGGLE);
+        co_sdo_abort(node, s->index, s->sub, CO_ABORT_TOGGLE);
         return;
     }
     const uint32_t left = s->size - s->pos;
@@ -215,6 +223,11 @@ void co_sdo_rx(co_node_t *node, const co_frame_t *f)
         node->sdo.state = SDO_IDLE; /* client abort: no answer */
         return;
     }
+#if CO_CONFIG_SDO_BLOCK
+    if (node->sdo.state > SDO_SEG_UPLOAD && co_sdo_block_rx(node, f)) {
+        return;
+    }
+#endif
 #if CO_CONFIG_SDO_SEGMENTED
     if (node->sdo.state == SDO_SEG_DOWNLOAD && (cmd & 0xE0U) == 0x00U) {
         download_segment(node, cmd, &f->data[1]);
@@ -231,9 +244,9 @@ void co_sdo_rx(co_node_t *node, const co_frame_t *f)
             download_expedited(node, cmd, index, sub, &f->data[4]);
             return;
         }
-        const uint32_t r = download_initiate_checks(node, cmd, index, sub, &f->data[4]);
+        const uint32_t r = co_sdo_download_checks(node, index, sub, (cmd & 0x01U) != 0U, co_get_u32(&f->data[4]));
         if (r != CO_ABORT_NONE || !segmented_enabled(node)) {
-            sdo_abort(node, index, sub, r != CO_ABORT_NONE ? r : CO_ABORT_UNSUPPORTED_ACCESS);
+            co_sdo_abort(node, index, sub, r != CO_ABORT_NONE ? r : CO_ABORT_UNSUPPORTED_ACCESS);
         } else {
 #if CO_CONFIG_SDO_SEGMENTED
             download_initiate_segmented(node, cmd, index, sub, &f->data[4]);
@@ -242,16 +255,27 @@ void co_sdo_rx(co_node_t *node, const co_frame_t *f)
         return;
     }
     if (cmd == 0x40U) {
-        upload_initiate(node, index, sub);
+        size_t len;
+        if (co_sdo_read_object(node, index, sub, &len)) {
+            co_sdo_upload_answer(node, index, sub, len);
+        }
         return;
     }
     const uint8_t ccs = (uint8_t)(cmd >> 5);
-    if (ccs == 0U || ccs == 3U) {
-        /* A segment with no transfer open: its bytes 1..3 are data, there is no multiplexer to echo. */
-        sdo_abort(node, 0U, 0U, CO_ABORT_COMMAND);
+    /* Initiates of block upload (ccs 5) and block download (ccs 6): sub-command 0 in the low bits. */
+    const bool block_initiate = (ccs == 5U && (cmd & 0x03U) == 0U) || (ccs == 6U && (cmd & 0x01U) == 0U);
+#if CO_CONFIG_SDO_BLOCK
+    if (block_initiate && (node->options & CO_OPT_SDO_BLOCK) != 0U) {
+        co_sdo_block_initiate(node, cmd, index, sub, &f->data[4]);
         return;
     }
-    sdo_abort(node, index, sub, CO_ABORT_COMMAND); /* block transfer, unknown commands */
+#endif
+    if (ccs == 0U || ccs == 3U || ((ccs == 5U || ccs == 6U) && !block_initiate)) {
+        /* A segment, or a block sub-command, with no transfer open: its bytes 1..3 are no multiplexer to echo. */
+        co_sdo_abort(node, 0U, 0U, CO_ABORT_COMMAND);
+        return;
+    }
+    co_sdo_abort(node, index, sub, CO_ABORT_COMMAND); /* block transfer switched off, unknown commands */
 }
 
 co_time_us_t co_sdo_process(co_node_t *node)
@@ -264,9 +288,14 @@ co_time_us_t co_sdo_process(co_node_t *node)
         return CO_NEVER;
     }
     if (node->now >= node->sdo.deadline) {
-        sdo_abort(node, node->sdo.index, node->sdo.sub, CO_ABORT_TIMEOUT);
+        co_sdo_abort(node, node->sdo.index, node->sdo.sub, CO_ABORT_TIMEOUT);
         return CO_NEVER;
     }
+#if CO_CONFIG_SDO_BLOCK
+    if (node->sdo.state == CO_SDO_BLK_UPLOAD) {
+        return co_min_time(node->sdo.deadline, co_sdo_block_process(node));
+    }
+#endif
     return node->sdo.deadline;
 }
 

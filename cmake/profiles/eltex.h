@@ -4,8 +4,9 @@
  * -DCO_CONFIG_HEADER='"path/to/eltex.h"'). Every value is checked against od/pro-ionizer.eds and
  * od/sds.eds (the generated tables in <build>/od/) and against the device models:
  *
- * - No segmented SDO: every object of both dictionaries fits an expedited transfer (the longest are the
- *   4-byte strings 0x1008/0x100A), and the device models do not set CO_OPT_SDO_SEGMENTED. The SDO
+ * - No segmented or block SDO: every object of both dictionaries fits an expedited transfer (the longest are
+ *   the 4-byte strings 0x1008/0x100A), and the device models set neither CO_OPT_SDO_SEGMENTED nor
+ *   CO_OPT_SDO_BLOCK (their manuals rule both out). The SDO
  *   buffer must still hold the largest object read by SDO (uploads are staged in it): 8 bytes.
  * - No SYNC: neither dictionary has 0x1005/0x1006/0x1007/0x1019, and the PDO transmission types
  *   (0x1400:02, 0x1800:02, 0x1801:02, 0x1802:02) are read-only and event-driven (254/255).
@@ -27,6 +28,7 @@
 #define CO_PROFILE_ELTEX_H
 
 #define CO_CONFIG_SDO_SEGMENTED 0
+#define CO_CONFIG_SDO_BLOCK 0
 #define CO_SDO_BUF_SIZE 8U
 #define CO_CONFIG_SYNC 0
 #define CO_CONFIG_NODE_GUARDING 0

@@ -2,14 +2,15 @@
  * Configuration profile "full": every service compiled in, the default sizes of include/co/co_config.h
  * (4 RPDOs, 4 TPDOs, 127 heartbeat-consumer slots, 64-byte segmented SDO buffer, 16-frame TX queue,
  * 8 active errors, 8 queued EMCY frames). This is what the host build (canopen-emu, the host tests)
- * uses; it serves all three shipped devices, the Bürkert flow controller included (segmented SDO, SYNC,
- * node guarding, 0x1016 with 127 entries, 4+4 PDOs).
+ * uses; it serves all three shipped devices, the Bürkert flow controller included (segmented and block SDO,
+ * SYNC, node guarding, 0x1016 with 127 entries, 4+4 PDOs).
  * Use it with -DCO_PROFILE=full (CMake) or -DCO_CONFIG_HEADER='"path/to/full.h"'.
  */
 #ifndef CO_PROFILE_FULL_H
 #define CO_PROFILE_FULL_H
 
 #define CO_CONFIG_SDO_SEGMENTED 1
+#define CO_CONFIG_SDO_BLOCK 1
 #define CO_SDO_BUF_SIZE 64U
 #define CO_CONFIG_SYNC 1
 #define CO_CONFIG_NODE_GUARDING 1

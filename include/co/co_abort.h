@@ -18,6 +18,9 @@ extern "C" {
     X(TOGGLE, 0x05030000UL, "toggle bit not alternated")                                      \
     X(TIMEOUT, 0x05040000UL, "SDO protocol timed out")                                        \
     X(COMMAND, 0x05040001UL, "command specifier not valid or unknown")                        \
+    X(BLOCK_SIZE, 0x05040002UL, "invalid block size")                                         \
+    X(SEQUENCE, 0x05040003UL, "invalid sequence number")                                      \
+    X(CRC, 0x05040004UL, "CRC error")                                                         \
     X(OUT_OF_MEMORY, 0x05040005UL, "out of memory")                                           \
     X(UNSUPPORTED_ACCESS, 0x06010000UL, "unsupported access to an object")                    \
     X(WRITE_ONLY, 0x06010001UL, "attempt to read a write-only object")                        \

@@ -52,12 +52,18 @@
 #define CO_CONFIG_SDO_SEGMENTED 1
 #endif
 
-/** Largest object a segmented SDO transfer can move, in bytes. */
+/** 1: SDO block transfer (CiA 301 §7.2.4.3.9-16, with CRC) is compiled in (a device switches it on with
+ *  CO_OPT_SDO_BLOCK). */
+#ifndef CO_CONFIG_SDO_BLOCK
+#define CO_CONFIG_SDO_BLOCK 1
+#endif
+
+/** Largest object a segmented or block SDO transfer can move, in bytes. */
 #ifndef CO_SDO_BUF_SIZE
 #define CO_SDO_BUF_SIZE 64U
 #endif
 
-/** Segmented SDO transfer timeout (no frame from the client), in µs. */
+/** Segmented and block SDO transfer timeout (no frame from the client), in µs. */
 #ifndef CO_SDO_TIMEOUT_US
 #define CO_SDO_TIMEOUT_US 1000000U
 #endif

@@ -110,7 +110,8 @@ enum co_node_option {
     CO_OPT_LSS_NO_UNCONFIGURE = 0x04U, /**< LSS configure node-ID refuses 0xFF (only 1..127), as Bürkert devices do. */
     CO_OPT_TPDO_NO_COS = 0x08U,        /**< Event-driven TPDOs go out on co_tpdo_trigger() and the event timer only,
                                             not when a mapped value changes (devices that send cyclically). */
-    CO_OPT_NO_LSS = 0x10U              /**< No LSS slave: LSS requests (0x7E5) are ignored (EDS LSS_Supported=0). */
+    CO_OPT_NO_LSS = 0x10U,             /**< No LSS slave: LSS requests (0x7E5) are ignored (EDS LSS_Supported=0). */
+    CO_OPT_SDO_BLOCK = 0x20U           /**< SDO block upload and download with CRC (needs CO_CONFIG_SDO_BLOCK). */
 };
 
 /** Number of entries of an LSS bit-timing table (CiA 305 indices 0..9). */
@@ -198,12 +199,16 @@ typedef struct co_emcy {
 } co_emcy_t;
 
 typedef struct co_sdo_server {
-    uint8_t state;              /**< 0 idle, 1 segmented download, 2 segmented upload. */
+    uint8_t state;              /**< 0 idle, 1 segmented download, 2 segmented upload, 3.. block (co_sdo_block.c). */
     uint8_t toggle;
     uint8_t sub;
     uint16_t index;
     uint32_t size;              /**< Bytes of the transfer (download: indicated, or 0 if not). */
-    uint32_t pos;
+    uint32_t pos;               /**< Segmented: bytes moved. Block download: 7 per segment received; block
+                                     upload: bytes the client acknowledged (start of the current block). */
+    uint8_t seq;                /**< Block: last sequence number received (download) or sent (upload). */
+    uint8_t blksize;            /**< Block: segments per block, 1..127. */
+    bool crc;                   /**< Block: both sides use the CRC. */
     co_time_us_t deadline;
     uint8_t buf[CO_SDO_BUF_SIZE];
 } co_sdo_server_t;

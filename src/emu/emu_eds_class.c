@@ -252,7 +252,7 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     cls->od_names = c->names;
     cls->default_node_id = f->comm.node_id; /* 0: the command line must give one */
     cls->default_bit_timing = bit_timing_of(f);
-    cls->core_options = CO_OPT_SDO_SEGMENTED | (f->lss_supported ? 0U : CO_OPT_NO_LSS);
+    cls->core_options = CO_OPT_SDO_SEGMENTED | CO_OPT_SDO_BLOCK | (f->lss_supported ? 0U : CO_OPT_NO_LSS);
     cls->rpdo_count = pdo_count(f, 0x1400U);
     cls->tpdo_count = pdo_count(f, 0x1800U);
     cls->model_size = device_pdo_state_size(cls);

@@ -100,10 +100,30 @@ uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint
 uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e);
 bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 
-/* ---- SDO server (co_sdo_server.c) ---- */
+/* ---- SDO server (co_sdo_server.c; block transfer in co_sdo_block.c) ---- */
+enum co_sdo_state {
+    CO_SDO_IDLE = 0,
+    CO_SDO_SEG_DOWNLOAD = 1,
+    CO_SDO_SEG_UPLOAD = 2,
+    CO_SDO_BLK_DOWNLOAD = 3,     /* receiving the segments of a block */
+    CO_SDO_BLK_DOWNLOAD_END = 4, /* last segment confirmed, waiting for the end request */
+    CO_SDO_BLK_UPLOAD_START = 5, /* initiate answered, waiting for the start request */
+    CO_SDO_BLK_UPLOAD = 6,       /* sending a block, or waiting for its confirmation */
+    CO_SDO_BLK_UPLOAD_END = 7    /* end request sent, waiting for the end response */
+};
 void co_sdo_reset(co_node_t *node);
 void co_sdo_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_sdo_process(co_node_t *node);
+void co_sdo_respond(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data, size_t len);
+void co_sdo_abort(co_node_t *node, uint16_t index, uint8_t sub, uint32_t code);
+uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size);
+bool co_sdo_read_object(co_node_t *node, uint16_t index, uint8_t sub, size_t *len);
+void co_sdo_upload_answer(co_node_t *node, uint16_t index, uint8_t sub, size_t len);
+#if CO_CONFIG_SDO_BLOCK
+void co_sdo_block_initiate(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data);
+bool co_sdo_block_rx(co_node_t *node, const co_frame_t *f);
+co_time_us_t co_sdo_block_process(co_node_t *node);
+#endif
 
 /* ---- SYNC (co_sync.c) ---- */
 void co_sync_reset(co_node_t *node);

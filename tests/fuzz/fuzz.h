@@ -66,7 +66,8 @@ typedef struct fz {
     co_frame_t rx;
     co_nmt_state_t state0;
     uint8_t id0;
-    bool sdo_open0;           /* a segmented transfer was open when the call began */
+    bool sdo_open0;           /* a segmented or block transfer was open when the call began */
+    uint8_t sdo_state0;       /* the SDO server's state then (enum co_sdo_state) */
     bool clean0;              /* port healthy, TX queue empty, not silenced: a response must go out at once */
     uint32_t sdo_resp;        /* SDO responses sent directly during the call */
     uint32_t lss_resp;
@@ -81,6 +82,7 @@ typedef struct fz {
     uint64_t sdo_req_total;
     uint64_t sdo_resp_total;
     uint64_t sdo_timeout_total;
+    uint64_t sdo_segments_allowed; /* block upload segments the requests so far allowed (127 per block) */
 
     uint32_t step;            /* records decoded so far, for messages */
     uint32_t loop_budget;     /* process calls left for time loops in this input */

@@ -26,6 +26,7 @@
 
 #include "fuzz_abort.h"
 #include "fuzz.h"
+#include "priv/co_priv.h" /* enum co_sdo_state: the SDO server's states the oracle tells apart */
 
 #define FZ_TIME_MAX (UINT64_C(1) << 60) /* 36,000 years: far below any overflow of now + period */
 #define FZ_MAX_RECORDS 3000U
@@ -168,6 +169,14 @@ static bool is_sdo_request(const co_frame_t *f, uint8_t id)
 {
     return id >= 1U && id <= 127U && f->id == 0x600U + id && f->len == 8U &&
            (f->flags & (CO_FRAME_RTR | CO_FRAME_EFF | CO_FRAME_ERR)) == 0U;
+}
+
+/* The request that lets a block upload send segments from the state it found: start (0xA3) after the initiate, a
+ * block confirmation (0xA2) while a block is out. */
+static bool starts_upload_block(const co_frame_t *f, uint8_t state0)
+{
+    return (state0 == CO_SDO_BLK_UPLOAD_START && (f->data[0] & 0xE3U) == 0xA3U) ||
+           (state0 == CO_SDO_BLK_UPLOAD && (f->data[0] & 0xE3U) == 0xA2U);
 }
 
 static bool is_plain(const co_frame_t *f) { return (f->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) == 0U && f->len <= 8U; }
@@ -326,6 +335,16 @@ static void check_frame(fz_t *h, const co_frame_t *f)
         if (!sdo_or_op(st)) {
             fz_fail(h, "SDO response %02X in NMT state 0x%02X", f->data[0], (unsigned)st);
         }
+        if (n->sdo.state == CO_SDO_BLK_UPLOAD) { /* a segment of a block upload, not a response */
+            const bool from_request = h->call == FZ_CALL_RX && is_sdo_request(&h->rx, h->id0) &&
+                                      starts_upload_block(&h->rx, h->sdo_state0);
+            const bool continued = h->call == FZ_CALL_PROCESS && h->sdo_state0 == CO_SDO_BLK_UPLOAD;
+            if (!from_request && !continued) {
+                fz_fail(h, "block upload segment %02X from a %s call in SDO state %u", f->data[0],
+                        call_name(h->call), (unsigned)h->sdo_state0);
+            }
+            return;
+        }
         h->sdo_resp++;
         if (h->call == FZ_CALL_RX) {
             if (!is_sdo_request(&h->rx, h->id0)) {
@@ -474,6 +493,7 @@ static void begin_call(fz_t *h, fz_call_t call, const co_frame_t *f)
     h->id0 = n->node_id;
     h->reset_in_call = false;
     h->sdo_open0 = n->sdo.state != 0U;
+    h->sdo_state0 = n->sdo.state;
     h->clean0 = h->fp.busy_count == 0U && !h->fp.send_io_error && n->txq.count == 0U &&
                 !(n->lss.silent_until != 0U && h->now < n->lss.silent_until);
     h->sdo_resp = 0U;
@@ -485,6 +505,9 @@ static void begin_call(fz_t *h, fz_call_t call, const co_frame_t *f)
     h->emcy_events = 0U;
     if (call == FZ_CALL_RX && is_sdo_request(f, h->id0)) {
         h->sdo_req_total++;
+        if (starts_upload_block(f, h->sdo_state0)) {
+            h->sdo_segments_allowed += 127U;
+        }
     }
 }
 
@@ -493,10 +516,25 @@ static void check_rx_effects(fz_t *h)
     co_node_t *n = h->node;
     const co_frame_t *f = &h->rx;
     const bool configured0 = h->id0 != CO_NODE_ID_UNCONFIGURED && h->state0 != CO_NMT_INITIALISING;
-    if (is_sdo_request(f, h->id0) && configured0 && sdo_or_op(h->state0) && h->clean0 && f->data[0] != 0x80U &&
-        h->sdo_resp != 1U) {
-        fz_fail(h, "SDO request %02X %02X%02X:%02X got %u responses (expected exactly one)", f->data[0], f->data[2],
-                f->data[1], f->data[3], (unsigned)h->sdo_resp);
+    if (is_sdo_request(f, h->id0) && configured0 && sdo_or_op(h->state0) && h->clean0 && f->data[0] != 0x80U) {
+        /* Exactly one response, except inside a block transfer: a download segment is confirmed only at the end of
+         * its block, an upload block's start and the end response get none, a block confirmation one if it ends
+         * the upload or is refused. */
+        const uint8_t st0 = h->sdo_state0;
+        const uint8_t cs = (uint8_t)(f->data[0] & 0xE3U);
+        uint32_t least = 1U;
+        uint32_t most = 1U;
+        if (st0 == CO_SDO_BLK_DOWNLOAD || (st0 == CO_SDO_BLK_UPLOAD && cs == 0xA2U)) {
+            least = 0U;
+        } else if ((st0 == CO_SDO_BLK_UPLOAD_START && cs == 0xA3U) || (st0 == CO_SDO_BLK_UPLOAD_END && cs == 0xA1U)) {
+            least = 0U;
+            most = 0U;
+        }
+        if (h->sdo_resp < least || h->sdo_resp > most) {
+            fz_fail(h, "SDO request %02X %02X%02X:%02X in SDO state %u got %u responses (expected %u..%u)",
+                    f->data[0], f->data[2], f->data[1], f->data[3], (unsigned)st0, (unsigned)h->sdo_resp,
+                    (unsigned)least, (unsigned)most);
+        }
     }
     if (f->id == 0x000U && is_plain(f) && (f->flags & CO_FRAME_RTR) == 0U && configured0) {
         const bool accepted = f->len == 2U || (f->len > 2U && (h->options & CO_OPT_NMT_ACCEPT_LONG) != 0U);
@@ -564,9 +602,14 @@ static void end_call(fz_t *h, bool legit)
         n->emcy.n_active > CO_EMCY_ACTIVE_MAX) {
         fz_fail(h, "EMCY queue %u/%u, active %u", n->emcy.q_count, n->emcy.q_head, n->emcy.n_active);
     }
-    if (n->sdo.state > 2U || n->sdo.pos > CO_SDO_BUF_SIZE || (n->sdo.state == 2U && n->sdo.size > CO_SDO_BUF_SIZE)) {
-        fz_fail(h, "SDO server state %u pos %lu size %lu", n->sdo.state, (unsigned long)n->sdo.pos,
-                (unsigned long)n->sdo.size);
+    /* A block transfer counts whole segments: up to 6 bytes past the object, or past the buffer before the end
+     * request refuses the download. */
+    const bool block = n->sdo.state >= CO_SDO_BLK_DOWNLOAD;
+    if (n->sdo.state > CO_SDO_BLK_UPLOAD_END || n->sdo.pos > CO_SDO_BUF_SIZE + (block ? 6U : 0U) ||
+        n->sdo.size > CO_SDO_BUF_SIZE ||
+        (block && (n->sdo.blksize == 0U || n->sdo.blksize > 127U || n->sdo.seq > n->sdo.blksize))) {
+        fz_fail(h, "SDO server state %u pos %lu size %lu seq %u blksize %u", n->sdo.state, (unsigned long)n->sdo.pos,
+                (unsigned long)n->sdo.size, n->sdo.seq, n->sdo.blksize);
     }
     if ((n->lss.active_bit_timing >= CO_LSS_BIT_TIMING_COUNT || n->lss.pending_bit_timing >= CO_LSS_BIT_TIMING_COUNT) &&
         !fz_known("lss-bit-timing")) {
@@ -576,10 +619,10 @@ static void end_call(fz_t *h, bool legit)
     if (n->hbc.count > CO_HB_CONSUMER_MAX) {
         fz_fail(h, "heartbeat consumer count %u", n->hbc.count);
     }
-    if (h->sdo_resp_total > h->sdo_req_total + h->sdo_timeout_total) {
-        fz_fail(h, "%llu SDO responses on the bus for %llu requests and %llu timeouts",
+    if (h->sdo_resp_total > h->sdo_req_total + h->sdo_timeout_total + h->sdo_segments_allowed) {
+        fz_fail(h, "%llu SDO frames on the bus for %llu requests, %llu timeouts and %llu block segments allowed",
                 (unsigned long long)h->sdo_resp_total, (unsigned long long)h->sdo_req_total,
-                (unsigned long long)h->sdo_timeout_total);
+                (unsigned long long)h->sdo_timeout_total, (unsigned long long)h->sdo_segments_allowed);
     }
     switch (h->call) {
     case FZ_CALL_RX:

@@ -541,6 +541,18 @@ def core_scenarios():
     s.sdo(0x21, 0x05, 0x20, 0x00, 20, 0, 0, 0).sdo(0x00, *b"abcdefg").sdo(0x10, *b"hijklmn").sdo(0x05, *b"opqrst\0")
     s.sdo(0x21, 0x05, 0x20, 0x00, 20, 0, 0, 0).sdo(0x00, *b"abcdefg").ms(1500)
     S["segmented-sdo"] = s.data()
+    # Block SDO on (option bit 7, with segmented): upload of the 24-byte string in blocks of 2 with a lost segment,
+    # a download with CRC, one with a lost segment, a protocol switch, and a timeout in the middle of a block.
+    s = Seq((0x82, OWN, 0, 0))
+    s.sdo(0xA4, 0x09, 0x10, 0x00, 2, 0, 0, 0).sdo(0xA3, 0, 0, 0, 0, 0, 0, 0).sdo(0xA2, 1, 3, 0, 0, 0, 0, 0)
+    s.sdo(0xA2, 3, 127, 0, 0, 0, 0, 0).sdo(0xA1, 0, 0, 0, 0, 0, 0, 0)
+    s.sdo(0xC6, 0x05, 0x20, 0x00, 9, 0, 0, 0).sdo(0x01, *b"1234567").sdo(0x82, *b"89\0\0\0\0\0")
+    s.sdo(0xD5, 0xC3, 0x31, 0, 0, 0, 0, 0)
+    s.sdo(0xC4, 0x05, 0x20, 0x00, 0, 0, 0, 0).sdo(0x01, *b"abcdefg").sdo(0x03, *b"XXXXXXX").sdo(0x84, *b"YYY\0\0\0\0")
+    s.sdo(0x01, *b"hijklmn").sdo(0x82, *b"opq\0\0\0\0").sdo(0xD1, 0xD2, 0x10, 0, 0, 0, 0, 0)
+    s.sdo(0xA4, 0x00, 0x10, 0x00, 127, 4, 0, 0).port_busy(3).sdo(0xA4, 0x09, 0x10, 0x00, 127, 0, 0, 0)
+    s.sdo(0xA3, 0, 0, 0, 0, 0, 0, 0).ms(5).ms(1500)
+    S["block-sdo"] = s.data()
     # TPDO timing: event timer 100 ms, inhibit 20 ms, then 50 ms inhibit (> ... timer) on a re-validated PDO.
     s = Seq()
     s.sdo_write(0x1800, 1, 0x80000185, 4).sdo_write(0x1800, 3, 200, 2).sdo_write(0x1800, 5, 100, 2)
@@ -691,6 +703,12 @@ def buerkert_scenarios(hdr):
     s.sdo(0x21, 0x02, 0x20, 0x01, 10, 0, 0, 0).sdo(0x00, *b"flow-co").sdo(0x17, *b"ntrl\0\0\0").sdo_read(0x2002, 1)
     s.sdo(0x21, 0x02, 0x20, 0x01, 40, 0, 0, 0).sdo(0x21, 0x02, 0x20, 0x01, 10, 0, 0, 0).ms(1500)
     S["bk-segmented-sdo"] = s.data()
+    s = Seq(hdr)   # block SDO: upload of the device name in blocks of 3, a download into it with CRC
+    s.sdo(0xA4, 0x02, 0x20, 0x01, 3, 0, 0, 0).sdo(0xA3, 0, 0, 0, 0, 0, 0, 0).sdo(0xA2, 3, 3, 0, 0, 0, 0, 0)
+    s.sdo(0xA2, 2, 127, 0, 0, 0, 0, 0).sdo(0xA2, 2, 127, 0, 0, 0, 0, 0).sdo(0xA1, 0, 0, 0, 0, 0, 0, 0)
+    s.sdo(0xC6, 0x02, 0x20, 0x01, 9, 0, 0, 0).sdo(0x01, *b"1234567").sdo(0x82, *b"89\0\0\0\0\0")
+    s.sdo(0xD5, 0xC3, 0x31, 0, 0, 0, 0, 0).sdo_read(0x2002, 1).ms(1500)
+    S["bk-block-sdo"] = s.data()
     s = Seq(hdr)   # TPDOs with inhibit 500 ms / event 1000 ms, other TPDOs enabled, late wake-up
     s.sdo_write(0x1801, 1, 0x285, 4).nmt(0x01).ms(1200).advance(1_700_000, jump=True).ms(100).ms(1000)
     S["bk-tpdo-timers"] = s.data()

@@ -5,8 +5,8 @@
  * LSS configuration API, resets). The read-only check is strict here: only 0x1001 and 0x1003 may move by
  * themselves.
  *
- * Header: [0] bits 0-2 CO_OPT_* options 0x01-0x04, bit 6 CO_OPT_TPDO_NO_COS, bit 3 no NVM functions,
- *         bit 4 no set_bit_rate, bit 5 custom bit-rate table; [1] node-ID (0 = 5; 128..254 must be
+ * Header: [0] bits 0-2 CO_OPT_* options 0x01-0x04, bit 3 no NVM functions, bit 4 no set_bit_rate, bit 5 custom
+ *         bit-rate table, bit 6 CO_OPT_TPDO_NO_COS, bit 7 CO_OPT_SDO_BLOCK; [1] node-ID (0 = 5; 128..254 must be
  *         refused); [2] bits 0-4 hook actions, bits 5-7 refusal preset; [3] node-ID the on_reset hook
  *         makes pending (action bit 4).
  */
@@ -205,7 +205,8 @@ bool fzt_init(fz_t *h, const uint8_t hdr[4])
     h->node = c->node;
     h->od = &test_od;
     h->values = (uint8_t *)c->values;
-    h->options = (hdr[0] & 0x07U) | ((hdr[0] & 0x40U) != 0U ? (uint32_t)CO_OPT_TPDO_NO_COS : 0U);
+    h->options = (hdr[0] & 0x07U) | ((hdr[0] & 0x40U) != 0U ? (uint32_t)CO_OPT_TPDO_NO_COS : 0U) |
+                 ((hdr[0] & 0x80U) != 0U ? (uint32_t)CO_OPT_SDO_BLOCK : 0U);
     if ((hdr[0] & 0x08U) != 0U) {
         h->port.nvm_write = NULL;
         h->port.nvm_commit = NULL;
