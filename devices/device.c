@@ -88,18 +88,25 @@ static co_status_t boot(device_t *dev, co_time_us_t now)
     nc.bit_timing = dev->cls->default_bit_timing;
     nc.bit_rates_kbit = dev->cls->bit_rates_kbit;
     nc.options = dev->cls->core_options;
+    uint8_t *core_state = (uint8_t *)dev->model;
     if (dev->cls->rpdo_count > 0U || dev->cls->tpdo_count > 0U) {
-        nc.rpdo = (co_rpdo_t *)dev->model;
+        nc.rpdo = (co_rpdo_t *)core_state;
         nc.rpdo_count = dev->cls->rpdo_count;
-        nc.tpdo = (co_tpdo_t *)((uint8_t *)dev->model + (size_t)dev->cls->rpdo_count * sizeof(co_rpdo_t));
+        nc.tpdo = (co_tpdo_t *)(core_state + (size_t)dev->cls->rpdo_count * sizeof(co_rpdo_t));
         nc.tpdo_count = dev->cls->tpdo_count;
+    }
+    if (dev->cls->sdo_server_count > 0U) {
+        nc.sdo_servers = (co_sdo_server_t *)(core_state + (size_t)dev->cls->rpdo_count * sizeof(co_rpdo_t) +
+                                             (size_t)dev->cls->tpdo_count * sizeof(co_tpdo_t));
+        nc.sdo_server_count = dev->cls->sdo_server_count;
     }
     return co_node_init(&dev->node, &nc, now);
 }
 
-size_t device_pdo_state_size(const device_class_t *cls)
+size_t device_core_state_size(const device_class_t *cls)
 {
-    return (size_t)cls->rpdo_count * sizeof(co_rpdo_t) + (size_t)cls->tpdo_count * sizeof(co_tpdo_t);
+    return (size_t)cls->rpdo_count * sizeof(co_rpdo_t) + (size_t)cls->tpdo_count * sizeof(co_tpdo_t) +
+           (size_t)cls->sdo_server_count * sizeof(co_sdo_server_t);
 }
 
 co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, void *model, const device_cfg_t *cfg,

@@ -78,12 +78,14 @@ typedef struct device_class {
     /** The core's on_store hook (co_node.h; may be NULL): stages the model's own data that belongs to a store
      *  (0x1010, 0x1011, LSS store 0x7E5) so that it becomes durable with it, all or none. */
     co_status_t (*on_store)(device_t *dev, uint16_t index, uint8_t sub);
-    /** For an OD with more PDOs than CO_RPDO_MAX / CO_TPDO_MAX (a device read from its EDS: CiA 301 allows 512):
-     *  when non-zero, the model block starts with co_rpdo_t[rpdo_count] then co_tpdo_t[tpdo_count] (model_size
-     *  counts them), which device_init gives the node; the model's own state follows at device_pdo_state_size().
-     *  0, 0: the node's own arrays. */
+    /** For an OD with more PDOs than CO_RPDO_MAX / CO_TPDO_MAX (a device read from its EDS: CiA 301 allows 512),
+     *  or with additional SDO servers (0x1201..0x127F): when non-zero, the model block starts with
+     *  co_rpdo_t[rpdo_count], co_tpdo_t[tpdo_count], co_sdo_server_t[sdo_server_count] (model_size counts them),
+     *  which device_init gives the node; the model's own state follows at device_core_state_size().
+     *  0: the node's own PDO arrays, no additional SDO server. */
     uint16_t rpdo_count;
     uint16_t tpdo_count;
+    uint8_t sdo_server_count;
 } device_class_t;
 
 /** What the runner gives an instance. */
@@ -174,8 +176,9 @@ const char *device_object_unit(const device_class_t *cls, const co_od_entry_t *e
  */
 co_time_us_t device_save_phase_us(const device_t *dev);
 
-/** Bytes at the start of a class's model block that hold PDO state (device_class_t.rpdo_count/tpdo_count). */
-size_t device_pdo_state_size(const device_class_t *cls);
+/** Bytes at the start of a class's model block that hold core state: PDOs and additional SDO servers
+ *  (device_class_t.rpdo_count/tpdo_count/sdo_server_count). */
+size_t device_core_state_size(const device_class_t *cls);
 
 /** The OD default of 0x1018:04 (serial number) of a class, 0 if it has none. */
 uint32_t device_default_serial(const device_class_t *cls);

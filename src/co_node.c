@@ -177,7 +177,8 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         node->tpdo = node->tpdo_own;
         node->tpdo_cap = CO_TPDO_MAX;
     }
-    if (co_pdo_count(node) != CO_OK || co_od_sub_count(node->od, 0x1016U) > CO_HB_CONSUMER_MAX) {
+    if (co_pdo_count(node) != CO_OK || co_sdo_count(node, cfg->sdo_servers, cfg->sdo_server_count) != CO_OK ||
+        co_od_sub_count(node->od, 0x1016U) > CO_HB_CONSUMER_MAX) {
         return CO_ERR_RANGE;
     }
     memcpy(node->values, node->od->defaults, node->od->values_size);
@@ -244,7 +245,10 @@ bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
     }
 #endif
     if (frame->id == 0x600U + node->node_id) {
-        co_sdo_rx(node, frame);
+        co_sdo_rx(node, &node->sdo, frame);
+        return true;
+    }
+    if (node->n_sdo_extra != 0U && co_sdo_rx_extra(node, frame)) {
         return true;
     }
     if (co_pdo_rx(node, frame)) {

@@ -48,9 +48,9 @@ static void start_transfer(co_sdo_server_t *s, uint8_t state, uint16_t index, ui
 
 /* Initiate block download (byte 0 0b110x_xcs0: c client CRC, s size indicated) or block upload (0b101x_xc00, byte 4
  * block size, byte 5 protocol switch threshold). The object checks come first, as for a segmented download. */
-void co_sdo_block_initiate(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data)
+void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
+                           const uint8_t *data)
 {
-    co_sdo_server_t *s = &node->sdo;
     const bool client_crc = (cmd & 0x04U) != 0U;
     if ((cmd & 0xE0U) == 0xC0U) {
         const bool sized = (cmd & 0x02U) != 0U;
@@ -60,7 +60,7 @@ void co_sdo_block_initiate(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t
             r = CO_ABORT_OUT_OF_MEMORY;
         }
         if (r != CO_ABORT_NONE) {
-            co_sdo_abort(node, index, sub, r);
+            co_sdo_abort(node, s, index, sub, r);
             return;
         }
         start_transfer(s, CO_SDO_BLK_DOWNLOAD, index, sub, node->now);
@@ -68,21 +68,21 @@ void co_sdo_block_initiate(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t
         s->crc = client_crc;
         s->blksize = download_block_size(s);
         const uint8_t answer[4] = {s->blksize, 0U, 0U, 0U};
-        co_sdo_respond(node, 0xA4U, index, sub, answer, 4U); /* server CRC support: always */
+        co_sdo_respond(node, s, 0xA4U, index, sub, answer, 4U); /* server CRC support: always */
         return;
     }
     const uint8_t blksize = data[0];
     const uint8_t pst = data[1];
     if (blksize == 0U || blksize > BLK_SIZE_MAX) {
-        co_sdo_abort(node, index, sub, CO_ABORT_BLOCK_SIZE);
+        co_sdo_abort(node, s, index, sub, CO_ABORT_BLOCK_SIZE);
         return;
     }
     size_t len;
-    if (!co_sdo_read_object(node, index, sub, &len)) {
+    if (!co_sdo_read_object(node, s, index, sub, &len)) {
         return;
     }
     if (pst != 0U && len <= pst) {
-        co_sdo_upload_answer(node, index, sub, len); /* protocol switch: the client accepts an ordinary upload */
+        co_sdo_upload_answer(node, s, index, sub, len); /* protocol switch: the client accepts an ordinary upload */
         return;
     }
     start_transfer(s, CO_SDO_BLK_UPLOAD_START, index, sub, node->now);
@@ -91,21 +91,20 @@ void co_sdo_block_initiate(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t
     s->blksize = blksize;
     uint8_t size[4];
     co_put_u32(size, (uint32_t)len);
-    co_sdo_respond(node, 0xC6U, index, sub, size, 4U); /* server CRC support, size indicated */
+    co_sdo_respond(node, s, 0xC6U, index, sub, size, 4U); /* server CRC support, size indicated */
 }
 
-static void download_segment(co_node_t *node, const uint8_t *frame)
+static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *frame)
 {
-    co_sdo_server_t *s = &node->sdo;
     const uint8_t seqno = (uint8_t)(frame[0] & 0x7FU);
     if (seqno == 0U || seqno > s->blksize) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_SEQUENCE);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_SEQUENCE);
         return;
     }
     const bool in_order = seqno == s->seq + 1U;
     if (in_order) {
         if (s->pos >= sizeof s->buf) {
-            co_sdo_abort(node, s->index, s->sub, CO_ABORT_OUT_OF_MEMORY);
+            co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_OUT_OF_MEMORY);
             return;
         }
         const uint32_t room = (uint32_t)sizeof s->buf - s->pos;
@@ -127,34 +126,33 @@ static void download_segment(co_node_t *node, const uint8_t *frame)
         s->seq = 0U;
         s->blksize = download_block_size(s);
     }
-    co_frame_t f = {0x580U + node->node_id, 8U, 0U, {0xA2U, ackseq, s->blksize, 0U, 0U, 0U, 0U, 0U}};
+    co_frame_t f = {s->tx_id, 8U, 0U, {0xA2U, ackseq, s->blksize, 0U, 0U, 0U, 0U, 0U}};
     co_node_send(node, &f);
 }
 
-static void download_end(co_node_t *node, uint8_t cmd, const uint8_t *frame)
+static void download_end(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *frame)
 {
-    co_sdo_server_t *s = &node->sdo;
     const uint32_t unused = (uint32_t)(cmd >> 2) & 0x07U;
     const uint32_t len = s->pos - unused; /* pos >= 7: the last segment was taken */
     if (len > sizeof s->buf) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_OUT_OF_MEMORY);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_OUT_OF_MEMORY);
         return;
     }
     if (s->size != 0U && len != s->size) {
-        co_sdo_abort(node, s->index, s->sub, len > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
+        co_sdo_abort(node, s, s->index, s->sub, len > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
         return;
     }
     if (s->crc && co_get_u16(&frame[1]) != block_crc(s->buf, len)) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_CRC);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_CRC);
         return;
     }
     const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, len, CO_ORIGIN_SDO);
     if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, s->index, s->sub, r);
+        co_sdo_abort(node, s, s->index, s->sub, r);
         return;
     }
     s->state = CO_SDO_IDLE;
-    co_sdo_respond(node, 0xA1U, 0U, 0U, NULL, 0U);
+    co_sdo_respond(node, s, 0xA1U, 0U, 0U, NULL, 0U);
 }
 
 /* Bytes of the upload, counted in segments: an empty object still takes one segment (with 7 unused bytes). */
@@ -167,14 +165,13 @@ static bool upload_block_sent(const co_sdo_server_t *s)
 
 /* Sends the segments of the current block while the port takes frames at once, so a block of up to 127
  * segments never floods the node's transmit queue: what is left goes out from co_sdo_block_process. */
-static void upload_send_block(co_node_t *node)
+static void upload_send_block(co_node_t *node, co_sdo_server_t *s)
 {
-    co_sdo_server_t *s = &node->sdo;
     while (!upload_block_sent(s) && node->txq.count == 0U) {
         const uint32_t offset = upload_end_of_block(s);
         const uint32_t left = s->size - offset;
         s->seq++;
-        co_frame_t f = {0x580U + node->node_id, 8U, 0U, {0U}};
+        co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
         f.data[0] = (uint8_t)(s->seq | (left <= BLK_SEG_DATA ? BLK_LAST : 0U));
         memcpy(&f.data[1], &s->buf[offset], left < BLK_SEG_DATA ? left : BLK_SEG_DATA);
         co_node_send(node, &f);
@@ -184,23 +181,22 @@ static void upload_send_block(co_node_t *node)
 /* Block confirmation from the client: ackseq segments of the block arrived in order, blksize for the next one.
  * All taken: the end request with the unused bytes of the last segment and the CRC; otherwise the next block,
  * starting after the last segment confirmed (a lost segment is repeated). */
-static void upload_confirmation(co_node_t *node, const uint8_t *frame)
+static void upload_confirmation(co_node_t *node, co_sdo_server_t *s, const uint8_t *frame)
 {
-    co_sdo_server_t *s = &node->sdo;
     const uint8_t ackseq = frame[1];
     const uint8_t blksize = frame[2];
     if (ackseq > s->seq) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_SEQUENCE);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_SEQUENCE);
         return;
     }
     if (blksize == 0U || blksize > BLK_SIZE_MAX) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_BLOCK_SIZE);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_BLOCK_SIZE);
         return;
     }
     const bool all_taken = ackseq == s->seq && upload_block_sent(s) && upload_end_of_block(s) >= s->size;
     if (all_taken) {
         const uint32_t unused = upload_end_of_block(s) - s->size;
-        co_frame_t f = {0x580U + node->node_id, 8U, 0U, {0U}};
+        co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
         f.data[0] = (uint8_t)(0xC1U | (unused << 2));
         co_put_u16(&f.data[1], s->crc ? block_crc(s->buf, s->size) : 0U);
         s->state = CO_SDO_BLK_UPLOAD_END; /* before the frame: only segments go out in CO_SDO_BLK_UPLOAD */
@@ -210,32 +206,31 @@ static void upload_confirmation(co_node_t *node, const uint8_t *frame)
     s->pos += (uint32_t)ackseq * BLK_SEG_DATA;
     s->seq = 0U;
     s->blksize = blksize;
-    upload_send_block(node);
+    upload_send_block(node, s);
 }
 
-bool co_sdo_block_rx(co_node_t *node, const co_frame_t *f)
+bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 {
-    co_sdo_server_t *s = &node->sdo;
     const uint8_t cmd = f->data[0];
     const uint8_t state = s->state;
     if (state == CO_SDO_BLK_DOWNLOAD) {
         s->deadline = node->now + CO_SDO_TIMEOUT_US;
-        download_segment(node, f->data); /* every frame but an abort (0x80, handled before) is a segment */
+        download_segment(node, s, f->data); /* every frame but an abort (0x80, handled before) is a segment */
         return true;
     }
     if (state == CO_SDO_BLK_DOWNLOAD_END && (cmd & 0xE3U) == 0xC1U) {
-        download_end(node, cmd, f->data);
+        download_end(node, s, cmd, f->data);
         return true;
     }
     if (state == CO_SDO_BLK_UPLOAD_START && (cmd & 0xE3U) == 0xA3U) {
         s->state = CO_SDO_BLK_UPLOAD;
         s->deadline = node->now + CO_SDO_TIMEOUT_US;
-        upload_send_block(node);
+        upload_send_block(node, s);
         return true;
     }
     if (state == CO_SDO_BLK_UPLOAD && (cmd & 0xE3U) == 0xA2U) {
         s->deadline = node->now + CO_SDO_TIMEOUT_US;
-        upload_confirmation(node, f->data);
+        upload_confirmation(node, s, f->data);
         return true;
     }
     if (state == CO_SDO_BLK_UPLOAD_END && (cmd & 0xE3U) == 0xA1U) {
@@ -245,10 +240,10 @@ bool co_sdo_block_rx(co_node_t *node, const co_frame_t *f)
     return false; /* not this transfer's next step: co_sdo_rx ends it and reads the frame as a new request */
 }
 
-co_time_us_t co_sdo_block_process(co_node_t *node)
+co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s)
 {
-    upload_send_block(node);
-    return upload_block_sent(&node->sdo) ? CO_NEVER : node->now + CO_TX_RETRY_US;
+    upload_send_block(node, s);
+    return upload_block_sent(s) ? CO_NEVER : node->now + CO_TX_RETRY_US;
 }
 
 #endif /* CO_CONFIG_SDO_BLOCK */

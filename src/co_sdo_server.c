@@ -2,16 +2,18 @@
  * SDO server (CiA 301 §7.2.4): expedited upload/download always; segmented transfer when compiled in
  * (CO_CONFIG_SDO_SEGMENTED) and switched on for the node (CO_OPT_SDO_SEGMENTED); block transfer likewise
  * (CO_CONFIG_SDO_BLOCK, CO_OPT_SDO_BLOCK; co_sdo_block.c), otherwise answered with 0x05040001.
- * Requests: 0x600+node-ID, responses: 0x580+node-ID, DLC 8. Processing order follows docs/decisions.md
+ * Requests: 0x600+node-ID, responses: 0x580+node-ID, DLC 8; each additional server of the OD (0x1201..0x127F)
+ * on its own COB-IDs with its own transfer state (co_sdo_server_t). Processing order follows docs/decisions.md
  * (DLC, client abort, NMT state, command, object, access, length, value).
  */
 #include "priv/co_priv.h"
 
 enum { SDO_IDLE = CO_SDO_IDLE, SDO_SEG_DOWNLOAD = CO_SDO_SEG_DOWNLOAD, SDO_SEG_UPLOAD = CO_SDO_SEG_UPLOAD };
 
-void co_sdo_respond(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data, size_t len)
+void co_sdo_respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
+                    const uint8_t *data, size_t len)
 {
-    co_frame_t f = {0x580U + node->node_id, 8U, 0U, {0U}};
+    co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
     f.data[0] = cmd;
     co_put_u16(&f.data[1], index);
     f.data[3] = sub;
@@ -21,12 +23,12 @@ void co_sdo_respond(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, c
     co_node_send(node, &f);
 }
 
-void co_sdo_abort(co_node_t *node, uint16_t index, uint8_t sub, uint32_t code)
+void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, uint32_t code)
 {
     uint8_t d[4];
     co_put_u32(d, code);
-    node->sdo.state = SDO_IDLE; /* before the frame goes out: the port sees no transfer open behind an abort */
-    co_sdo_respond(node, 0x80U, index, sub, d, 4U);
+    s->state = SDO_IDLE; /* before the frame goes out: the port sees no transfer open behind an abort */
+    co_sdo_respond(node, s, 0x80U, index, sub, d, 4U);
     node->stats.sdo_aborts++;
     co_node_event(node, CO_EV_SDO_ABORT, index, sub, 0U, code);
 }
@@ -41,7 +43,8 @@ static bool segmented_enabled(const co_node_t *node)
 #endif
 }
 
-static void download_expedited(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data)
+static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
+                               const uint8_t *data)
 {
     size_t len;
     if ((cmd & 0x01U) != 0U) {
@@ -55,30 +58,30 @@ static void download_expedited(co_node_t *node, uint8_t cmd, uint16_t index, uin
             len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
         }
         if (len > 4U) {
-            co_sdo_abort(node, index, sub, CO_ABORT_LENGTH_HIGH);
+            co_sdo_abort(node, s, index, sub, CO_ABORT_LENGTH_HIGH);
             return;
         }
     }
     const uint32_t r = co_od_write(node, index, sub, data, len, CO_ORIGIN_SDO);
     if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, index, sub, r);
+        co_sdo_abort(node, s, index, sub, r);
         return;
     }
-    co_sdo_respond(node, 0x60U, index, sub, NULL, 0U);
+    co_sdo_respond(node, s, 0x60U, index, sub, NULL, 0U);
 }
 
 /* Reads the object into the transfer buffer. False (and the abort sent) when it cannot be read. */
-bool co_sdo_read_object(co_node_t *node, uint16_t index, uint8_t sub, size_t *len)
+bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t *len)
 {
     *len = 0U;
-    const uint32_t r = co_od_read(node, index, sub, node->sdo.buf, sizeof node->sdo.buf, len, CO_ORIGIN_SDO);
+    const uint32_t r = co_od_read(node, index, sub, s->buf, sizeof s->buf, len, CO_ORIGIN_SDO);
     if (r == CO_ABORT_LENGTH_HIGH) { /* larger than any transfer buffer */
         const bool large_transfers = segmented_enabled(node) || (node->options & CO_OPT_SDO_BLOCK) != 0U;
-        co_sdo_abort(node, index, sub, large_transfers ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_UNSUPPORTED_ACCESS);
+        co_sdo_abort(node, s, index, sub, large_transfers ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_UNSUPPORTED_ACCESS);
         return false;
     }
     if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, index, sub, r);
+        co_sdo_abort(node, s, index, sub, r);
         return false;
     }
     return true;
@@ -86,32 +89,32 @@ bool co_sdo_read_object(co_node_t *node, uint16_t index, uint8_t sub, size_t *le
 
 /* The answer to an upload initiate for len bytes read into the buffer: expedited, or the start of a segmented
  * upload. Also the protocol switch of a block upload initiate (CiA 301 §7.2.4.3.13). */
-void co_sdo_upload_answer(co_node_t *node, uint16_t index, uint8_t sub, size_t len)
+void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t len)
 {
-    const uint8_t *buf = node->sdo.buf;
+    const uint8_t *buf = s->buf;
     if (len >= 1U && len <= 4U) {
-        co_sdo_respond(node, (uint8_t)(0x43U | ((4U - len) << 2)), index, sub, buf, len);
+        co_sdo_respond(node, s, (uint8_t)(0x43U | ((4U - len) << 2)), index, sub, buf, len);
         return;
     }
     if (!segmented_enabled(node)) {
         if (len == 0U) { /* an empty string: one NUL byte is the shortest expedited answer */
             const uint8_t nul = 0U;
-            co_sdo_respond(node, 0x4FU, index, sub, &nul, 1U);
+            co_sdo_respond(node, s, 0x4FU, index, sub, &nul, 1U);
             return;
         }
-        co_sdo_abort(node, index, sub, CO_ABORT_UNSUPPORTED_ACCESS); /* > 4 bytes need segmented transfer */
+        co_sdo_abort(node, s, index, sub, CO_ABORT_UNSUPPORTED_ACCESS); /* > 4 bytes need segmented transfer */
         return;
     }
     uint8_t size[4];
     co_put_u32(size, (uint32_t)len);
-    co_sdo_respond(node, 0x41U, index, sub, size, 4U);
-    node->sdo.state = SDO_SEG_UPLOAD;
-    node->sdo.index = index;
-    node->sdo.sub = sub;
-    node->sdo.size = (uint32_t)len;
-    node->sdo.pos = 0U;
-    node->sdo.toggle = 0U;
-    node->sdo.deadline = node->now + CO_SDO_TIMEOUT_US;
+    co_sdo_respond(node, s, 0x41U, index, sub, size, 4U);
+    s->state = SDO_SEG_UPLOAD;
+    s->index = index;
+    s->sub = sub;
+    s->size = (uint32_t)len;
+    s->pos = 0U;
+    s->toggle = 0U;
+    s->deadline = node->now + CO_SDO_TIMEOUT_US;
 }
 
 /* The checks of a segmented or block download initiate before the transfer (the object's existence, access and
@@ -131,36 +134,35 @@ uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t s
 
 #if CO_CONFIG_SDO_SEGMENTED
 /* After co_sdo_download_checks passed. */
-static void download_initiate_segmented(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub,
+static void download_initiate_segmented(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
                                         const uint8_t *data)
 {
     const co_od_entry_t *e = co_od_find(node->od, index, sub);
     const uint32_t size = (cmd & 0x01U) != 0U ? co_get_u32(data) : 0U;
-    if (size > sizeof node->sdo.buf || e->size > sizeof node->sdo.buf) {
-        co_sdo_abort(node, index, sub, CO_ABORT_OUT_OF_MEMORY);
+    if (size > sizeof s->buf || e->size > sizeof s->buf) {
+        co_sdo_abort(node, s, index, sub, CO_ABORT_OUT_OF_MEMORY);
         return;
     }
-    node->sdo.state = SDO_SEG_DOWNLOAD;
-    node->sdo.index = index;
-    node->sdo.sub = sub;
-    node->sdo.size = size;
-    node->sdo.pos = 0U;
-    node->sdo.toggle = 0U;
-    node->sdo.deadline = node->now + CO_SDO_TIMEOUT_US;
-    co_sdo_respond(node, 0x60U, index, sub, NULL, 0U);
+    s->state = SDO_SEG_DOWNLOAD;
+    s->index = index;
+    s->sub = sub;
+    s->size = size;
+    s->pos = 0U;
+    s->toggle = 0U;
+    s->deadline = node->now + CO_SDO_TIMEOUT_US;
+    co_sdo_respond(node, s, 0x60U, index, sub, NULL, 0U);
 }
 
-static void download_segment(co_node_t *node, uint8_t cmd, const uint8_t *seg)
+static void download_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *seg)
 {
-    co_sdo_server_t *s = &node->sdo;
     const uint8_t toggle = (uint8_t)((cmd >> 4) & 1U);
     if (toggle != s->toggle) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_TOGGLE);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_TOGGLE);
         return;
     }
     const uint32_t n = 7U - ((cmd >> 1) & 0x07U);
     if (s->pos + n > sizeof s->buf) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_LENGTH_HIGH);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_LENGTH_HIGH);
         return;
     }
     memcpy(&s->buf[s->pos], seg, n);
@@ -168,34 +170,33 @@ static void download_segment(co_node_t *node, uint8_t cmd, const uint8_t *seg)
     s->toggle ^= 1U;
     s->deadline = node->now + CO_SDO_TIMEOUT_US;
     if ((cmd & 0x01U) == 0U) {
-        co_sdo_respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
+        co_sdo_respond(node, s, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
         return;
     }
     if (s->size != 0U && s->pos != s->size) {
-        co_sdo_abort(node, s->index, s->sub, s->pos > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
+        co_sdo_abort(node, s, s->index, s->sub, s->pos > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
         return;
     }
     const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, s->pos, CO_ORIGIN_SDO);
     if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, s->index, s->sub, r);
+        co_sdo_abort(node, s, s->index, s->sub, r);
         return;
     }
     s->state = SDO_IDLE;
-    co_sdo_respond(node, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
+    co_sdo_respond(node, s, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
 }
 
-static void upload_segment(co_node_t *node, uint8_t cmd)
+static void upload_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd)
 {
-    co_sdo_server_t *s = &node->sdo;
     const uint8_t toggle = (uint8_t)((cmd >> 4) & 1U);
     if (toggle != s->toggle) {
-        co_sdo_abort(node, s->index, s->sub, CO_ABORT_TOGGLE);
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_TOGGLE);
         return;
     }
     const uint32_t left = s->size - s->pos;
     const uint32_t n = left < 7U ? left : 7U;
     const bool last = s->pos + n >= s->size;
-    co_frame_t f = {0x580U + node->node_id, 8U, 0U, {0U}};
+    co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
     f.data[0] = (uint8_t)(((uint32_t)toggle << 4) | ((7U - n) << 1) | (last ? 1U : 0U));
     memcpy(&f.data[1], &s->buf[s->pos], n);
     co_node_send(node, &f);
@@ -208,7 +209,7 @@ static void upload_segment(co_node_t *node, uint8_t cmd)
 }
 #endif /* CO_CONFIG_SDO_SEGMENTED */
 
-void co_sdo_rx(co_node_t *node, const co_frame_t *f)
+void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 {
     if (f->len != 8U) {
         return; /* not an SDO frame: ignored */
@@ -220,44 +221,44 @@ void co_sdo_rx(co_node_t *node, const co_frame_t *f)
     const uint16_t index = co_get_u16(&f->data[1]);
     const uint8_t sub = f->data[3];
     if (cmd == 0x80U) {
-        node->sdo.state = SDO_IDLE; /* client abort: no answer */
+        s->state = SDO_IDLE; /* client abort: no answer */
         return;
     }
 #if CO_CONFIG_SDO_BLOCK
-    if (node->sdo.state > SDO_SEG_UPLOAD && co_sdo_block_rx(node, f)) {
+    if (s->state > SDO_SEG_UPLOAD && co_sdo_block_rx(node, s, f)) {
         return;
     }
 #endif
 #if CO_CONFIG_SDO_SEGMENTED
-    if (node->sdo.state == SDO_SEG_DOWNLOAD && (cmd & 0xE0U) == 0x00U) {
-        download_segment(node, cmd, &f->data[1]);
+    if (s->state == SDO_SEG_DOWNLOAD && (cmd & 0xE0U) == 0x00U) {
+        download_segment(node, s, cmd, &f->data[1]);
         return;
     }
-    if (node->sdo.state == SDO_SEG_UPLOAD && (cmd & 0xEFU) == 0x60U) {
-        upload_segment(node, cmd);
+    if (s->state == SDO_SEG_UPLOAD && (cmd & 0xEFU) == 0x60U) {
+        upload_segment(node, s, cmd);
         return;
     }
 #endif
-    node->sdo.state = SDO_IDLE; /* a new initiate (or garbage) ends any transfer in progress */
+    s->state = SDO_IDLE; /* a new initiate (or garbage) ends any transfer in progress */
     if ((cmd & 0xF0U) == 0x20U) {
         if ((cmd & 0x02U) != 0U) {
-            download_expedited(node, cmd, index, sub, &f->data[4]);
+            download_expedited(node, s, cmd, index, sub, &f->data[4]);
             return;
         }
         const uint32_t r = co_sdo_download_checks(node, index, sub, (cmd & 0x01U) != 0U, co_get_u32(&f->data[4]));
         if (r != CO_ABORT_NONE || !segmented_enabled(node)) {
-            co_sdo_abort(node, index, sub, r != CO_ABORT_NONE ? r : CO_ABORT_UNSUPPORTED_ACCESS);
+            co_sdo_abort(node, s, index, sub, r != CO_ABORT_NONE ? r : CO_ABORT_UNSUPPORTED_ACCESS);
         } else {
 #if CO_CONFIG_SDO_SEGMENTED
-            download_initiate_segmented(node, cmd, index, sub, &f->data[4]);
+            download_initiate_segmented(node, s, cmd, index, sub, &f->data[4]);
 #endif
         }
         return;
     }
     if (cmd == 0x40U) {
         size_t len;
-        if (co_sdo_read_object(node, index, sub, &len)) {
-            co_sdo_upload_answer(node, index, sub, len);
+        if (co_sdo_read_object(node, s, index, sub, &len)) {
+            co_sdo_upload_answer(node, s, index, sub, len);
         }
         return;
     }
@@ -266,37 +267,132 @@ void co_sdo_rx(co_node_t *node, const co_frame_t *f)
     const bool block_initiate = (ccs == 5U && (cmd & 0x03U) == 0U) || (ccs == 6U && (cmd & 0x01U) == 0U);
 #if CO_CONFIG_SDO_BLOCK
     if (block_initiate && (node->options & CO_OPT_SDO_BLOCK) != 0U) {
-        co_sdo_block_initiate(node, cmd, index, sub, &f->data[4]);
+        co_sdo_block_initiate(node, s, cmd, index, sub, &f->data[4]);
         return;
     }
 #endif
     if (ccs == 0U || ccs == 3U || ((ccs == 5U || ccs == 6U) && !block_initiate)) {
         /* A segment, or a block sub-command, with no transfer open: its bytes 1..3 are no multiplexer to echo. */
-        co_sdo_abort(node, 0U, 0U, CO_ABORT_COMMAND);
+        co_sdo_abort(node, s, 0U, 0U, CO_ABORT_COMMAND);
         return;
     }
-    co_sdo_abort(node, index, sub, CO_ABORT_COMMAND); /* block transfer switched off, unknown commands */
+    co_sdo_abort(node, s, index, sub, CO_ABORT_COMMAND); /* block transfer switched off, unknown commands */
+}
+
+static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)
+{
+    if (s->state == SDO_IDLE) {
+        return CO_NEVER;
+    }
+    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
+        s->state = SDO_IDLE; /* Stopped: the transfer ends silently (SDO says nothing in Stopped) */
+        return CO_NEVER;
+    }
+    if (node->now >= s->deadline) {
+        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_TIMEOUT);
+        return CO_NEVER;
+    }
+#if CO_CONFIG_SDO_BLOCK
+    if (s->state == CO_SDO_BLK_UPLOAD) {
+        return co_min_time(s->deadline, co_sdo_block_process(node, s));
+    }
+#endif
+    return s->deadline;
 }
 
 co_time_us_t co_sdo_process(co_node_t *node)
 {
-    if (node->sdo.state == SDO_IDLE) {
-        return CO_NEVER;
+    co_time_us_t next = server_process(node, &node->sdo);
+    for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
+        next = co_min_time(next, server_process(node, &node->sdo_extra[i]));
     }
-    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
-        node->sdo.state = SDO_IDLE; /* Stopped: the transfer ends silently (SDO says nothing in Stopped) */
-        return CO_NEVER;
-    }
-    if (node->now >= node->sdo.deadline) {
-        co_sdo_abort(node, node->sdo.index, node->sdo.sub, CO_ABORT_TIMEOUT);
-        return CO_NEVER;
-    }
-#if CO_CONFIG_SDO_BLOCK
-    if (node->sdo.state == CO_SDO_BLK_UPLOAD) {
-        return co_min_time(node->sdo.deadline, co_sdo_block_process(node));
-    }
-#endif
-    return node->sdo.deadline;
+    return next;
 }
 
-void co_sdo_reset(co_node_t *node) { node->sdo.state = SDO_IDLE; }
+/* ---- Additional SDO servers (0x1201..0x127F) ---------------------------------------------------------------- */
+
+/* The CAN-IDs of an additional server from its parameter object: it takes requests only while both COB-IDs are
+ * valid (bit 31 clear). A transfer in progress ends when they change. */
+static void load_server(co_node_t *node, co_sdo_server_t *s)
+{
+    const uint32_t rx = co_od_u32_or(node, s->param_index, 1U, CO_COBID_INVALID);
+    const uint32_t tx = co_od_u32_or(node, s->param_index, 2U, CO_COBID_INVALID);
+    const bool valid = ((rx | tx) & CO_COBID_INVALID) == 0U;
+    s->rx_id = valid ? (uint16_t)(rx & CO_COBID_CAN_ID) : CO_SDO_NO_ID;
+    s->tx_id = (uint16_t)(tx & CO_COBID_CAN_ID);
+    s->state = SDO_IDLE;
+}
+
+co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capacity)
+{
+    uint8_t n = 0U;
+    for (uint16_t index = 0x1201U; index <= 0x127FU; index++) {
+        if (!co_od_has_index(node->od, index)) {
+            continue;
+        }
+        if (n >= capacity) {
+            return CO_ERR_RANGE;
+        }
+        servers[n].param_index = index;
+        n++;
+    }
+    node->sdo_extra = servers;
+    node->n_sdo_extra = n;
+    return CO_OK;
+}
+
+/* CiA 301 rules for the COB-IDs of an additional server (sub 1 client to server, sub 2 server to client): 11-bit
+ * CAN-IDs only (bit 30 "dynamic" is kept as the master wrote it), no restricted CAN-ID while valid, and the
+ * CAN-ID changes only while the COB-ID is not valid. stored: a value being loaded, not a change. */
+uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)
+{
+    if (e->index == 0x1200U || (e->sub != 1U && e->sub != 2U) || e->size != 4U) {
+        return CO_ABORT_NONE;
+    }
+    const uint32_t v = co_get_u32(data);
+    if ((v & 0x3FFFF800UL) != 0U) {
+        return CO_ABORT_INVALID_VALUE; /* 29-bit identifiers and reserved bits */
+    }
+    if ((v & CO_COBID_INVALID) != 0U) {
+        return CO_ABORT_NONE;
+    }
+    if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
+        return CO_ABORT_INVALID_VALUE;
+    }
+    const uint32_t cur = co_od_entry_u32(node, e);
+    if (!stored && (cur & CO_COBID_INVALID) == 0U && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
+        return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while the COB-ID is not valid */
+    }
+    return CO_ABORT_NONE;
+}
+
+void co_sdo_written(co_node_t *node, const co_od_entry_t *e)
+{
+    for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
+        if (node->sdo_extra[i].param_index == e->index) {
+            load_server(node, &node->sdo_extra[i]);
+        }
+    }
+}
+
+bool co_sdo_rx_extra(co_node_t *node, const co_frame_t *f)
+{
+    for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
+        if (node->sdo_extra[i].rx_id == f->id) {
+            co_sdo_rx(node, &node->sdo_extra[i], f);
+            return true;
+        }
+    }
+    return false;
+}
+
+void co_sdo_reset(co_node_t *node)
+{
+    node->sdo.state = SDO_IDLE;
+    node->sdo.param_index = 0x1200U;
+    node->sdo.rx_id = (uint16_t)(0x600U + node->node_id);
+    node->sdo.tx_id = (uint16_t)(0x580U + node->node_id);
+    for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
+        load_server(node, &node->sdo_extra[i]);
+    }
+}

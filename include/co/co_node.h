@@ -137,6 +137,12 @@ typedef struct co_node_cfg {
     uint16_t rpdo_count;
     struct co_tpdo *tpdo;
     uint16_t tpdo_count;
+    /**
+     * Additional SDO servers (CiA 301: 0x1201..0x127F in the OD, each with its own COB-IDs and transfer state):
+     * caller-owned array of sdo_server_count entries, at least one per such object. NULL/0 when the OD has none.
+     */
+    struct co_sdo_server *sdo_servers;
+    uint8_t sdo_server_count;
 } co_node_cfg_t;
 
 /** What the last load of the parameter area found. */
@@ -198,11 +204,17 @@ typedef struct co_emcy {
     uint32_t lost;              /**< EMCY frames dropped because the queue was full. */
 } co_emcy_t;
 
+/** co_sdo_server_t.rx_id of a server whose COB-IDs are not both valid (it takes no request). */
+#define CO_SDO_NO_ID 0xFFFFU
+
 typedef struct co_sdo_server {
     uint8_t state;              /**< 0 idle, 1 segmented download, 2 segmented upload, 3.. block (co_sdo_block.c). */
     uint8_t toggle;
     uint8_t sub;
     uint16_t index;
+    uint16_t param_index;       /**< Its server SDO parameter object: 0x1200 (the default server), 0x1201.. */
+    uint16_t rx_id;             /**< CAN-ID of requests (client to server), CO_SDO_NO_ID while not valid. */
+    uint16_t tx_id;             /**< CAN-ID of responses (server to client). */
     uint32_t size;              /**< Bytes of the transfer (download: indicated, or 0 if not). */
     uint32_t pos;               /**< Segmented: bytes moved. Block download: 7 per segment received; block
                                      upload: bytes the client acknowledged (start of the current block). */
@@ -306,7 +318,9 @@ struct co_node {
 #endif
     co_hb_consumer_t hbc;
     co_emcy_t emcy;
-    co_sdo_server_t sdo;
+    co_sdo_server_t sdo;        /**< The default SDO server (0x1200: 0x600/0x580 + node-ID). */
+    co_sdo_server_t *sdo_extra; /**< co_node_cfg_t.sdo_servers: the servers of 0x1201.. present in the OD. */
+    uint8_t n_sdo_extra;        /**< Additional servers the OD declares. */
 #if CO_CONFIG_SYNC
     co_sync_t sync;
 #endif
@@ -326,8 +340,9 @@ struct co_node {
  * every object, and (when the node-ID is configured) sends the boot-up frame and enters Pre-operational.
  * An unconfigured node (0xFF) runs only the LSS slave until a master gives it a node-ID.
  * @return CO_OK, CO_ERR_ARG (NULL pointers, node-ID 0 or 128..254, no send function), CO_ERR_RANGE (the
- *         OD declares more PDOs than the PDO arrays hold (co_node_cfg_t.rpdo/tpdo, else CO_RPDO_MAX/CO_TPDO_MAX)
- *         or more heartbeat-consumer entries than co_config.h allows).
+ *         OD declares more PDOs than the PDO arrays hold (co_node_cfg_t.rpdo/tpdo, else CO_RPDO_MAX/CO_TPDO_MAX),
+ *         more additional SDO servers than co_node_cfg_t.sdo_servers holds, or more heartbeat-consumer entries
+ *         than co_config.h allows).
  */
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now);
 

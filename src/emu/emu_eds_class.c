@@ -165,6 +165,18 @@ static uint16_t pdo_count(const eds_file_t *f, uint16_t base)
     return n;
 }
 
+/* Additional SDO servers: the objects 0x1201..0x127F of the file (CiA 301), each served by the core. */
+static uint8_t sdo_server_count(const eds_file_t *f)
+{
+    uint8_t n = 0U;
+    for (uint32_t i = 0; i < f->n_objects; i++) {
+        if (f->objects[i].index >= 0x1201U && f->objects[i].index <= 0x127FU) {
+            n++;
+        }
+    }
+    return n;
+}
+
 static void free_class(eds_class_t *c)
 {
     if (c == NULL) {
@@ -255,7 +267,8 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     cls->core_options = CO_OPT_SDO_SEGMENTED | CO_OPT_SDO_BLOCK | (f->lss_supported ? 0U : CO_OPT_NO_LSS);
     cls->rpdo_count = pdo_count(f, 0x1400U);
     cls->tpdo_count = pdo_count(f, 0x1800U);
-    cls->model_size = device_pdo_state_size(cls);
+    cls->sdo_server_count = sdo_server_count(f);
+    cls->model_size = device_core_state_size(cls);
     return c;
 }
 
@@ -351,7 +364,7 @@ bool eds_class_export(device_t *dev, const char *path, char *why, size_t cap)
 
 static const eds_class_t *class_of(const device_t *dev) { return (const eds_class_t *)(const void *)dev->cls; }
 
-static void *rules_state(device_t *dev) { return (uint8_t *)dev->model + device_pdo_state_size(dev->cls); }
+static void *rules_state(device_t *dev) { return (uint8_t *)dev->model + device_core_state_size(dev->cls); }
 
 static co_time_us_t rules_hook_step(device_t *dev, co_time_us_t now)
 {
@@ -415,7 +428,7 @@ bool eds_class_attach_rules(const char *path, FILE *log)
     cls->step = rules_hook_step;
     cls->on_write = rules_hook_write;
     cls->on_reset = rules_hook_reset;
-    cls->model_size = device_pdo_state_size(cls) + rules_state_size(r);
+    cls->model_size = device_core_state_size(cls) + rules_state_size(r);
     return true;
 }
 

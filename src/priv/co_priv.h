@@ -111,18 +111,24 @@ enum co_sdo_state {
     CO_SDO_BLK_UPLOAD = 6,       /* sending a block, or waiting for its confirmation */
     CO_SDO_BLK_UPLOAD_END = 7    /* end request sent, waiting for the end response */
 };
+co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capacity);
 void co_sdo_reset(co_node_t *node);
-void co_sdo_rx(co_node_t *node, const co_frame_t *f);
+void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
+bool co_sdo_rx_extra(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_sdo_process(co_node_t *node);
-void co_sdo_respond(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data, size_t len);
-void co_sdo_abort(co_node_t *node, uint16_t index, uint8_t sub, uint32_t code);
+uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
+void co_sdo_written(co_node_t *node, const co_od_entry_t *e);
+void co_sdo_respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
+                    const uint8_t *data, size_t len);
+void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, uint32_t code);
 uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size);
-bool co_sdo_read_object(co_node_t *node, uint16_t index, uint8_t sub, size_t *len);
-void co_sdo_upload_answer(co_node_t *node, uint16_t index, uint8_t sub, size_t len);
+bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t *len);
+void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t len);
 #if CO_CONFIG_SDO_BLOCK
-void co_sdo_block_initiate(co_node_t *node, uint8_t cmd, uint16_t index, uint8_t sub, const uint8_t *data);
-bool co_sdo_block_rx(co_node_t *node, const co_frame_t *f);
-co_time_us_t co_sdo_block_process(co_node_t *node);
+void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
+                           const uint8_t *data);
+bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
+co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s);
 #endif
 
 /* ---- SYNC (co_sync.c) ---- */

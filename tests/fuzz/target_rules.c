@@ -63,8 +63,8 @@ static void run_once(const rules_t *rules, const uint8_t *p, size_t n, run_t *r)
     memset(r, 0, sizeof *r);
     fake_port_init(&r->port, &r->now);
     r->values = calloc(1U, drive->od->values_size);
-    const size_t pdo = device_pdo_state_size(drive), state = rules_state_size(rules);
-    r->model = calloc(1U, pdo + state + 1U);
+    const size_t core = device_core_state_size(drive), state = rules_state_size(rules);
+    r->model = calloc(1U, core + state + 1U);
     if (r->values == NULL || r->model == NULL) {
         abort();
     }
@@ -76,7 +76,7 @@ static void run_once(const rules_t *rules, const uint8_t *p, size_t n, run_t *r)
     if (device_init(&r->dev, drive, r->values, r->model, &cfg, r->now) != CO_OK) {
         violation("the drive does not start");
     }
-    void *st = r->model + pdo;
+    void *st = r->model + core;
     rules_power_on(rules, st, &r->dev, r->now);
     size_t pos = 0U;
     for (int records = 0; pos < n && records < 64; records++) {

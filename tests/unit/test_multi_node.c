@@ -66,7 +66,7 @@ static void deliver(uint32_t id, uint8_t len, const uint8_t *data)
 
 static void start_node(size_t i, const co_od_t *od, void *values, uint8_t id)
 {
-    const co_node_cfg_t cfg = {od, values, &bus.port, &bus, NULL, NULL, id, 4U, NULL, 0U, NULL, 0U, NULL, 0U};
+    const co_node_cfg_t cfg = {od, values, &bus.port, &bus, NULL, NULL, id, 4U, NULL, 0U, NULL, 0U, NULL, 0U, NULL, 0U};
     TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&node[i], &cfg, now));
 }
 
@@ -146,7 +146,7 @@ static void many_nodes_of_one_type(void)
     static test_od_values_t vals[TEST_MULTI_NODE_COUNT];
     bus.n_sent = 0U;
     for (uint8_t i = 0U; i < TEST_MULTI_NODE_COUNT; i++) {
-        const co_node_cfg_t cfg = {&test_od, &vals[i], &bus.port, &bus, NULL, NULL, (uint8_t)(i + 1U), 4U, NULL, 0U, NULL, 0U, NULL, 0U};
+        const co_node_cfg_t cfg = {&test_od, &vals[i], &bus.port, &bus, NULL, NULL, (uint8_t)(i + 1U), 4U, NULL, 0U, NULL, 0U, NULL, 0U, NULL, 0U};
         TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&nodes[i], &cfg, now));
     }
     TEST_ASSERT_EQUAL_UINT32(TEST_MULTI_NODE_COUNT, bus.n_sent);

@@ -42,8 +42,9 @@ int main(void)
     co_bm_clock_init(&clock_us, board_timer_read, NULL, 1000000UL, 32U, 0U);
     const bool have_nvm = co_bm_nvm_init(&nvm, &flash, areas, nvm_stage, sizeof nvm_stage) == CO_OK;
     co_bm_port_init(&port, &can, have_nvm ? &nvm : NULL, &clock_us);
-    const co_node_cfg_t cfg = {&sds_od, &values, &port.port, &port, NULL, NULL, 0x10U, 4U /* 125 kbit/s */,
-                               NULL, CO_OPT_NMT_ACCEPT_LONG, NULL, 0U, NULL, 0U};
+    /* Designated fields: members added to co_node_cfg_t later (zero = not used) need no change here. */
+    const co_node_cfg_t cfg = {.od = &sds_od, .values = &values, .port = &port.port, .port_ctx = &port,
+                               .node_id = 0x10U, .bit_timing = 4U /* 125 kbit/s */, .options = CO_OPT_NMT_ACCEPT_LONG};
     if (co_node_init(&node, &cfg, co_bm_clock_now(&clock_us)) != CO_OK) {
         for (;;) {
         }
