@@ -13,6 +13,23 @@ bool co_cob_id_restricted(uint32_t can_id)
            (can_id >= 0x601U && can_id <= 0x67FU) || (can_id >= 0x6E0U && can_id <= 0x6FFU) || can_id >= 0x701U;
 }
 
+uint32_t co_cob_id_check(uint32_t v, uint32_t cur, bool in_use)
+{
+    if ((v & 0x3FFFF800UL) != 0U) {
+        return CO_ABORT_INVALID_VALUE; /* 29-bit identifiers and reserved bits */
+    }
+    if ((v & CO_COBID_INVALID) != 0U) {
+        return CO_ABORT_NONE;
+    }
+    if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
+        return CO_ABORT_INVALID_VALUE;
+    }
+    if (in_use && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
+        return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while the COB-ID is not valid */
+    }
+    return CO_ABORT_NONE;
+}
+
 void co_node_event(co_node_t *node, co_event_kind_t kind, uint16_t index, uint8_t sub, uint32_t value,
                    uint32_t code)
 {

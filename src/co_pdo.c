@@ -350,18 +350,9 @@ static uint32_t check_comm(co_node_t *node, const co_od_entry_t *e, const uint8_
     switch (e->sub) {
     case 1: {
         const uint32_t v = co_get_u32(data);
-        const uint32_t cur = co_od_entry_u32(node, e);
-        if ((v & 0x3FFFF800UL) != 0U) {
-            return CO_ABORT_INVALID_VALUE; /* 29-bit identifiers and reserved bits */
-        }
-        if ((v & CO_COBID_INVALID) != 0U) {
-            return CO_ABORT_NONE;
-        }
-        if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
-            return CO_ABORT_INVALID_VALUE;
-        }
-        if (valid && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
-            return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while the PDO is invalid */
+        const uint32_t r = co_cob_id_check(v, co_od_entry_u32(node, e), valid);
+        if (r != CO_ABORT_NONE || (v & CO_COBID_INVALID) != 0U) {
+            return r;
         }
         if (stored) {
             return CO_ABORT_NONE; /* its mapping loads after it (records in index order): checked at configuration */

@@ -341,29 +341,16 @@ co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capa
     return CO_OK;
 }
 
-/* CiA 301 rules for the COB-IDs of an additional server (sub 1 client to server, sub 2 server to client): 11-bit
- * CAN-IDs only (bit 30 "dynamic" is kept as the master wrote it), no restricted CAN-ID while valid, and the
- * CAN-ID changes only while the COB-ID is not valid. stored: a value being loaded, not a change. */
+/* CiA 301 rules for the COB-IDs of an additional server (sub 1 client to server, sub 2 server to client), as for a
+ * PDO (co_cob_id_check; bit 30 "dynamic" is kept as the master wrote it): the COB-ID is in use while its own valid
+ * bit is clear. stored: a value being loaded, not a change. */
 uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)
 {
     if (e->index == 0x1200U || (e->sub != 1U && e->sub != 2U) || e->size != 4U) {
         return CO_ABORT_NONE;
     }
-    const uint32_t v = co_get_u32(data);
-    if ((v & 0x3FFFF800UL) != 0U) {
-        return CO_ABORT_INVALID_VALUE; /* 29-bit identifiers and reserved bits */
-    }
-    if ((v & CO_COBID_INVALID) != 0U) {
-        return CO_ABORT_NONE;
-    }
-    if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
-        return CO_ABORT_INVALID_VALUE;
-    }
     const uint32_t cur = co_od_entry_u32(node, e);
-    if (!stored && (cur & CO_COBID_INVALID) == 0U && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
-        return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while the COB-ID is not valid */
-    }
-    return CO_ABORT_NONE;
+    return co_cob_id_check(co_get_u32(data), cur, !stored && (cur & CO_COBID_INVALID) == 0U);
 }
 
 void co_sdo_written(co_node_t *node, const co_od_entry_t *e)

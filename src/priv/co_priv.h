@@ -160,8 +160,12 @@ void co_lss_init(co_node_t *node);
 void co_lss_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_lss_process(co_node_t *node);
 
-/* ---- COB-ID rules shared by SYNC, EMCY and PDO ---- */
+/* ---- COB-ID rules shared by SYNC, EMCY, PDO and SDO servers (co_node.c) ---- */
 /* True when a CAN-ID may not be used for SYNC/TIME/EMCY/PDO/SDO (CiA 301 restricted identifiers). */
 bool co_cob_id_restricted(uint32_t can_id);
+/* CiA 301 rules for a new COB-ID v (old cur) of a PDO or an additional SDO server: 11-bit CAN-IDs only (bit 29 and
+ * the reserved bits 11..28 clear; bit 30 is not looked at), no restricted CAN-ID while valid, and the CAN-ID of an
+ * object in use changes only by way of "not valid". 0 or 0x06090030. */
+uint32_t co_cob_id_check(uint32_t v, uint32_t cur, bool in_use);
 
 #endif /* CO_PRIV_H */
