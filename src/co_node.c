@@ -265,9 +265,11 @@ bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
         co_sdo_rx(node, &node->sdo, frame);
         return true;
     }
+#if CO_CONFIG_SDO_SERVERS
     if (node->n_sdo_extra != 0U && co_sdo_rx_extra(node, frame)) {
         return true;
     }
+#endif
     if (co_pdo_rx(node, frame)) {
         return true;
     }

@@ -351,9 +351,11 @@ static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const 
         if (e->index >= 0x1400U && e->index <= 0x1BFFU) {
             return co_pdo_check_write(node, e, data, stored);
         }
+#if CO_CONFIG_SDO_SERVERS
         if (e->index >= 0x1200U && e->index <= 0x127FU) {
             return co_sdo_check_write(node, e, data, stored);
         }
+#endif
         return CO_ABORT_NONE;
     }
 }
@@ -378,9 +380,12 @@ static void comm_written(co_node_t *node, const co_od_entry_t *e)
     default:
         if (e->index >= 0x1400U && e->index <= 0x1BFFU) {
             co_pdo_written(node, e);
-        } else if (e->index >= 0x1201U && e->index <= 0x127FU) {
+        }
+#if CO_CONFIG_SDO_SERVERS
+        if (e->index >= 0x1201U && e->index <= 0x127FU) {
             co_sdo_written(node, e);
         }
+#endif
         break;
     }
 }

@@ -303,13 +303,35 @@ static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)
 co_time_us_t co_sdo_process(co_node_t *node)
 {
     co_time_us_t next = server_process(node, &node->sdo);
+#if CO_CONFIG_SDO_SERVERS
     for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
         next = co_min_time(next, server_process(node, &node->sdo_extra[i]));
     }
+#endif
     return next;
 }
 
 /* ---- Additional SDO servers (0x1201..0x127F) ---------------------------------------------------------------- */
+
+co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capacity)
+{
+    uint8_t n = 0U;
+    for (uint16_t index = 0x1201U; index <= 0x127FU; index++) {
+        if (!co_od_has_index(node->od, index)) {
+            continue;
+        }
+        if (n >= capacity || !CO_CONFIG_SDO_SERVERS) {
+            return CO_ERR_RANGE;
+        }
+        servers[n].param_index = index;
+        n++;
+    }
+    node->sdo_extra = servers;
+    node->n_sdo_extra = n;
+    return CO_OK;
+}
+
+#if CO_CONFIG_SDO_SERVERS
 
 /* The CAN-IDs of an additional server from its parameter object: it takes requests only while both COB-IDs are
  * valid (bit 31 clear). A transfer in progress ends when they change. */
@@ -321,24 +343,6 @@ static void load_server(co_node_t *node, co_sdo_server_t *s)
     s->rx_id = valid ? (uint16_t)(rx & CO_COBID_CAN_ID) : CO_SDO_NO_ID;
     s->tx_id = (uint16_t)(tx & CO_COBID_CAN_ID);
     s->state = SDO_IDLE;
-}
-
-co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capacity)
-{
-    uint8_t n = 0U;
-    for (uint16_t index = 0x1201U; index <= 0x127FU; index++) {
-        if (!co_od_has_index(node->od, index)) {
-            continue;
-        }
-        if (n >= capacity) {
-            return CO_ERR_RANGE;
-        }
-        servers[n].param_index = index;
-        n++;
-    }
-    node->sdo_extra = servers;
-    node->n_sdo_extra = n;
-    return CO_OK;
 }
 
 /* CiA 301 rules for the COB-IDs of an additional server (sub 1 client to server, sub 2 server to client), as for a
@@ -372,6 +376,7 @@ bool co_sdo_rx_extra(co_node_t *node, const co_frame_t *f)
     }
     return false;
 }
+#endif /* CO_CONFIG_SDO_SERVERS */
 
 void co_sdo_reset(co_node_t *node)
 {
@@ -379,7 +384,9 @@ void co_sdo_reset(co_node_t *node)
     node->sdo.param_index = 0x1200U;
     node->sdo.rx_id = (uint16_t)(0x600U + node->node_id);
     node->sdo.tx_id = (uint16_t)(0x580U + node->node_id);
+#if CO_CONFIG_SDO_SERVERS
     for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
         load_server(node, &node->sdo_extra[i]);
     }
+#endif
 }

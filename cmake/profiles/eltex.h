@@ -6,7 +6,7 @@
  *
  * - No segmented or block SDO: every object of both dictionaries fits an expedited transfer (the longest are
  *   the 4-byte strings 0x1008/0x100A), and the device models set neither CO_OPT_SDO_SEGMENTED nor
- *   CO_OPT_SDO_BLOCK (their manuals rule both out). The SDO
+ *   CO_OPT_SDO_BLOCK (their manuals rule both out). One SDO server: neither dictionary has 0x1201... The SDO
  *   buffer must still hold the largest object read by SDO (uploads are staged in it): 8 bytes.
  * - No SYNC: neither dictionary has 0x1005/0x1006/0x1007/0x1019, and the PDO transmission types
  *   (0x1400:02, 0x1800:02, 0x1801:02, 0x1802:02) are read-only and event-driven (254/255).
@@ -29,6 +29,7 @@
 
 #define CO_CONFIG_SDO_SEGMENTED 0
 #define CO_CONFIG_SDO_BLOCK 0
+#define CO_CONFIG_SDO_SERVERS 0
 #define CO_SDO_BUF_SIZE 8U
 #define CO_CONFIG_SYNC 0
 #define CO_CONFIG_NODE_GUARDING 0

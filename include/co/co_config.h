@@ -58,6 +58,12 @@
 #define CO_CONFIG_SDO_BLOCK 1
 #endif
 
+/** 1: additional SDO servers (0x1201..0x127F in the OD, co_node_cfg_t.sdo_servers) are compiled in. 0: an OD
+ *  that declares one is refused by co_node_init (CO_ERR_RANGE). */
+#ifndef CO_CONFIG_SDO_SERVERS
+#define CO_CONFIG_SDO_SERVERS 1
+#endif
+
 /** Largest object a segmented or block SDO transfer can move, in bytes. */
 #ifndef CO_SDO_BUF_SIZE
 #define CO_SDO_BUF_SIZE 64U

@@ -114,10 +114,12 @@ enum co_sdo_state {
 co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capacity);
 void co_sdo_reset(co_node_t *node);
 void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
-bool co_sdo_rx_extra(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_sdo_process(co_node_t *node);
+#if CO_CONFIG_SDO_SERVERS
+bool co_sdo_rx_extra(co_node_t *node, const co_frame_t *f);
 uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
 void co_sdo_written(co_node_t *node, const co_od_entry_t *e);
+#endif
 void co_sdo_respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
                     const uint8_t *data, size_t len);
 void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, uint32_t code);
