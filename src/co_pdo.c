@@ -67,12 +67,28 @@ static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_
     return CO_ABORT_NONE;
 }
 
-/* Resolves a whole mapping; returns the mapped byte count, or -1 when invalid. */
+/* Mapping sub 0 of an MPDO this node serves: 0xFE both ways (SAM producer, SAM consumer), 0xFF for RPDOs (DAM
+ * consumer). A DAM producer is a master's role: a TPDO with 0xFF is refused. */
+static bool mpdo_mapping(uint32_t n, bool receive)
+{
+#if CO_CONFIG_MPDO
+    return n == CO_MPDO_SAM || (n == CO_MPDO_DAM && receive);
+#else
+    (void)n;
+    (void)receive;
+    return false;
+#endif
+}
+
+/* Resolves a whole mapping; returns the mapped byte count (8 for an MPDO), or -1 when invalid. */
 static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, co_pdo_map_t map[8], uint8_t *n_out)
 {
     const uint32_t n = co_od_u32_or(node, map_index, 0U, 0U);
     int total = 0;
     *n_out = 0U;
+    if (mpdo_mapping(n, receive)) {
+        return 8;
+    }
     if (n > 8U) {
         return -1;
     }
@@ -96,6 +112,8 @@ static void configure_rpdo(co_node_t *node, uint16_t n)
     p->cob_id = co_od_u32_or(node, comm, 1U, CO_COBID_INVALID);
     p->type = (uint8_t)co_od_u32_or(node, comm, 2U, 255U);
     const int len = resolve_all(node, (uint16_t)(RPDO_MAP + n), true, p->map, &p->n_map);
+    const uint32_t entries = co_od_u32_or(node, (uint16_t)(RPDO_MAP + n), 0U, 0U);
+    p->mpdo = mpdo_mapping(entries, true) ? (uint8_t)entries : 0U;
     p->map_len = len > 0 ? (uint8_t)len : 0U;
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
     p->sync_pending = false;
@@ -112,6 +130,9 @@ static void configure_tpdo(co_node_t *node, uint16_t n)
     p->event_us = co_od_u32_or(node, comm, 5U, 0U) * 1000U;
     p->sync_start = (uint8_t)co_od_u32_or(node, comm, 6U, 0U);
     const int len = resolve_all(node, (uint16_t)(TPDO_MAP + n), false, p->map, &p->n_map);
+    const uint32_t entries = co_od_u32_or(node, (uint16_t)(TPDO_MAP + n), 0U, 0U);
+    p->mpdo = mpdo_mapping(entries, false) ? (uint8_t)entries : 0U;
+    p->scan_next = 0U;
     p->map_len = len > 0 ? (uint8_t)len : 0U;
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
     p->sent_once = false;
@@ -177,6 +198,11 @@ bool co_pdo_rx(co_node_t *node, const co_frame_t *f)
                 (void)co_emcy_clear(node, 0x8220U, rpdo_msef);
             }
         }
+#if CO_CONFIG_MPDO
+        if (p->mpdo != 0U) {
+            co_mpdo_receive(node, p, f->data); /* event-driven whatever the transmission type (CiA 301) */
+        } else
+#endif
         if (p->type <= 240U) {
             memcpy(p->sync_data, f->data, p->map_len);
             p->sync_len = p->map_len;
@@ -220,8 +246,11 @@ static void tpdo_send(co_node_t *node, co_tpdo_t *p, const uint8_t buf[8])
 static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
 {
     uint8_t buf[8];
-    (void)tpdo_sample(node, p, buf);
-    const bool cos = (node->options & CO_OPT_TPDO_NO_COS) == 0U && memcmp(buf, p->last, 8U) != 0;
+    bool cos = false;
+    if (p->mpdo == 0U) {
+        (void)tpdo_sample(node, p, buf);
+        cos = (node->options & CO_OPT_TPDO_NO_COS) == 0U && memcmp(buf, p->last, 8U) != 0;
+    }
     const bool changed = !p->sent_once || p->event || cos;
     const bool timer = p->event_due != CO_NEVER && node->now >= p->event_due;
     if (changed || timer) {
@@ -229,7 +258,15 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
             p->event = true; /* waits for the inhibit time; the timer (if it fired) is served with it */
             return p->next_allowed;
         }
-        tpdo_send(node, p, buf);
+#if CO_CONFIG_MPDO
+        if (p->mpdo != 0U && !co_mpdo_sam_next(node, p, buf)) {
+            p->sent_once = true; /* an empty scanner list: nothing to send at this event */
+            p->event = false;
+        } else
+#endif
+        {
+            tpdo_send(node, p, buf);
+        }
         if (p->event_us == 0U) {
             p->event_due = CO_NEVER;
         } else if (timer && !changed) {
@@ -284,8 +321,8 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
     }
     for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
-        if (!p->valid || p->type > 240U) {
-            continue;
+        if (!p->valid || p->type > 240U || p->mpdo != 0U) {
+            continue; /* an MPDO is event-driven only (CiA 301) */
         }
         if (!p->sync_started) {
             if (counter != 0U && counter != p->sync_start) {
@@ -383,6 +420,9 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
     }
     if (e->sub == 0U) {
         const uint8_t n = data[0];
+        if (mpdo_mapping(n, receive)) {
+            return CO_ABORT_NONE; /* an MPDO: the entries are not used */
+        }
         if (n > 8U || n > co_od_sub_count(node->od, e->index)) {
             return CO_ABORT_PDO_LENGTH;
         }

@@ -89,6 +89,13 @@
 #define CO_CONFIG_LSS_FASTSCAN 1
 #endif
 
+/** 1: multiplexed PDOs (CiA 301 MPDO) are compiled in: a TPDO whose mapping sub 0 is 0xFE sends SAM-MPDOs of the
+ *  object scanner list 0x1FA0..0x1FCF; an RPDO with 0xFF takes DAM-MPDOs, with 0xFE SAM-MPDOs through the object
+ *  dispatching list 0x1FD0..0x1FFF. */
+#ifndef CO_CONFIG_MPDO
+#define CO_CONFIG_MPDO 1
+#endif
+
 /** 1: writable PDO mapping (the CiA 301 mapping procedure) is compiled in. */
 #ifndef CO_CONFIG_PDO_DYNAMIC_MAPPING
 #define CO_CONFIG_PDO_DYNAMIC_MAPPING 1

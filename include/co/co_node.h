@@ -250,6 +250,8 @@ typedef struct co_rpdo {
     uint8_t sync_data[8];
     bool length_error;
     bool timeout_error;
+    uint8_t mpdo;               /**< 0, or the MPDO kind of its mapping: 0xFE SAM (dispatching list), 0xFF DAM. */
+    bool mpdo_error;            /**< A DAM-MPDO's object could not be written (EMCY 0x8230 active). */
 } co_rpdo_t;
 
 typedef struct co_tpdo {
@@ -268,6 +270,8 @@ typedef struct co_tpdo {
     bool sent_once;             /**< last[] holds what was sent last. */
     bool event;                 /**< Application event (co_tpdo_trigger) or a change waiting for the inhibit time. */
     bool sync_started;          /**< The SYNC start value was reached (or none is set). */
+    uint8_t mpdo;               /**< 0, or 0xFE: a SAM-MPDO producer of the object scanner list. */
+    uint16_t scan_next;         /**< SAM-MPDO: position in the scanner list of the next object to send. */
     uint8_t last[8];
 } co_tpdo_t;
 

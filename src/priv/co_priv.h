@@ -133,6 +133,17 @@ bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
 co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s);
 #endif
 
+/* ---- Multiplexed PDOs (co_mpdo.c) ---- */
+#define CO_MPDO_SAM 0xFEU /* mapping sub 0 of a source address mode MPDO */
+#define CO_MPDO_DAM 0xFFU /* ... of a destination address mode MPDO */
+#if CO_CONFIG_MPDO
+/* Fills the 8 bytes of the next SAM-MPDO of the scanner list (after p->scan_next, wrapping); false when the list
+ * has no object that can go out. */
+bool co_mpdo_sam_next(co_node_t *node, co_tpdo_t *p, uint8_t frame[8]);
+/* An MPDO received by RPDO p (8 bytes): written to the object it addresses, or ignored. */
+void co_mpdo_receive(co_node_t *node, co_rpdo_t *p, const uint8_t frame[8]);
+#endif
+
 /* ---- SYNC (co_sync.c) ---- */
 void co_sync_reset(co_node_t *node);
 bool co_sync_rx(co_node_t *node, const co_frame_t *f);

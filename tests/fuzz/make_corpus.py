@@ -553,6 +553,15 @@ def core_scenarios():
     s.sdo(0xA4, 0x00, 0x10, 0x00, 127, 4, 0, 0).port_busy(3).sdo(0xA4, 0x09, 0x10, 0x00, 127, 0, 0, 0)
     s.sdo(0xA3, 0, 0, 0, 0, 0, 0, 0).ms(5).ms(1500)
     S["block-sdo"] = s.data()
+    # MPDO: RPDO1 becomes a DAM consumer (mapping sub 0 = 0xFF), TPDO1 a SAM producer without a scanner list; DAM
+    # frames to this node, to all, to another node, to a missing object, and a short one.
+    s = Seq()
+    s.sdo_write(0x1400, 1, 0x80000205, 4).sdo_write(0x1600, 0, 0xFF, 1).sdo_write(0x1400, 1, 0x205, 4)
+    s.sdo_write(0x1800, 1, 0x80000185, 4).sdo_write(0x1A00, 0, 0xFE, 1).sdo_write(0x1800, 1, 0x185, 4).nmt(0x01)
+    s.rx(0x205, [0x85, 0x00, 0x20, 0x00, 0xE8, 0x03, 0, 0]).rx(0x205, [0x80, 0x00, 0x63, 0x01, 1, 2, 3, 4])
+    s.rx(0x205, [0x86, 0x00, 0x20, 0x00, 1, 0, 0, 0]).rx(0x205, [0x85, 0x00, 0x30, 0x00, 1, 0, 0, 0])
+    s.rx(0x205, [0x85, 0x00, 0x20]).app_trigger(0).ms(50)
+    S["mpdo"] = s.data()
     # TPDO timing: event timer 100 ms, inhibit 20 ms, then 50 ms inhibit (> ... timer) on a re-validated PDO.
     s = Seq()
     s.sdo_write(0x1800, 1, 0x80000185, 4).sdo_write(0x1800, 3, 200, 2).sdo_write(0x1800, 5, 100, 2)
