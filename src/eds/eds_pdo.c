@@ -2,7 +2,8 @@
  * @file eds_pdo.c
  * @brief PDO checks of the EDS reader: communication and mapping objects pair up, every mapping entry names an
  * existing mappable object of the right size and direction (dummy entries only where [DummyUsage] allows),
- * at most 64 bits. A PDO whose mapping is wrong is disabled with an empty mapping, so the device still loads.
+ * at most 64 bits; sub-index 0 = 0xFE (both ways) or 0xFF (receive) is an MPDO. A PDO whose mapping is wrong is
+ * disabled with an empty mapping, so the device still loads.
  */
 #include "eds_internal.h"
 
@@ -97,6 +98,9 @@ static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool recei
             continue;
         }
         const char *key = pass == 0 ? "DefaultValue" : "ParameterValue";
+        if (n->u == 0xFEU || (n->u == 0xFFU && receive)) {
+            continue; /* an MPDO (CiA 301: 0xFE source, 0xFF destination address mode): the entries are not used */
+        }
         if (n->u > 0x40U) {
             eds_warn(f, count->line, "[%04Xsub0] %s %llu: a mapping has at most 64 entries; the PDO is disabled",
                      (unsigned)map, key, (unsigned long long)n->u);
