@@ -75,6 +75,9 @@ static bool same_value(const eds_value_t *a, const eds_value_t *b)
 static void check_mapping(const eds_file_t *f, const eds_entry_t *count, bool receive, bool param)
 {
     const eds_value_t *n = param && count->param.kind != EDS_V_NONE ? &count->param : &count->def;
+    if (n->kind == EDS_V_UINT && (n->u == 0xFEU || (n->u == 0xFFU && receive))) {
+        return; /* an MPDO (the core's CO_CONFIG_MPDO): its entries are not used */
+    }
     if (n->kind != EDS_V_UINT || n->u > 64U) {
         fail("a mapping count the core refuses", count);
     }
