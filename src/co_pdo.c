@@ -4,7 +4,8 @@
  * TPDOs (254/255) go out when a mapped value changes (compared with what was sent last, so the
  * application needs no call), when co_tpdo_trigger() asks, and when the event timer expires; always
  * subject to the inhibit time. Synchronous TPDOs (0..240) and RPDOs go with SYNC. Only in Operational.
- * Mapping granularity is one byte; entries whose length is not a multiple of 8 bits are refused.
+ * Mapping granularity is one byte; entries whose length is not a multiple of 8 bits are refused. A mapping whose
+ * sub-index 0 is 0xFE or 0xFF makes the PDO a multiplexed PDO (co_mpdo.c, CO_CONFIG_MPDO).
  */
 #include "priv/co_priv.h"
 
