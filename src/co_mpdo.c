@@ -4,7 +4,8 @@
  * the consumer's node-ID or 0 for all), bytes 1-2 index, byte 3 sub-index, bytes 4-7 the value (zero-padded).
  * - SAM producer: a TPDO whose mapping sub 0 is 0xFE sends, at each of its events (event timer, co_tpdo_trigger,
  *   entering Operational), the next object of the object scanner list 0x1FA0..0x1FCF in turn.
- * - DAM consumer: an RPDO with 0xFF writes the object the frame names when it is addressed to this node or to all.
+ * - DAM consumer: an RPDO with 0xFF writes the object the frame names when it is addressed to this node or to all
+ *   (co_pdo.c raises EMCY 0x8230 when it cannot, with the RPDO's other errors).
  * - SAM consumer: an RPDO with 0xFE writes the local object the object dispatching list 0x1FD0..0x1FFF gives for the
  *   producer's node-ID, index and sub-index; frames of objects not in the list are ignored.
  * co_pdo.c configures the PDOs and routes their events and frames here.
@@ -105,36 +106,28 @@ static bool dispatch(co_node_t *node, uint8_t producer, uint16_t *index, uint8_t
     return false;
 }
 
-void co_mpdo_receive(co_node_t *node, co_rpdo_t *p, const uint8_t frame[8])
+int co_mpdo_receive(co_node_t *node, const co_rpdo_t *p, const uint8_t frame[8])
 {
     const uint8_t address = frame[0];
     uint16_t index = co_get_u16(&frame[1]);
     uint8_t sub = frame[3];
     const bool dam = (address & 0x80U) != 0U;
     if (dam != (p->mpdo == CO_MPDO_DAM)) {
-        return; /* the other addressing mode: not for this RPDO */
+        return 0; /* the other addressing mode: not for this RPDO */
     }
     if (dam) {
         const uint8_t to = (uint8_t)(address & 0x7FU);
         if (to != 0U && to != node->node_id) {
-            return; /* addressed to another node */
+            return 0; /* addressed to another node */
         }
     } else if (!dispatch(node, address, &index, &sub)) {
-        return; /* an object of a producer this node does not listen to */
+        return 0; /* an object of a producer this node does not listen to */
     }
     const co_od_entry_t *e = mpdo_object(node, index, sub, CO_OD_RPDO);
-    const uint32_t r = e != NULL ? co_od_write(node, index, sub, &frame[4], e->size, CO_ORIGIN_RPDO) : CO_ABORT_NO_OBJECT;
-    static const uint8_t msef[5] = {0x04U, 0U, 0U, 0U, 0U};
-    if (!dam) {
-        return; /* CiA 301 defines no error for SAM: a refused value is dropped like an RPDO's */
+    if (e != NULL && co_od_write(node, index, sub, &frame[4], e->size, CO_ORIGIN_RPDO) == CO_ABORT_NONE) {
+        return 1;
     }
-    if (r != CO_ABORT_NONE && !p->mpdo_error) {
-        p->mpdo_error = true;
-        (void)co_emcy_raise(node, 0x8230U, 0x10U, msef); /* DAM-MPDO not processed: destination object */
-    } else if (r == CO_ABORT_NONE && p->mpdo_error) {
-        p->mpdo_error = false;
-        (void)co_emcy_clear(node, 0x8230U, msef);
-    }
+    return dam ? -1 : 0; /* CiA 301 defines no error for SAM: a refused value is dropped like an RPDO's */
 }
 
 #endif /* CO_CONFIG_MPDO */

@@ -201,7 +201,15 @@ bool co_pdo_rx(co_node_t *node, const co_frame_t *f)
         }
 #if CO_CONFIG_MPDO
         if (p->mpdo != 0U) {
-            co_mpdo_receive(node, p, f->data); /* event-driven whatever the transmission type (CiA 301) */
+            /* event-driven whatever the transmission type (CiA 301) */
+            const int written = co_mpdo_receive(node, p, f->data);
+            if (written < 0 && !p->mpdo_error) {
+                p->mpdo_error = true;
+                (void)co_emcy_raise(node, 0x8230U, 0x10U, rpdo_msef); /* DAM-MPDO not processed: destination */
+            } else if (written > 0 && p->mpdo_error) {
+                p->mpdo_error = false;
+                (void)co_emcy_clear(node, 0x8230U, rpdo_msef);
+            }
         } else
 #endif
         if (p->type <= 240U) {

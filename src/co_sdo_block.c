@@ -55,10 +55,7 @@ void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uin
     if ((cmd & 0xE0U) == 0xC0U) {
         const bool sized = (cmd & 0x02U) != 0U;
         const uint32_t size = sized ? co_get_u32(data) : 0U;
-        uint32_t r = co_sdo_download_checks(node, index, sub, sized, size);
-        if (r == CO_ABORT_NONE && (size > sizeof s->buf || co_od_find(node->od, index, sub)->size > sizeof s->buf)) {
-            r = CO_ABORT_OUT_OF_MEMORY;
-        }
+        const uint32_t r = co_sdo_download_checks(node, index, sub, sized, size, true);
         if (r != CO_ABORT_NONE) {
             co_sdo_abort(node, s, index, sub, r);
             return;

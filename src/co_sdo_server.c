@@ -119,8 +119,10 @@ void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, u
 
 /* The checks of a segmented or block download initiate before the transfer (the object's existence, access and
  * the size indicated, if sized), also where the transfer type is off: they come first, so a missing object answers
- * 0x06020000 rather than 0x06010000 (docs/decisions.md). 0 or the abort code. */
-uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size)
+ * 0x06020000 rather than 0x06010000 (docs/decisions.md). staged: the transfer goes through the SDO buffer, which
+ * the object must fit (0x05040005). 0 or the abort code. */
+uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size,
+                                bool staged)
 {
     const co_od_entry_t *e = co_od_find(node->od, index, sub);
     if (e == NULL) {
@@ -129,20 +131,18 @@ uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t s
     if ((e->flags & CO_OD_WRITE) == 0U || (e->flags & CO_OD_CONST) != 0U) {
         return (e->flags & CO_OD_READ) != 0U ? CO_ABORT_READ_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
-    return (sized && size > e->size) ? CO_ABORT_LENGTH_HIGH : CO_ABORT_NONE;
+    if (sized && size > e->size) {
+        return CO_ABORT_LENGTH_HIGH;
+    }
+    return (staged && e->size > CO_SDO_BUF_SIZE) ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_NONE;
 }
 
 #if CO_CONFIG_SDO_SEGMENTED
-/* After co_sdo_download_checks passed. */
+/* After co_sdo_download_checks passed (staged). */
 static void download_initiate_segmented(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
                                         const uint8_t *data)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
     const uint32_t size = (cmd & 0x01U) != 0U ? co_get_u32(data) : 0U;
-    if (size > sizeof s->buf || e->size > sizeof s->buf) {
-        co_sdo_abort(node, s, index, sub, CO_ABORT_OUT_OF_MEMORY);
-        return;
-    }
     s->state = SDO_SEG_DOWNLOAD;
     s->index = index;
     s->sub = sub;
@@ -245,7 +245,8 @@ void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
             download_expedited(node, s, cmd, index, sub, &f->data[4]);
             return;
         }
-        const uint32_t r = co_sdo_download_checks(node, index, sub, (cmd & 0x01U) != 0U, co_get_u32(&f->data[4]));
+        const uint32_t r = co_sdo_download_checks(node, index, sub, (cmd & 0x01U) != 0U, co_get_u32(&f->data[4]),
+                                                  segmented_enabled(node));
         if (r != CO_ABORT_NONE || !segmented_enabled(node)) {
             co_sdo_abort(node, s, index, sub, r != CO_ABORT_NONE ? r : CO_ABORT_UNSUPPORTED_ACCESS);
         } else {

@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 BASE = ROOT / "od" / "buerkert-flow-controller.eds"
 OUT = ROOT / "od" / "variants" / "buerkert-mpdo.eds"
 
-# Sensor values 0x2500.. (name, unit code of 0x25xx:02 as the base's 0x2500 gives none: 0), mapped as below.
+# Sensor values 0x2500.. (index, name of sub 3), shaped as the base's 0x2500; control values as its 0x2540.
 SENSORS = [
     (0x2500, "Flow actual value"),
     (0x2501, "Gas temperature"),
@@ -44,20 +44,20 @@ def sections(text):
     return out
 
 
-def var(name, dtype, access, default, mapping=0):
+def var(name, dtype, access, default):
     return [f"ParameterName={name}", "ObjectType=0x7", f"DataType={dtype}", f"AccessType={access}",
-            f"DefaultValue={default}", f"PDOMapping={mapping}"]
+            f"DefaultValue={default}", "PDOMapping=0"]
 
 
 def set_key(body, key, value):
     return [f"{key}={value}" if line.startswith(key + "=") else line for line in body]
 
 
-def value_record(index, name, access, template):
-    """A sensor/control value record shaped as the base's 0x2500/0x2540, with its own name."""
-    out = [(f"[{index:04X}]", template[f"[{template['base']:04X}]"])]
+def value_record(index, name, access, base, model):
+    """A sensor/control value record shaped as the base EDS's record `model` (0x2500/0x2540), with its own name."""
+    out = [(f"[{index:04X}]", base[f"[{model:04X}]"])]
     for sub in range(8):
-        body = template[f"[{template['base']:04X}sub{sub}]"]
+        body = base[f"[{model:04X}sub{sub}]"]
         if sub == 1:
             body = set_key(body, "AccessType", access)
         if sub == 3:
@@ -106,15 +106,10 @@ def build():
         if re.fullmatch(r"\[25(00|40)(sub\d)?\]", head):
             continue  # written below with the other values
         out.append((head, body))
-    template = dict(base)
-    template["base"] = 0x2500
-    values = []
     for index, name in SENSORS:
-        values += value_record(index, name, "rwr", template)
-    template["base"] = 0x2540
+        out += value_record(index, name, "rwr", by_head, 0x2500)
     for index, name in CONTROLS:
-        values += value_record(index, name, "rww", template)
-    out += values
+        out += value_record(index, name, "rww", by_head, 0x2540)
     return "".join(f"{head}\n" + "".join(f"{line}\n" for line in body) + "\n" for head, body in out)
 
 

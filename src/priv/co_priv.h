@@ -123,7 +123,8 @@ void co_sdo_written(co_node_t *node, const co_od_entry_t *e);
 void co_sdo_respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
                     const uint8_t *data, size_t len);
 void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, uint32_t code);
-uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size);
+uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size,
+                                bool staged);
 bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t *len);
 void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t len);
 #if CO_CONFIG_SDO_BLOCK
@@ -140,8 +141,9 @@ co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s);
 /* Fills the 8 bytes of the next SAM-MPDO of the scanner list (after p->scan_next, wrapping); false when the list
  * has no object that can go out. */
 bool co_mpdo_sam_next(co_node_t *node, co_tpdo_t *p, uint8_t frame[8]);
-/* An MPDO received by RPDO p (8 bytes): written to the object it addresses, or ignored. */
-void co_mpdo_receive(co_node_t *node, co_rpdo_t *p, const uint8_t frame[8]);
+/* An MPDO received by RPDO p (8 bytes): written to the object it addresses (1), ignored (0), or a DAM-MPDO whose
+ * object could not be written (-1: EMCY 0x8230, raised by the caller). */
+int co_mpdo_receive(co_node_t *node, const co_rpdo_t *p, const uint8_t frame[8]);
 #endif
 
 /* ---- SYNC (co_sync.c) ---- */
