@@ -87,7 +87,7 @@ void co_freestanding_entry(co_node_t *node, void *values, const co_frame_t *fram
 void co_freestanding_entry(co_node_t *node, void *values, const co_frame_t *frame)
 {
     static const co_port_t port = {send, nvm_write, nvm_commit, nvm_read, NULL};
-    const co_node_cfg_t cfg = {&CO_CHECK_OD, values, &port, NULL, NULL, NULL, 1U, 4U, NULL, 0U, NULL, 0U, NULL, 0U, NULL, 0U};
+    const co_node_cfg_t cfg = {.od = &CO_CHECK_OD, .values = values, .port = &port, .node_id = 1U, .bit_timing = 4U};
     uint8_t b[4] = {0U};
     size_t n = 0U;
     (void)co_node_init(node, &cfg, 0U);

@@ -89,24 +89,32 @@ static co_status_t boot(device_t *dev, co_time_us_t now)
     nc.bit_rates_kbit = dev->cls->bit_rates_kbit;
     nc.options = dev->cls->core_options;
     uint8_t *core_state = (uint8_t *)dev->model;
-    if (dev->cls->rpdo_count > 0U || dev->cls->tpdo_count > 0U) {
+    const device_class_t *cls = dev->cls;
+    if (cls->rpdo_count > 0U || cls->tpdo_count > 0U || cls->sdo_server_count > 0U) {
         nc.rpdo = (co_rpdo_t *)core_state;
-        nc.rpdo_count = dev->cls->rpdo_count;
-        nc.tpdo = (co_tpdo_t *)(core_state + (size_t)dev->cls->rpdo_count * sizeof(co_rpdo_t));
-        nc.tpdo_count = dev->cls->tpdo_count;
-    }
-    if (dev->cls->sdo_server_count > 0U) {
-        nc.sdo_servers = (co_sdo_server_t *)(core_state + (size_t)dev->cls->rpdo_count * sizeof(co_rpdo_t) +
-                                             (size_t)dev->cls->tpdo_count * sizeof(co_tpdo_t));
-        nc.sdo_server_count = dev->cls->sdo_server_count;
+        nc.rpdo_count = cls->rpdo_count;
+        core_state += (size_t)cls->rpdo_count * sizeof(co_rpdo_t);
+        nc.tpdo = (co_tpdo_t *)core_state;
+        nc.tpdo_count = cls->tpdo_count;
+        core_state += (size_t)cls->tpdo_count * sizeof(co_tpdo_t);
+        nc.sdo_servers = (co_sdo_server_t *)core_state;
+        nc.sdo_server_count = cls->sdo_server_count;
+        core_state += (size_t)cls->sdo_server_count * sizeof(co_sdo_server_t);
+        nc.routes = (co_rx_route_t *)core_state;
+        nc.route_count = (uint16_t)(CO_RX_ROUTES_FIXED + cls->rpdo_count + cls->sdo_server_count);
     }
     return co_node_init(&dev->node, &nc, now);
 }
 
 size_t device_core_state_size(const device_class_t *cls)
 {
-    return (size_t)cls->rpdo_count * sizeof(co_rpdo_t) + (size_t)cls->tpdo_count * sizeof(co_tpdo_t) +
-           (size_t)cls->sdo_server_count * sizeof(co_sdo_server_t);
+    if (cls->rpdo_count == 0U && cls->tpdo_count == 0U && cls->sdo_server_count == 0U) {
+        return 0U; /* the node's own arrays */
+    }
+    const size_t size = (size_t)cls->rpdo_count * sizeof(co_rpdo_t) + (size_t)cls->tpdo_count * sizeof(co_tpdo_t) +
+                        (size_t)cls->sdo_server_count * sizeof(co_sdo_server_t) +
+                        (CO_RX_ROUTES_FIXED + (size_t)cls->rpdo_count + cls->sdo_server_count) * sizeof(co_rx_route_t);
+    return (size + 15U) & ~(size_t)15U; /* the model's state that follows keeps any alignment it needs */
 }
 
 co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, void *model, const device_cfg_t *cfg,
@@ -175,6 +183,7 @@ co_time_us_t device_process(device_t *dev, co_time_us_t now)
     co_time_us_t next = CO_NEVER;
     if (dev->cls->step != NULL) {
         next = dev->cls->step(dev, now);
+        co_node_values_changed(&dev->node); /* the models write their process values directly */
     }
     const co_time_us_t core = co_node_process(&dev->node, now);
     return core < next ? core : next;

@@ -80,7 +80,8 @@ typedef struct device_class {
     co_status_t (*on_store)(device_t *dev, uint16_t index, uint8_t sub);
     /** For an OD with more PDOs than CO_RPDO_MAX / CO_TPDO_MAX (a device read from its EDS: CiA 301 allows 512),
      *  or with additional SDO servers (0x1201..0x127F): when non-zero, the model block starts with
-     *  co_rpdo_t[rpdo_count], co_tpdo_t[tpdo_count], co_sdo_server_t[sdo_server_count] (model_size counts them),
+     *  co_rpdo_t[rpdo_count], co_tpdo_t[tpdo_count], co_sdo_server_t[sdo_server_count] and the frame router's
+     *  co_rx_route_t[CO_RX_ROUTES_FIXED + rpdo_count + sdo_server_count] (model_size counts them),
      *  which device_init gives the node; the model's own state follows at device_core_state_size().
      *  0: the node's own PDO arrays, no additional SDO server. */
     uint16_t rpdo_count;

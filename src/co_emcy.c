@@ -89,6 +89,7 @@ bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8
     if (em->n_active >= CO_EMCY_ACTIVE_MAX) {
         return false;
     }
+    co_node_wake(node, CO_SVC_EMCY);
     co_emcy_error_t *a = &em->active[em->n_active++];
     a->code = code;
     a->reg = reg_bits;
@@ -105,6 +106,7 @@ bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef)
     const uint8_t *m = msef != NULL ? msef : zero_msef;
     for (uint8_t i = 0U; i < em->n_active; i++) {
         if (same_error(&em->active[i], code, m)) {
+            co_node_wake(node, CO_SVC_EMCY);
             em->active[i] = em->active[em->n_active - 1U];
             em->n_active--;
             update_register(node);
@@ -125,8 +127,15 @@ bool co_emcy_is_active(const co_node_t *node, uint16_t code)
     return false;
 }
 
+void co_emcy_written(co_node_t *node)
+{
+    node->emcy.cob_id = co_od_u32_or(node, 0x1014U, 0U, 0x80U + (uint32_t)node->node_id);
+    node->emcy.inhibit_100us = (uint16_t)co_od_u32_or(node, 0x1015U, 0U, 0U);
+}
+
 void co_emcy_reset(co_node_t *node)
 {
+    co_emcy_written(node);
     /* Communication reset: the error state starts afresh (0x1001/0x1003 were re-initialised with the
      * 0x1000 area); device errors that persist are raised again by the device's on_reset hook. */
     node->emcy.n_active = 0U;
@@ -149,13 +158,12 @@ co_time_us_t co_emcy_process(co_node_t *node)
         co_frame_t f = em->queue[em->q_head];
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
-        const uint32_t cob = co_od_u32_or(node, 0x1014U, 0U, 0x80U + (uint32_t)node->node_id);
-        if ((cob & CO_COBID_INVALID) != 0U) {
+        if ((em->cob_id & CO_COBID_INVALID) != 0U) {
             continue; /* EMCY disabled */
         }
-        f.id = cob & CO_COBID_CAN_ID;
+        f.id = em->cob_id & CO_COBID_CAN_ID;
         co_node_send(node, &f);
-        em->next_allowed = node->now + (co_time_us_t)co_od_u32_or(node, 0x1015U, 0U, 0U) * 100U;
+        em->next_allowed = node->now + (co_time_us_t)em->inhibit_100us * 100U;
     }
     return CO_NEVER;
 }

@@ -12,13 +12,19 @@ static const uint8_t guard_msef[5] = {0x01U, 0U, 0U, 0U, 0U}; /* distinguishes l
 
 static co_time_us_t life_time_us(const co_node_t *node)
 {
-    const uint32_t guard_ms = co_od_u32_or(node, 0x100CU, 0U, 0U);
-    const uint32_t factor = co_od_u32_or(node, 0x100DU, 0U, 0U);
-    return (co_time_us_t)guard_ms * factor * 1000U;
+    return (co_time_us_t)node->guard.guard_ms * node->guard.life_factor * 1000U;
+}
+
+void co_guard_written(co_node_t *node)
+{
+    node->guard.present = co_od_find(node->od, 0x100CU, 0U) != NULL && co_od_find(node->od, 0x100DU, 0U) != NULL;
+    node->guard.guard_ms = (uint16_t)co_od_u32_or(node, 0x100CU, 0U, 0U);
+    node->guard.life_factor = (uint8_t)co_od_u32_or(node, 0x100DU, 0U, 0U);
 }
 
 void co_guard_reset(co_node_t *node)
 {
+    co_guard_written(node);
     node->guard.toggle = 0U;
     node->guard.armed = false;
     node->guard.failed = false;
@@ -27,11 +33,8 @@ void co_guard_reset(co_node_t *node)
 
 void co_guard_rx(co_node_t *node, const co_frame_t *f)
 {
-    (void)f;
-    if (co_od_find(node->od, 0x100CU, 0U) == NULL || co_od_find(node->od, 0x100DU, 0U) == NULL) {
-        return; /* the device has no node guarding (heartbeat only): a guard request is not its business */
-    }
-    if (co_od_u32_or(node, 0x1017U, 0U, 0U) != 0U) {
+    (void)f; /* routed here only when the device has node guarding (co_node.c) */
+    if (node->hb.period_ms != 0U) {
         return; /* heartbeat producer active: node guarding disabled */
     }
     const co_frame_t reply = {0x700U + node->node_id, 1U, 0U, {(uint8_t)(node->guard.toggle | (uint8_t)node->nmt_state)}};
@@ -40,6 +43,7 @@ void co_guard_rx(co_node_t *node, const co_frame_t *f)
     const co_time_us_t life = life_time_us(node);
     node->guard.armed = life != 0U;
     node->guard.deadline = life != 0U ? node->now + life : CO_NEVER;
+    co_node_due(node, node->guard.deadline);
     if (node->guard.failed) {
         node->guard.failed = false;
         (void)co_emcy_clear(node, 0x8130U, guard_msef);
@@ -51,7 +55,7 @@ co_time_us_t co_guard_process(co_node_t *node)
     if (!node->guard.armed || node->guard.failed) {
         return CO_NEVER;
     }
-    if (co_od_u32_or(node, 0x1017U, 0U, 0U) != 0U) {
+    if (node->hb.period_ms != 0U) {
         node->guard.armed = false;
         return CO_NEVER;
     }

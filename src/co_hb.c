@@ -4,16 +4,18 @@
  */
 #include "priv/co_priv.h"
 
-static co_time_us_t period_us(const co_node_t *node)
-{
-    return (co_time_us_t)co_od_u32_or(node, 0x1017U, 0U, 0U) * 1000U;
-}
+static co_time_us_t period_us(const co_node_t *node) { return (co_time_us_t)node->hb.period_ms * 1000U; }
 
-void co_hb_reset(co_node_t *node)
+/* 0x1017 took the value ms: a new period starts now. */
+static void start(co_node_t *node, uint32_t ms)
 {
+    node->hb.period_ms = (uint16_t)ms;
     const co_time_us_t p = period_us(node);
     node->hb.due = p != 0U ? node->now + p : CO_NEVER;
+    co_node_due(node, node->hb.due);
 }
+
+void co_hb_reset(co_node_t *node) { start(node, co_od_u32_or(node, 0x1017U, 0U, 0U)); }
 
 co_time_us_t co_hb_process(co_node_t *node)
 {
@@ -39,8 +41,4 @@ uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_
     return CO_ABORT_NONE; /* range limits come from the OD; device-specific steps from the device hook */
 }
 
-void co_hb_written(co_node_t *node, const co_od_entry_t *e)
-{
-    (void)e;
-    co_hb_reset(node); /* a new period starts now */
-}
+void co_hb_written(co_node_t *node, const co_od_entry_t *e) { start(node, co_od_entry_u32(node, e)); }

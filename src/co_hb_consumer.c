@@ -24,6 +24,7 @@ static void slot_configure(co_node_t *node, uint8_t i)
     }
     s->node_id = (id >= 1U && id <= 127U && (v & 0xFFFFU) != 0U) ? id : 0U;
     s->state = s->node_id != 0U ? 1U : 0U;
+    s->time_ms = (uint16_t)v;
     s->deadline = CO_NEVER;
     s->remote_state = 0U;
 }
@@ -57,7 +58,7 @@ void co_hbc_reset(co_node_t *node)
 
 bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
 {
-    if (f->id <= 0x700U || f->id > 0x77FU || f->len != 1U) {
+    if (f->len != 1U) { /* f->id is 0x701..0x77F (co_node_rx) */
         return false;
     }
     const uint8_t id = (uint8_t)(f->id - 0x700U);
@@ -85,7 +86,8 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
             (void)co_emcy_clear(node, 0x8130U, msef);
         }
         s->state = 2U;
-        s->deadline = node->now + (co_time_us_t)(co_od_u32_or(node, 0x1016U, (uint8_t)(i + 1U), 0U) & 0xFFFFU) * 1000U;
+        s->deadline = node->now + (co_time_us_t)s->time_ms * 1000U;
+        co_node_due(node, s->deadline);
     }
     return used;
 }
@@ -137,5 +139,6 @@ void co_hbc_written(co_node_t *node, const co_od_entry_t *e)
     if (e->sub >= 1U && e->sub <= node->hbc.count) {
         slot_configure(node, (uint8_t)(e->sub - 1U));
         update_index(node);
+        co_node_routes_update(node); /* the heartbeats it takes changed */
     }
 }

@@ -100,6 +100,7 @@ void co_node_set_state(co_node_t *node, co_nmt_state_t state)
         return;
     }
     node->nmt_state = state;
+    co_node_wake(node, CO_SVC_ALL); /* every service acts by the NMT state */
     co_pdo_on_state(node, from, state);
     co_node_event(node, CO_EV_NMT_STATE, 0U, 0U, (uint32_t)state, (uint32_t)from);
     if (node->hooks != NULL && node->hooks->on_nmt_change != NULL) {
@@ -133,17 +134,18 @@ static void reset_communication(co_node_t *node, bool loaded)
     if (node->hooks != NULL && node->hooks->on_reset != NULL) {
         node->hooks->on_reset(node->hooks_ctx, node, CO_RESET_COMMUNICATION);
     }
-    if (node->node_id == CO_NODE_ID_UNCONFIGURED) {
-        return; /* CiA 305: an unconfigured node runs LSS only and sends no boot-up */
+    if (node->node_id != CO_NODE_ID_UNCONFIGURED) { /* CiA 305: an unconfigured node runs LSS only, no boot-up */
+        const co_frame_t bootup = {0x700U + node->node_id, 1U, 0U, {0U}};
+        co_node_send(node, &bootup);
+        co_node_set_state(node, CO_NMT_PRE_OPERATIONAL);
     }
-    const co_frame_t bootup = {0x700U + node->node_id, 1U, 0U, {0U}};
-    co_node_send(node, &bootup);
-    co_node_set_state(node, CO_NMT_PRE_OPERATIONAL);
+    co_node_routes_update(node);
 }
 
 void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
 {
     node->now = now;
+    co_node_wake(node, CO_SVC_ALL);
     const bool application = what == CO_RESET_APPLICATION;
     if (application) {
         /* Both areas from one pass over the stored records, so that one refused record refuses them all. */
@@ -194,8 +196,16 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         node->tpdo = node->tpdo_own;
         node->tpdo_cap = CO_TPDO_MAX;
     }
+    if (cfg->routes != NULL) {
+        node->route = cfg->routes;
+        node->route_cap = cfg->route_count;
+    } else {
+        node->route = node->route_own;
+        node->route_cap = (uint16_t)(sizeof node->route_own / sizeof node->route_own[0]);
+    }
     if (co_pdo_count(node) != CO_OK || co_sdo_count(node, cfg->sdo_servers, cfg->sdo_server_count) != CO_OK ||
-        co_od_sub_count(node->od, 0x1016U) > CO_HB_CONSUMER_MAX) {
+        co_od_sub_count(node->od, 0x1016U) > CO_HB_CONSUMER_MAX ||
+        node->route_cap < CO_RX_ROUTES_FIXED + node->n_rpdo + node->n_sdo_extra) {
         return CO_ERR_RANGE;
     }
     memcpy(node->values, node->od->defaults, node->od->values_size);
@@ -223,81 +233,275 @@ static bool services_run(const co_node_t *node)
     return node->node_id != CO_NODE_ID_UNCONFIGURED && node->nmt_state != CO_NMT_INITIALISING;
 }
 
+/* ---- Frame routing: a table of the COB-IDs the node takes, sorted, built when one of them changes ---------- */
+
+static uint16_t route_target(enum co_rx_kind kind, uint16_t n) { return (uint16_t)(((unsigned)kind << 12) | n); }
+
+/* Adds an id in order. An id already taken keeps its service: the order of the calls is the priority, as the order
+ * of the tests was before the table (SYNC, then the SDO servers, then the RPDOs). */
+static void route_add(co_node_t *node, uint16_t id, uint16_t target)
+{
+    uint16_t i = node->n_route;
+    while (i > 0U && node->route[i - 1U].id > id) {
+        i--;
+    }
+    if ((i > 0U && node->route[i - 1U].id == id) || node->n_route >= node->route_cap) {
+        return; /* the capacity is checked at co_node_init: never full */
+    }
+    for (uint16_t k = node->n_route; k > i; k--) {
+        node->route[k] = node->route[k - 1U];
+    }
+    node->route[i].id = id;
+    node->route[i].target = target;
+    node->n_route++;
+}
+
+/* A heartbeat (0x701..0x77F) of a node this one monitors. */
+static bool monitored(const co_node_t *node, uint32_t id)
+{
+    const uint32_t other = id - 0x700U;
+    return other - 1U < 127U && (node->hbc.monitored[other >> 3] & (1U << (other & 7U))) != 0U;
+}
+
+void co_node_routes_update(co_node_t *node)
+{
+    node->n_route = 0U;
+    if ((node->options & CO_OPT_NO_LSS) == 0U) {
+        route_add(node, 0x7E5U, route_target(CO_RX_LSS, 0U));
+    }
+    if (services_run(node)) {
+        route_add(node, 0x000U, route_target(CO_RX_NMT, 0U));
+#if CO_CONFIG_SYNC
+        if (node->sync.can_id != CO_NO_CAN_ID) {
+            route_add(node, node->sync.can_id, route_target(CO_RX_SYNC, 0U));
+        }
+#endif
+        route_add(node, node->sdo.rx_id, route_target(CO_RX_SDO, 0U));
+#if CO_CONFIG_SDO_SERVERS
+        for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
+            if (node->sdo_extra[i].rx_id != CO_SDO_NO_ID) {
+                route_add(node, node->sdo_extra[i].rx_id, route_target(CO_RX_SDO, (uint16_t)(i + 1U)));
+            }
+        }
+#endif
+        for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+            if (node->rpdo[n].valid) {
+                route_add(node, (uint16_t)(node->rpdo[n].cob_id & CO_COBID_CAN_ID), route_target(CO_RX_RPDO, n));
+            }
+        }
+    }
+    memset(node->route_hash, 0, sizeof node->route_hash);
+    for (uint16_t i = 0U; i < node->n_route; i++) {
+        uint8_t *b = &node->route_hash[CO_ROUTE_HASH(node->route[i].id)];
+        *b = (*b == 0U && i < 0xFEU) ? (uint8_t)(i + 1U) : 0xFFU;
+    }
+    for (uint16_t id = 0x701U; id <= 0x77FU; id++) {
+        if (monitored(node, id)) {
+            node->route_hash[CO_ROUTE_HASH(id)] = 0xFFU; /* a consumed heartbeat: not in the table, looked at */
+        }
+    }
+    co_node_event(node, CO_EV_RX_FILTER, 0U, 0U, node->n_route, 0U);
+}
+
+/* A remote frame on 0x700 + node-ID asks for the node-guarding answer, when the OD has node guarding. */
+static bool guarding_request(const co_node_t *node, const co_frame_t *frame)
+{
+#if CO_CONFIG_NODE_GUARDING
+    return frame->flags == CO_FRAME_RTR && frame->id == 0x700U + node->node_id && node->guard.present &&
+           services_run(node);
+#else
+    (void)node;
+    (void)frame;
+    return false;
+#endif
+}
+
+static void put_id(uint16_t *ids, uint16_t cap, uint16_t *n, uint16_t id)
+{
+    if (*n < cap) {
+        ids[*n] = id;
+    }
+    (*n)++;
+}
+
+uint16_t co_node_rx_ids(const co_node_t *node, uint16_t *ids, uint16_t cap)
+{
+    uint16_t n = 0U;
+    uint16_t r = 0U;
+    for (; r < node->n_route && node->route[r].id <= 0x700U; r++) {
+        put_id(ids, cap, &n, node->route[r].id);
+    }
+    if (services_run(node)) { /* heartbeats consumed and the guard request, between the table's ids */
+        for (uint16_t id = 0x701U; id <= 0x77FU; id++) {
+            const co_frame_t guard = {id, 0U, CO_FRAME_RTR, {0U}};
+            const uint8_t other = (uint8_t)(id - 0x700U);
+            if (guarding_request(node, &guard) || (node->hbc.monitored[other >> 3] & (1U << (other & 7U))) != 0U) {
+                put_id(ids, cap, &n, id);
+            }
+        }
+    }
+    for (; r < node->n_route; r++) {
+        put_id(ids, cap, &n, node->route[r].id);
+    }
+    return n;
+}
+
+static const co_rx_route_t *route_find(const co_node_t *node, uint16_t id)
+{
+    const unsigned b = node->route_hash[CO_ROUTE_HASH(id)];
+    if (b != 0xFFU) {
+        return (b != 0U && node->route[b - 1U].id == id) ? &node->route[b - 1U] : NULL;
+    }
+    unsigned lo = 0U;
+    unsigned hi = node->n_route;
+    while (lo < hi) {
+        const unsigned mid = (lo + hi) >> 1;
+        if (node->route[mid].id < id) {
+            lo = mid + 1U;
+        } else {
+            hi = mid;
+        }
+    }
+    return (lo < node->n_route && node->route[lo].id == id) ? &node->route[lo] : NULL;
+}
+
 bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
 {
     node->now = now;
     node->stats.rx_frames++;
-    if ((frame->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) != 0U || frame->len > 8U) {
-        return false;
+    const uint32_t id = frame->id;
+    if (frame->flags == 0U && id <= 0x7FFU && node->route_hash[CO_ROUTE_HASH(id)] == 0U) {
+        return false; /* a data frame in a bucket of no route and no heartbeat it consumes: for other nodes */
     }
-    if (frame->id == 0x7E5U) {
-        if ((node->options & CO_OPT_NO_LSS) != 0U) {
-            return false; /* a device without LSS (EDS LSS_Supported=0) ignores the master's requests */
+    return co_node_take(node, frame);
+}
+
+/* Not static, so that the compiler keeps it out of co_node_rx: the early return there then saves no registers. */
+bool co_node_take(co_node_t *node, const co_frame_t *frame)
+{
+    if (frame->flags != 0U || frame->len > 8U || frame->id > 0x7FFU) {
+        if (!guarding_request(node, frame)) {
+            return false; /* extended, error and remote frames but a guard request; RTR of TPDOs is not supported */
         }
-        co_lss_rx(node, frame);
-        return true;
-    }
-    if (!services_run(node)) {
-        return false;
-    }
-    if (frame->id == 0x000U) {
-        if ((frame->flags & CO_FRAME_RTR) != 0U) {
-            return false;
-        }
-        co_nmt_rx(node, frame);
-        return true;
-    }
-    if ((frame->flags & CO_FRAME_RTR) != 0U) {
 #if CO_CONFIG_NODE_GUARDING
-        if (frame->id == 0x700U + node->node_id) {
-            co_guard_rx(node, frame);
-            return true;
-        }
+        co_guard_rx(node, frame);
 #endif
-        return false; /* RTR for TPDOs (types 252/253) is not supported */
+        return true;
     }
+    const uint16_t id = (uint16_t)frame->id;
+    const co_rx_route_t *route = route_find(node, id);
+    if (route == NULL) {
+        return monitored(node, id) && services_run(node) && co_hbc_rx(node, frame);
+    }
+    const uint16_t target = route->target;
+    const uint16_t n = (uint16_t)(target & 0x0FFFU);
+    switch ((enum co_rx_kind)(target >> 12)) {
+    case CO_RX_LSS:
+        co_node_wake(node, CO_SVC_LSS);
+        co_lss_rx(node, frame);
+        break;
+    case CO_RX_NMT:
+        co_nmt_rx(node, frame); /* a change of state wakes every service */
+        break;
 #if CO_CONFIG_SYNC
-    if (co_sync_rx(node, frame)) {
-        return true;
-    }
+    case CO_RX_SYNC:
+        co_sync_rx(node, frame);
+        break;
 #endif
-    if (frame->id == 0x600U + node->node_id) {
-        co_sdo_rx(node, &node->sdo, frame);
-        return true;
-    }
+    case CO_RX_SDO: {
 #if CO_CONFIG_SDO_SERVERS
-    if (node->n_sdo_extra != 0U && co_sdo_rx_extra(node, frame)) {
-        return true;
-    }
+        co_sdo_server_t *s = n == 0U ? &node->sdo : &node->sdo_extra[n - 1U];
+#else
+        co_sdo_server_t *s = &node->sdo;
 #endif
-    if (co_pdo_rx(node, frame)) {
-        return true;
+        co_sdo_rx(node, s, frame);
+        if (s->state != CO_SDO_IDLE) {
+            co_node_wake(node, CO_SVC_SDO); /* a transfer in progress: its timeout, block segments to send */
+        }
+        break;
     }
-    return co_hbc_rx(node, frame);
+    default:
+        co_rpdo_rx(node, n, frame);
+        break;
+    }
+    return true;
+}
+
+/* Whether a pass runs a service: all of them at a deadline, else those marked since they last ran. The mark is
+ * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. */
+static bool take(co_node_t *node, unsigned service, bool all)
+{
+    const bool run = all || (node->wake & service) != 0U;
+    node->wake = (uint8_t)(node->wake & ~service);
+    return run;
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
 {
     node->now = now;
-    co_time_us_t next = txq_flush(node);
-    next = co_min_time(next, co_lss_process(node));
+    if (node->wake == 0U && now < node->next_due && node->txq.count == 0U) {
+        return node->next_due; /* nothing happened since the last pass and nothing is due */
+    }
+    return co_node_pass(node, now);
+}
+
+/* Not static, so that the compiler keeps it out of co_node_process: the early return above then saves no
+ * registers. */
+co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
+{
+    /* At a deadline every service runs and the deadlines are taken afresh. Otherwise only the marked ones: the
+     * others' deadlines are as they were, none earlier than next_due, which therefore stays a bound (at worst
+     * early, when a marked service's deadline moved later: the pass then is a full one). */
+    const bool all = now >= node->next_due;
+    co_time_us_t next = all ? CO_NEVER : node->next_due;
+    node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
+    next = co_min_time(next, txq_flush(node));
+    if (take(node, CO_SVC_LSS, all)) {
+        next = co_min_time(next, co_lss_process(node));
+    }
     if (services_run(node)) {
-        next = co_min_time(next, co_hb_process(node));
+        if (take(node, CO_SVC_HB, all)) {
+            next = co_min_time(next, co_hb_process(node));
+        }
 #if CO_CONFIG_NODE_GUARDING
-        next = co_min_time(next, co_guard_process(node));
+        if (take(node, CO_SVC_GUARD, all)) {
+            next = co_min_time(next, co_guard_process(node));
+        }
 #endif
-        next = co_min_time(next, co_hbc_process(node));
-        next = co_min_time(next, co_sdo_process(node));
+        if (take(node, CO_SVC_HBC, all)) {
+            next = co_min_time(next, co_hbc_process(node));
+        }
+        if (take(node, CO_SVC_SDO, all)) {
+            next = co_min_time(next, co_sdo_process(node));
+        }
 #if CO_CONFIG_SYNC
-        next = co_min_time(next, co_sync_process(node));
+        if (take(node, CO_SVC_SYNC, all)) {
+            next = co_min_time(next, co_sync_process(node));
+        }
 #endif
-        next = co_min_time(next, co_pdo_process(node));
-        next = co_min_time(next, co_emcy_process(node));
+        if (take(node, CO_SVC_PDO, all)) {
+            next = co_min_time(next, co_pdo_process(node));
+        }
+        if (take(node, CO_SVC_EMCY, all)) {
+            next = co_min_time(next, co_emcy_process(node));
+        }
+    } else {
+        node->wake = 0U; /* nothing but LSS runs; a reset that starts the services wakes them all */
     }
     if (node->txq.count > 0U) {
         next = co_min_time(next, now + CO_TX_RETRY_US);
     }
-    return next;
+    if (node->wake != 0U) {
+        next = now; /* a service earlier in the order was marked meanwhile (by a hook): call again at once */
+    }
+    node->next_due = co_min_time(node->next_due, next);
+    return node->next_due;
+}
+
+void co_node_values_changed(co_node_t *node)
+{
+    co_node_wake(node, CO_SVC_PDO);
+    node->cos_pending = true;
 }
 
 co_nmt_state_t co_node_state(const co_node_t *node) { return node->nmt_state; }

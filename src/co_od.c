@@ -13,31 +13,74 @@ static uint32_t entry_key(uint16_t index, uint8_t sub) { return ((uint32_t)index
 /* Index of the first row with key >= (index, sub). */
 static uint16_t lower_bound(const co_od_t *od, uint16_t index, uint8_t sub)
 {
-    uint16_t lo = 0U;
-    uint16_t hi = od->count;
+    const co_od_entry_t *rows = od->entries;
+    unsigned lo = 0U;
+    unsigned hi = od->count;
     const uint32_t key = entry_key(index, sub);
     while (lo < hi) {
-        const uint16_t mid = (uint16_t)(lo + (uint16_t)((hi - lo) / 2U));
-        if (entry_key(od->entries[mid].index, od->entries[mid].sub) < key) {
-            lo = (uint16_t)(mid + 1U);
+        const unsigned mid = (lo + hi) >> 1;
+        if (entry_key(rows[mid].index, rows[mid].sub) < key) {
+            lo = mid + 1U;
         } else {
             hi = mid;
         }
     }
-    return lo;
+    return (uint16_t)lo;
+}
+
+/* The object table's entry of index, or NULL (od->objects != NULL). */
+static const co_od_object_t *find_object(const co_od_t *od, uint16_t index)
+{
+    const co_od_object_t *objects = od->objects;
+    unsigned lo = 0U;
+    unsigned hi = od->n_objects;
+    while (lo < hi) {
+        const unsigned mid = (lo + hi) >> 1;
+        if (objects[mid].index < index) {
+            lo = mid + 1U;
+        } else {
+            hi = mid;
+        }
+    }
+    return (lo < od->n_objects && objects[lo].index == index) ? &objects[lo] : NULL;
 }
 
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub)
 {
+    const co_od_entry_t *rows = od->entries;
+    if (od->objects != NULL) {
+        const co_od_object_t *o = find_object(od, index);
+        if (o == NULL) {
+            return NULL;
+        }
+        unsigned lo = o->first;
+        unsigned hi = o + 1 < od->objects + od->n_objects ? o[1].first : od->count;
+        if (lo + sub < hi && rows[lo + sub].sub == sub) {
+            return &rows[lo + sub]; /* sub-indices 0..n without gaps: the usual case */
+        }
+        while (lo < hi) {
+            const unsigned mid = (lo + hi) >> 1;
+            if (rows[mid].sub < sub) {
+                lo = mid + 1U;
+            } else {
+                hi = mid;
+            }
+        }
+        return (lo < od->count && rows[lo].index == index && rows[lo].sub == sub) ? &rows[lo] : NULL;
+    }
     const uint16_t i = lower_bound(od, index, sub);
-    if (i < od->count && od->entries[i].index == index && od->entries[i].sub == sub) {
-        return &od->entries[i];
+    if (i < od->count && rows[i].index == index && rows[i].sub == sub) {
+        return &rows[i];
     }
     return NULL;
 }
 
 uint16_t co_od_first_row(const co_od_t *od, uint16_t index)
 {
+    if (od->objects != NULL) {
+        const co_od_object_t *o = find_object(od, index);
+        return o != NULL ? o->first : od->count;
+    }
     const uint16_t i = lower_bound(od, index, 0U);
     return (i < od->count && od->entries[i].index == index) ? i : od->count;
 }
@@ -187,8 +230,19 @@ uint32_t co_od_entry_u32(const co_node_t *node, const co_od_entry_t *e)
     }
 }
 
+/* Every write of a value passes here or co_od_store_value: a TPDO-mappable one tells the event-driven TPDOs to
+ * compare at the next pass (co_pdo.c). */
+static void value_written(co_node_t *node, const co_od_entry_t *e)
+{
+    if ((e->flags & CO_OD_TPDO) != 0U) {
+        node->cos_pending = true;
+        co_node_wake(node, CO_SVC_PDO);
+    }
+}
+
 void co_od_entry_set_u32(co_node_t *node, const co_od_entry_t *e, uint32_t v)
 {
+    value_written(node, e);
     uint8_t *p = node->values + e->offset;
     switch (e->size) {
     case 1U:
@@ -215,6 +269,7 @@ uint32_t co_od_u32_or(const co_node_t *node, uint16_t index, uint8_t sub, uint32
 
 void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
+    value_written(node, e);
     uint8_t *p = co_od_ptr(node, e);
     if (is_bytes(e)) {
         const size_t n = len < e->size ? len : e->size;
@@ -360,6 +415,8 @@ static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const 
     }
 }
 
+/* A communication parameter took a new value: its service takes it (the services keep the parameters they use
+ * at every frame or pass, rather than look them up) and runs at the next pass. */
 static void comm_written(co_node_t *node, const co_od_entry_t *e)
 {
     switch (e->index) {
@@ -369,28 +426,44 @@ static void comm_written(co_node_t *node, const co_od_entry_t *e)
     case 0x1007:
     case 0x1019:
         co_sync_written(node, e);
+        co_node_wake(node, CO_SVC_SYNC);
         break;
 #endif
     case 0x1016:
         co_hbc_written(node, e);
+        co_node_wake(node, CO_SVC_HBC);
         break;
     case 0x1017:
-        co_hb_written(node, e);
+        co_hb_written(node, e); /* life guarding, which a heartbeat producer ends, sees it at its deadline */
         break;
+    case 0x1014:
+    case 0x1015:
+        co_emcy_written(node);
+        co_node_wake(node, CO_SVC_EMCY);
+        break;
+#if CO_CONFIG_NODE_GUARDING
+    case 0x100C:
+    case 0x100D:
+        co_guard_written(node);
+        co_node_wake(node, CO_SVC_GUARD);
+        break;
+#endif
     default:
         if (e->index >= 0x1400U && e->index <= 0x1BFFU) {
             co_pdo_written(node, e);
+            co_node_wake(node, CO_SVC_PDO);
         }
 #if CO_CONFIG_SDO_SERVERS
         if (e->index >= 0x1201U && e->index <= 0x127FU) {
             co_sdo_written(node, e);
+            co_node_wake(node, CO_SVC_SDO);
         }
 #endif
         break;
     }
 }
 
-static uint32_t find_checked(const co_od_t *od, uint16_t index, uint8_t sub, const co_od_entry_t **out)
+uint32_t co_od_lookup(const co_od_t *od, uint16_t index, uint8_t sub, const co_od_entry_t **out)
 {
     *out = co_od_find(od, index, sub);
     if (*out != NULL) {
@@ -403,11 +476,16 @@ uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, siz
                     co_od_origin_t origin)
 {
     const co_od_entry_t *e;
-    uint32_t r = find_checked(node->od, index, sub, &e);
+    const uint32_t r = co_od_lookup(node->od, index, sub, &e);
     *len = 0U;
-    if (r != CO_ABORT_NONE) {
-        return r;
-    }
+    return r != CO_ABORT_NONE ? r : co_od_read_entry(node, e, buf, cap, len, origin);
+}
+
+uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, size_t cap, size_t *len,
+                          co_od_origin_t origin)
+{
+    uint32_t r;
+    *len = 0U;
     if (origin != CO_ORIGIN_LOCAL && (e->flags & CO_OD_READ) == 0U) {
         return (e->flags & CO_OD_WRITE) != 0U ? CO_ABORT_WRITE_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
@@ -433,11 +511,16 @@ uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *d
                      co_od_origin_t origin)
 {
     const co_od_entry_t *e;
+    const uint32_t r = co_od_lookup(node->od, index, sub, &e);
+    return r != CO_ABORT_NONE ? r : co_od_write_entry(node, e, data, len, origin);
+}
+
+uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *data, size_t len,
+                           co_od_origin_t origin)
+{
     const uint8_t *bytes = (const uint8_t *)data;
-    uint32_t r = find_checked(node->od, index, sub, &e);
-    if (r != CO_ABORT_NONE) {
-        return r;
-    }
+    const uint16_t index = e->index;
+    uint32_t r;
     if ((e->flags & CO_OD_CONST) != 0U) {
         return CO_ABORT_READ_ONLY;
     }
@@ -480,6 +563,18 @@ uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *d
         comm_written(node, e);
     }
     return CO_ABORT_NONE;
+}
+
+void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub)
+{
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    if (e == NULL) {
+        return;
+    }
+    value_written(node, e);
+    if (index < 0x2000U) {
+        comm_written(node, e);
+    }
 }
 
 uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)

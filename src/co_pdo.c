@@ -117,6 +117,7 @@ static void configure_rpdo(co_node_t *node, uint16_t n)
     p->mpdo = mpdo_mapping(entries, true) ? (uint8_t)entries : 0U;
     p->map_len = len > 0 ? (uint8_t)len : 0U;
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
+    p->event_ms = (uint16_t)co_od_u32_or(node, comm, 5U, 0U);
     p->sync_pending = false;
     p->deadline = CO_NEVER;
 }
@@ -163,7 +164,7 @@ static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
         const co_od_entry_t *e = p->map[i].entry;
         if (e != NULL) {
             /* The device hook may refuse a value; an RPDO has no way to answer, so it is dropped. */
-            (void)co_od_write(node, e->index, e->sub, &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
+            (void)co_od_write_entry(node, e, &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
         }
         pos = (uint8_t)(pos + p->map[i].len);
     }
@@ -177,57 +178,50 @@ static void rpdo_length_error(co_node_t *node, co_rpdo_t *p, uint16_t code)
     }
 }
 
-bool co_pdo_rx(co_node_t *node, const co_frame_t *f)
+void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
 {
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
-        co_rpdo_t *p = &node->rpdo[n];
-        if (!p->valid || f->id != (p->cob_id & CO_COBID_CAN_ID)) {
-            continue;
-        }
-        if (node->nmt_state != CO_NMT_OPERATIONAL) {
-            return true; /* dropped, not applied later */
-        }
-        if (f->len < p->map_len) {
-            rpdo_length_error(node, p, 0x8210U); /* data discarded */
-            return true;
-        }
-        if (f->len > p->map_len) {
-            rpdo_length_error(node, p, 0x8220U); /* first mapped bytes applied */
-        } else if (p->length_error) {
-            p->length_error = false;
-            if (!co_emcy_clear(node, 0x8210U, rpdo_msef)) {
-                (void)co_emcy_clear(node, 0x8220U, rpdo_msef);
-            }
-        }
-#if CO_CONFIG_MPDO
-        if (p->mpdo != 0U) {
-            /* event-driven whatever the transmission type (CiA 301) */
-            const int written = co_mpdo_receive(node, p, f->data);
-            if (written < 0 && !p->mpdo_error) {
-                p->mpdo_error = true;
-                (void)co_emcy_raise(node, 0x8230U, 0x10U, rpdo_msef); /* DAM-MPDO not processed: destination */
-            } else if (written > 0 && p->mpdo_error) {
-                p->mpdo_error = false;
-                (void)co_emcy_clear(node, 0x8230U, rpdo_msef);
-            }
-        } else
-#endif
-        if (p->type <= 240U) {
-            memcpy(p->sync_data, f->data, p->map_len);
-            p->sync_len = p->map_len;
-            p->sync_pending = true;
-        } else {
-            rpdo_apply(node, p, f->data);
-        }
-        const uint32_t event_ms = co_od_u32_or(node, (uint16_t)(RPDO_COMM + n), 5U, 0U);
-        p->deadline = event_ms != 0U ? node->now + (co_time_us_t)event_ms * 1000U : CO_NEVER;
-        if (p->timeout_error) {
-            p->timeout_error = false;
-            (void)co_emcy_clear(node, 0x8250U, rpdo_msef);
-        }
-        return true;
+    co_rpdo_t *p = &node->rpdo[n];
+    if (node->nmt_state != CO_NMT_OPERATIONAL) {
+        return; /* dropped, not applied later */
     }
-    return false;
+    if (f->len < p->map_len) {
+        rpdo_length_error(node, p, 0x8210U); /* data discarded */
+        return;
+    }
+    if (f->len > p->map_len) {
+        rpdo_length_error(node, p, 0x8220U); /* first mapped bytes applied */
+    } else if (p->length_error) {
+        p->length_error = false;
+        if (!co_emcy_clear(node, 0x8210U, rpdo_msef)) {
+            (void)co_emcy_clear(node, 0x8220U, rpdo_msef);
+        }
+    }
+#if CO_CONFIG_MPDO
+    if (p->mpdo != 0U) {
+        /* event-driven whatever the transmission type (CiA 301) */
+        const int written = co_mpdo_receive(node, p, f->data);
+        if (written < 0 && !p->mpdo_error) {
+            p->mpdo_error = true;
+            (void)co_emcy_raise(node, 0x8230U, 0x10U, rpdo_msef); /* DAM-MPDO not processed: destination */
+        } else if (written > 0 && p->mpdo_error) {
+            p->mpdo_error = false;
+            (void)co_emcy_clear(node, 0x8230U, rpdo_msef);
+        }
+    } else
+#endif
+    if (p->type <= 240U) {
+        memcpy(p->sync_data, f->data, p->map_len);
+        p->sync_len = p->map_len;
+        p->sync_pending = true;
+    } else {
+        rpdo_apply(node, p, f->data);
+    }
+    p->deadline = p->event_ms != 0U ? node->now + (co_time_us_t)p->event_ms * 1000U : CO_NEVER;
+    co_node_due(node, p->deadline);
+    if (p->timeout_error) {
+        p->timeout_error = false;
+        (void)co_emcy_clear(node, 0x8250U, rpdo_msef);
+    }
 }
 
 static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
@@ -256,12 +250,14 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
 {
     uint8_t buf[8];
     bool cos = false;
-    if (p->mpdo == 0U) {
+    const bool timer = p->event_due != CO_NEVER && node->now >= p->event_due;
+    /* Mapped values change only where a write says so (node->cos_pending, co_node_values_changed): sampled then,
+     * and when something is to be sent anyway. */
+    if (p->mpdo == 0U && (node->cos_pending || !p->sent_once || p->event || timer)) {
         (void)tpdo_sample(node, p, buf);
         cos = (node->options & CO_OPT_TPDO_NO_COS) == 0U && memcmp(buf, p->last, 8U) != 0;
     }
     const bool changed = !p->sent_once || p->event || cos;
-    const bool timer = p->event_due != CO_NEVER && node->now >= p->event_due;
     if (changed || timer) {
         if (node->now < p->next_allowed) {
             p->event = true; /* waits for the inhibit time; the timer (if it fired) is served with it */
@@ -292,6 +288,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
 {
     co_time_us_t next = CO_NEVER;
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
+        node->cos_pending = false; /* entering Operational sends every event-driven TPDO anyway */
         return next;
     }
     for (uint16_t n = 0U; n < node->n_rpdo; n++) {
@@ -307,12 +304,21 @@ co_time_us_t co_pdo_process(co_node_t *node)
             next = co_min_time(next, p->deadline);
         }
     }
+    const bool cos = node->cos_pending;
     for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
-        if (p->valid && p->type >= 254U) {
-            next = co_min_time(next, tpdo_event_driven(node, p));
+        if (!p->valid || p->type < 254U) {
+            continue;
         }
+        if (!cos && p->sent_once && !p->event && node->now < p->event_due) {
+            next = co_min_time(next, p->event_due); /* nothing to compare, nothing asked for, the timer not due */
+            continue;
+        }
+        next = co_min_time(next, tpdo_event_driven(node, p));
     }
+    /* Consumed: the values were compared. A read hook's write during the sampling is taken as sampled. */
+    node->cos_pending = false;
+    node->wake = (uint8_t)(node->wake & ~(unsigned)CO_SVC_PDO);
     return next;
 }
 
@@ -382,6 +388,7 @@ void co_tpdo_trigger(co_node_t *node, uint16_t n)
 {
     if (n < node->n_tpdo) {
         node->tpdo[n].event = true;
+        co_node_wake(node, CO_SVC_PDO);
     }
 }
 
@@ -493,7 +500,11 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
     const uint16_t base = (uint16_t)(e->index & 0xFE00U);
     const uint16_t n = (uint16_t)(e->index & 0x01FFU);
     if ((base == RPDO_COMM || base == RPDO_MAP) && n < node->n_rpdo) {
+        const uint32_t was = node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
         configure_rpdo(node, n);
+        if ((node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
+            co_node_routes_update(node); /* the frames it takes changed */
+        }
     } else if ((base == TPDO_COMM || base == TPDO_MAP) && n < node->n_tpdo) {
         configure_tpdo(node, n);
     }

@@ -46,23 +46,23 @@ static bool segmented_enabled(const co_node_t *node)
 static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
                                const uint8_t *data)
 {
-    size_t len;
+    const co_od_entry_t *e;
+    uint32_t r = co_od_lookup(node->od, index, sub, &e);
+    size_t len = 4U;
     if ((cmd & 0x01U) != 0U) {
         len = 4U - ((cmd >> 2) & 0x03U);
-    } else {
+    } else if (e != NULL) {
         /* Size not indicated (0x22): the object's own size, as the Eltex masters rely on (decisions.md). */
-        const co_od_entry_t *e = co_od_find(node->od, index, sub);
-        len = 4U;
-        if (e != NULL) {
-            const uint16_t size = co_od_type_size(e->type);
-            len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
-        }
+        const uint16_t size = co_od_type_size(e->type);
+        len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
         if (len > 4U) {
             co_sdo_abort(node, s, index, sub, CO_ABORT_LENGTH_HIGH);
             return;
         }
     }
-    const uint32_t r = co_od_write(node, index, sub, data, len, CO_ORIGIN_SDO);
+    if (r == CO_ABORT_NONE) {
+        r = co_od_write_entry(node, e, data, len, CO_ORIGIN_SDO);
+    }
     if (r != CO_ABORT_NONE) {
         co_sdo_abort(node, s, index, sub, r);
         return;
@@ -361,21 +361,15 @@ uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
 void co_sdo_written(co_node_t *node, const co_od_entry_t *e)
 {
     for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
-        if (node->sdo_extra[i].param_index == e->index) {
-            load_server(node, &node->sdo_extra[i]);
+        co_sdo_server_t *s = &node->sdo_extra[i];
+        if (s->param_index == e->index) {
+            const uint16_t was = s->rx_id;
+            load_server(node, s);
+            if (s->rx_id != was) {
+                co_node_routes_update(node); /* the requests it takes come on another COB-ID */
+            }
         }
     }
-}
-
-bool co_sdo_rx_extra(co_node_t *node, const co_frame_t *f)
-{
-    for (uint8_t i = 0U; i < node->n_sdo_extra; i++) {
-        if (node->sdo_extra[i].rx_id == f->id) {
-            co_sdo_rx(node, &node->sdo_extra[i], f);
-            return true;
-        }
-    }
-    return false;
 }
 #endif /* CO_CONFIG_SDO_SERVERS */
 

@@ -12,34 +12,40 @@ static const uint8_t sync_msef[5] = {0x03U, 0U, 0U, 0U, 0U};
 
 static co_time_us_t timeout_after(const co_node_t *node)
 {
-    const co_time_us_t period = co_od_u32_or(node, 0x1006U, 0U, 0U);
+    const co_time_us_t period = node->sync.period_us;
     return period != 0U ? node->now + period + period / 2U : CO_NEVER;
+}
+
+/* The parameters the consumer uses at every SYNC, from the OD (at a reset and when one is written). The
+ * synchronous window 0x1007 needs no copy: synchronous TPDOs go out at the SYNC itself, inside any window. */
+static void load_parameters(co_node_t *node)
+{
+    const co_od_entry_t *e = co_od_find(node->od, 0x1005U, 0U);
+    node->sync.can_id = e != NULL ? (uint16_t)(co_od_entry_u32(node, e) & CO_COBID_CAN_ID) : CO_NO_CAN_ID;
+    node->sync.period_us = co_od_u32_or(node, 0x1006U, 0U, 0U);
+    node->sync.overflow = (uint8_t)co_od_u32_or(node, 0x1019U, 0U, 0U);
 }
 
 void co_sync_reset(co_node_t *node)
 {
+    load_parameters(node);
     node->sync.timeout_due = CO_NEVER;
-    node->sync.window_end = CO_NEVER;
     node->sync.timeout_error = false;
     node->sync.length_error = false;
 }
 
-bool co_sync_rx(co_node_t *node, const co_frame_t *f)
+void co_sync_rx(co_node_t *node, const co_frame_t *f)
 {
-    const co_od_entry_t *e = co_od_find(node->od, 0x1005U, 0U);
-    if (e == NULL || f->id != (co_od_entry_u32(node, e) & CO_COBID_CAN_ID)) {
-        return false;
-    }
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
-        return true;
+        return;
     }
-    const uint32_t overflow = co_od_u32_or(node, 0x1019U, 0U, 0U);
+    const uint8_t overflow = node->sync.overflow;
     if (f->len != (overflow != 0U ? 1U : 0U)) {
         if (!node->sync.length_error) {
             node->sync.length_error = true;
             (void)co_emcy_raise(node, 0x8240U, 0x10U, sync_msef);
         }
-        return true;
+        return;
     }
     if (node->sync.length_error) {
         node->sync.length_error = false;
@@ -50,10 +56,8 @@ bool co_sync_rx(co_node_t *node, const co_frame_t *f)
         (void)co_emcy_clear(node, 0x8100U, sync_msef);
     }
     node->sync.timeout_due = timeout_after(node);
-    const uint32_t window = co_od_u32_or(node, 0x1007U, 0U, 0U);
-    node->sync.window_end = window != 0U ? node->now + window : CO_NEVER;
+    co_node_due(node, node->sync.timeout_due);
     co_pdo_on_sync(node, overflow != 0U ? f->data[0] : 0U);
-    return true;
 }
 
 co_time_us_t co_sync_process(co_node_t *node)
@@ -100,8 +104,13 @@ uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint
 
 void co_sync_written(co_node_t *node, const co_od_entry_t *e)
 {
+    const uint16_t can_id = node->sync.can_id;
+    load_parameters(node);
     if (e->index == 0x1006U && node->sync.timeout_due != CO_NEVER) {
         node->sync.timeout_due = timeout_after(node);
+    }
+    if (node->sync.can_id != can_id) {
+        co_node_routes_update(node);
     }
 }
 

@@ -331,6 +331,11 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
         lim = f"&limits_{r.member}" if has_limits(r) else "NULL"
         c.append(f"    ROW(0x{r.index:04X}, 0x{r.sub:02X}, {TYPE_ENUM[r.dtype]}, {flags(r)}, {r.member}, {lim}),\n")
     c.append("};\n\n")
+    firsts = [i for i, r in enumerate(od.rows) if i == 0 or od.rows[i - 1].index != r.index]
+    c.append(f"static const co_od_object_t objects[{len(firsts)}] = {{\n")
+    for k in range(0, len(firsts), 6):
+        c.append("    " + " ".join(f"{{0x{od.rows[i].index:04X}, {i}U}}," for i in firsts[k:k + 6]) + "\n")
+    c.append("};\n\n")
     c.append(f"static const {c_name}_od_values_t defaults = {{\n")
     for r in od.rows:
         if r.dtype == 0x09:
@@ -349,7 +354,8 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     c.append("};\n\n")
     c.append(f"const co_od_t {c_name}_od = {{\n    \"{od.name}\", rows, {len(od.rows)}U, &defaults,\n"
              f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n"
-             f"    0x{od.device_info['dummy_usage']:02X}U, /* [DummyUsage] */\n}};\n")
+             f"    0x{od.device_info['dummy_usage']:02X}U, /* [DummyUsage] */\n"
+             f"    objects, {len(firsts)}U,\n}};\n")
     # The names in an object file of their own: a firmware that links the table does not link them.
     n = [banner, f"#include \"{c_name}_od.h\"\n\n#include <stddef.h>\n\n"]
     n.append(f"const char *const {c_name}_od_names[{len(od.rows)}] = {{\n")

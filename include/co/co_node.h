@@ -16,6 +16,12 @@
  * Call co_node_process() also after the application changed OD values (change-of-state TPDOs are detected
  * there) and after co_emcy_raise()/co_emcy_clear().
  *
+ * Between those events co_node_process() costs almost nothing: it returns the deadline of its last full pass
+ * unless a frame was taken or an API call changed something since. The core therefore has to hear of every
+ * change: values written with co_od_write()/co_od_set_*() are seen; a value written around them (through
+ * co_od_value()'s pointer or the generated values struct) is seen only after co_node_values_changed() (process
+ * values) or co_od_changed() (any object, communication parameters included).
+ *
  * The fields of co_node_t are visible so it can be allocated statically; treat them as read-only.
  */
 #ifndef CO_NODE_H
@@ -51,8 +57,10 @@ typedef enum co_event_kind {
     CO_EV_HB_TIMEOUT,         /**< value = monitored node-ID whose heartbeat is missing. */
     CO_EV_GUARD_TIMEOUT,      /**< life guarding: no guard request within the node life time. */
     CO_EV_TX_DROPPED,         /**< a frame could not be queued or sent; value = CAN-ID. */
-    CO_EV_NVM_REFUSED         /**< a stored value an SDO write of it would be refused: index/sub of the object,
+    CO_EV_NVM_REFUSED,        /**< a stored value an SDO write of it would be refused: index/sub of the object,
                                    code = the abort code; the area then loads as CO_NVM_REFUSED (defaults). */
+    CO_EV_RX_FILTER           /**< the COB-IDs the node takes changed (co_node_rx_ids): a port with hardware
+                                   filters reprograms them, a runner of many nodes its frame routing. */
 } co_event_kind_t;
 
 typedef struct co_event {
@@ -143,6 +151,13 @@ typedef struct co_node_cfg {
      */
     struct co_sdo_server *sdo_servers;
     uint8_t sdo_server_count;
+    /**
+     * The frame router's table (one entry per COB-ID the node takes) for a node whose PDO or SDO server arrays are
+     * the caller's: at least CO_RX_ROUTES_FIXED + rpdo_count + sdo_server_count entries. NULL: the node's own
+     * (CO_RX_ROUTES_FIXED + CO_RPDO_MAX entries, enough without caller-owned arrays).
+     */
+    struct co_rx_route *routes;
+    uint16_t route_count;
 } co_node_cfg_t;
 
 /** What the last load of the parameter area found. */
@@ -164,12 +179,16 @@ typedef struct co_txq {
 
 typedef struct co_hb_producer {
     co_time_us_t due;           /**< Next heartbeat, CO_NEVER when 0x1017 = 0. */
+    uint16_t period_ms;         /**< 0x1017, kept here by the write path (no dictionary look-up per pass). */
 } co_hb_producer_t;
 
 typedef struct co_guard {
     uint8_t toggle;             /**< 0x00 or 0x80: bit 7 of the next guard reply. */
     bool armed;                 /**< A guard request was seen: life guarding runs. */
     bool failed;                /**< Life-guarding event raised, not yet cleared. */
+    bool present;               /**< The OD has 0x100C and 0x100D (else guard requests are not answered). */
+    uint8_t life_factor;        /**< 0x100D, kept here by the write path. */
+    uint16_t guard_ms;          /**< 0x100C, kept here by the write path. */
     co_time_us_t deadline;      /**< Life-guarding deadline. */
 } co_guard_t;
 
@@ -178,6 +197,7 @@ typedef struct co_hb_consumer_slot {
     uint8_t node_id;            /**< 0 = slot unused. */
     uint8_t state;              /**< 0 unused, 1 waiting for the first heartbeat, 2 monitoring, 3 timed out. */
     uint8_t remote_state;       /**< Last NMT state byte received from that node. */
+    uint16_t time_ms;           /**< Consumer time of its 0x1016 entry. */
 } co_hb_consumer_slot_t;
 
 typedef struct co_hb_consumer {
@@ -202,10 +222,14 @@ typedef struct co_emcy {
     uint8_t q_count;
     co_time_us_t next_allowed;  /**< Inhibit time 0x1015: earliest time of the next EMCY. */
     uint32_t lost;              /**< EMCY frames dropped because the queue was full. */
+    uint32_t cob_id;            /**< 0x1014 (or 0x80 + node-ID without it), kept here by the write path. */
+    uint16_t inhibit_100us;     /**< 0x1015, kept here by the write path. */
 } co_emcy_t;
 
+/** A CAN-ID field that holds no CAN-ID (an object the OD lacks, a COB-ID not valid). */
+#define CO_NO_CAN_ID 0xFFFFU
 /** co_sdo_server_t.rx_id of a server whose COB-IDs are not both valid (it takes no request). */
-#define CO_SDO_NO_ID 0xFFFFU
+#define CO_SDO_NO_ID CO_NO_CAN_ID
 
 typedef struct co_sdo_server {
     uint8_t state;              /**< 0 idle, 1 segmented download, 2 segmented upload, 3.. block (co_sdo_block.c). */
@@ -227,7 +251,9 @@ typedef struct co_sdo_server {
 
 typedef struct co_sync {
     co_time_us_t timeout_due;   /**< 1.5 x 0x1006 after the last SYNC, or CO_NEVER. */
-    co_time_us_t window_end;    /**< End of the synchronous window 0x1007 after the last SYNC. */
+    uint32_t period_us;         /**< 0x1006, kept here by the write path. */
+    uint16_t can_id;            /**< CAN-ID of 0x1005, CO_NO_CAN_ID without the object. */
+    uint8_t overflow;           /**< 0x1019 (0: SYNC without a counter). */
     bool timeout_error;
     bool length_error;
 } co_sync_t;
@@ -241,6 +267,7 @@ typedef struct co_rpdo {
     uint32_t cob_id;            /**< 0x1400+n sub 1 as configured. */
     co_pdo_map_t map[8];
     co_time_us_t deadline;      /**< Event-timer deadline monitoring, CO_NEVER when off. */
+    uint16_t event_ms;          /**< Its event timer (sub 5): reception deadline monitoring, 0 = off. */
     uint8_t n_map;
     uint8_t map_len;            /**< Mapped bytes. */
     uint8_t type;
@@ -291,6 +318,24 @@ typedef struct co_lss_slave {
     co_time_us_t silent_until;  /**< No frame is sent before this time (activate bit timing). */
 } co_lss_slave_t;
 
+/** Kinds of received frames (co_rx_route_t.target >> 12). */
+enum co_rx_kind {
+    CO_RX_LSS = 0,   /**< 0x7E5. */
+    CO_RX_NMT = 1,   /**< 0x000. */
+    CO_RX_SYNC = 2,  /**< 0x1005. */
+    CO_RX_SDO = 3,   /**< An SDO server's requests; n = 0 the default server, 1.. the additional ones. */
+    CO_RX_RPDO = 4   /**< RPDO n (0-based). */
+};
+
+/** One COB-ID the node takes (a data frame): the frame router's table, sorted by id, one entry per id. */
+typedef struct co_rx_route {
+    uint16_t id;                /**< 11-bit CAN-ID. */
+    uint16_t target;            /**< co_rx_kind << 12 | n. */
+} co_rx_route_t;
+
+/** Routes of the fixed services (LSS, NMT, SYNC, the default SDO server) in a route table. */
+#define CO_RX_ROUTES_FIXED 4U
+
 typedef struct co_node_stats {
     uint32_t rx_frames;
     uint32_t tx_frames;
@@ -337,6 +382,19 @@ struct co_node {
     co_rpdo_t rpdo_own[CO_RPDO_MAX];
     co_tpdo_t tpdo_own[CO_TPDO_MAX];
     co_lss_slave_t lss;
+    co_time_us_t next_due;      /**< The earliest deadline of any service (a little early at worst), as the
+                                     last co_node_process() returned it. */
+    uint8_t wake;               /**< Services whose state changed since they last ran (a frame taken, an API call;
+                                     bits in src/priv/co_priv.h): the next co_node_process() runs them, and every
+                                     service once next_due has come. 0: it returns next_due at once. */
+    bool cos_pending;           /**< A TPDO-mappable value was written: event-driven TPDOs compare what they
+                                     would send with what they sent last at the next pass. */
+    uint16_t n_route;           /**< Entries of route[] in use. */
+    uint16_t route_cap;
+    uint8_t route_hash[16];     /**< Per CO_ROUTE_HASH(id): 0 no route has it, 1 + the entry of the only one, 0xFF
+                                     several (then the table is searched): most frames for others end here. */
+    co_rx_route_t *route;       /**< co_node_cfg_t.routes, or route_own. */
+    co_rx_route_t route_own[CO_RX_ROUTES_FIXED + CO_RPDO_MAX];
 };
 
 /**
@@ -364,6 +422,22 @@ bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
  * @return the absolute time when it must be called again at the latest (CO_NEVER if nothing is pending).
  */
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now);
+
+/**
+ * The CAN-IDs of the frames this node takes, sorted: data frames of its services (LSS, NMT, SYNC, SDO servers,
+ * RPDOs), the heartbeats it consumes, and its node-guarding request (a remote frame on 0x700 + node-ID, when the
+ * OD has node guarding). co_node_rx() ignores every other frame, so a port may filter on these in hardware and a
+ * runner of many nodes may give a frame only to the nodes that take it. Changes are reported with
+ * CO_EV_RX_FILTER. @return the number of IDs (at most 2 + 4 + route entries + 127); at most cap are written.
+ */
+uint16_t co_node_rx_ids(const co_node_t *node, uint16_t *ids, uint16_t cap);
+
+/**
+ * The application wrote process values around co_od_write() (through the generated values struct or
+ * co_od_value()'s pointer): event-driven TPDOs compare what they would send with what they sent last at the next
+ * co_node_process(). Cheap: call it after every batch of such writes.
+ */
+void co_node_values_changed(co_node_t *node);
 
 /** Performs a reset as NMT 0x81 (CO_RESET_APPLICATION) or 0x82 (CO_RESET_COMMUNICATION) would. */
 void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now);

@@ -82,6 +82,12 @@ typedef struct co_od_entry {
     const co_od_limits_t *limits;  /**< NULL when the row has no limits. */
 } co_od_entry_t;
 
+/** One object of the dictionary: its index and its first row (its rows run to the next object's first row). */
+typedef struct co_od_object {
+    uint16_t index;
+    uint16_t first;
+} co_od_object_t;
+
 /** A device's object dictionary: what the generator writes for one EDS. */
 typedef struct co_od {
     const char *name;              /**< Device name, for logs. */
@@ -91,6 +97,10 @@ typedef struct co_od {
     uint32_t values_size;          /**< Size of the values block each node must provide. */
     uint32_t signature;            /**< Hash of the table's layout; stored blobs of another layout are not loaded. */
     uint8_t dummy_usage;           /**< Bit n (1..7): RPDOs may map dummy entries of data type n (EDS [DummyUsage]). */
+    /** The objects in index order, or NULL: a look-up then searches the rows by (index, sub) instead of the objects
+     *  by index and then the object's rows by sub (fewer steps, direct when sub-index n is the object's row n). */
+    const co_od_object_t *objects;
+    uint16_t n_objects;
 } co_od_t;
 
 /** Who is accessing an object: decides which access checks apply and is passed to the write hook. */
@@ -104,7 +114,7 @@ typedef enum co_od_origin {
                               (it must not act: the model sees the loaded values in on_reset). */
 } co_od_origin_t;
 
-/** Finds a row, or NULL. O(log n). */
+/** Finds a row, or NULL. O(log objects), or O(log rows) without the object table. */
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub);
 
 /** True when any row of the object exists (decides 0x06020000 against 0x06090011). */
@@ -131,8 +141,20 @@ uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, siz
 uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *data, size_t len,
                      co_od_origin_t origin);
 
-/** Pointer to an object's value in the node's values block (no hooks), or NULL. For the device model. */
+/**
+ * Pointer to an object's value in the node's values block (no hooks), or NULL. For the device model. A value
+ * written through it is seen by the core only after co_od_changed() (or co_node_values_changed() for process
+ * values): a communication parameter (0x1000-0x1FFF) written this way has no effect until then.
+ */
 void *co_od_value(co_node_t *node, uint16_t index, uint8_t sub);
+
+/**
+ * A value was written around co_od_write() (through co_od_value() or the generated values struct): the core takes
+ * note as after a co_od_write() of it, without its checks (the value must be one co_od_write() would accept): a
+ * communication parameter takes effect (a heartbeat period, a PDO's COB-ID, ...), event-driven TPDOs compare at the
+ * next co_node_process(). Nothing happens for an object the OD lacks.
+ */
+void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub);
 
 /** Typed reads without hooks or access checks; 0 when the object does not exist or has another size. */
 uint8_t co_od_get_u8(co_node_t *node, uint16_t index, uint8_t sub);

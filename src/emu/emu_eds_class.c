@@ -16,6 +16,7 @@ typedef struct eds_class {
     co_od_t od;
     eds_file_t *file;        /* owns the names */
     co_od_entry_t *rows;
+    co_od_object_t *objects; /* the object table of rows (co_od_t.objects) */
     co_od_limits_t *limits;
     uint8_t *defaults;
     const char **names;
@@ -183,6 +184,7 @@ static void free_class(eds_class_t *c)
         return;
     }
     free(c->rows);
+    free(c->objects);
     free(c->limits);
     free(c->defaults);
     free(c->names);
@@ -203,12 +205,13 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     }
     const uint32_t n = f->n_entries; /* c->file is set at the end: until then the caller owns f */
     c->rows = calloc(n, sizeof *c->rows);
+    c->objects = calloc(n > 0U ? n : 1U, sizeof *c->objects);
     c->limits = calloc(n, sizeof *c->limits);
     c->names = calloc(n, sizeof *c->names);
     c->path = strdup(path);
     const char *base = strrchr(path, '/');
     c->name = strdup(base != NULL ? base + 1 : path);
-    if (c->rows == NULL || c->limits == NULL || c->names == NULL || c->path == NULL || c->name == NULL || n > 0xFFFFU) {
+    if (c->rows == NULL || c->objects == NULL || c->limits == NULL || c->names == NULL || c->path == NULL || c->name == NULL || n > 0xFFFFU) {
         free_class(c);
         return NULL;
     }
@@ -257,6 +260,14 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     c->od.values_size = offset;
     c->od.signature = hash;
     c->od.dummy_usage = f->dummy_usage;
+    c->od.objects = c->objects;
+    for (uint32_t i = 0; i < n; i++) {
+        if (i == 0U || c->rows[i - 1U].index != c->rows[i].index) { /* the reader's entries are in (index, sub) order */
+            c->objects[c->od.n_objects].index = c->rows[i].index;
+            c->objects[c->od.n_objects].first = (uint16_t)i;
+            c->od.n_objects++;
+        }
+    }
     device_class_t *cls = &c->cls;
     cls->name = c->name;
     cls->summary = c->summary != NULL ? c->summary : c->name;

@@ -49,6 +49,13 @@ void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last);
 uint8_t co_od_sub_count(const co_od_t *od, uint16_t index);
 /* Index of the first row of an object, or od->count. */
 uint16_t co_od_first_row(const co_od_t *od, uint16_t index);
+/* Finds a row: 0, or the abort code of a missing one (0x06020000 no object, 0x06090011 no such sub-index). */
+uint32_t co_od_lookup(const co_od_t *od, uint16_t index, uint8_t sub, const co_od_entry_t **out);
+/* co_od_read/co_od_write of a row already found (no second look-up). */
+uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, size_t cap, size_t *len,
+                          co_od_origin_t origin);
+uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *data, size_t len,
+                           co_od_origin_t origin);
 /* Writes an entry's value from a buffer; len may be shorter for strings (rest zeroed). No checks. */
 void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 /* Reads a row for a PDO or SDO after the device's read hook (no access check). Returns bytes copied. */
@@ -62,11 +69,48 @@ uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8
 void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last);
 
 /* ---- node (co_node.c) ---- */
+/* The services of co_node_process(), in the order it runs them: bits of co_node_t.wake. A module that changes a
+ * service's state outside that service's process function (a frame, an API call, a written parameter) marks it,
+ * so that the next pass runs it and takes its new deadline; a pass at next_due runs them all. */
+enum co_service {
+    CO_SVC_LSS = 0x01U,
+    CO_SVC_HB = 0x02U,
+    CO_SVC_GUARD = 0x04U,
+    CO_SVC_HBC = 0x08U,
+    CO_SVC_SDO = 0x10U,
+    CO_SVC_SYNC = 0x20U,
+    CO_SVC_PDO = 0x40U,
+    CO_SVC_EMCY = 0x80U,
+    CO_SVC_ALL = 0xFFU
+};
+/* Bucket of a CAN-ID in co_node_t.route_hash: the low node-ID bits mixed with the function code, so that the
+ * COB-IDs of one node and those of its neighbours fall apart. */
+#define CO_ROUTE_HASH(id) ((unsigned)((id) ^ ((id) >> 7)) & 15U)
+static inline void co_node_wake(co_node_t *node, unsigned services)
+{
+    node->wake = (uint8_t)(node->wake | services);
+}
+/* A service's new deadline, where its change needs no pass of the service now (a timer restarted by a frame):
+ * the next pass comes no later than t. */
+static inline void co_node_due(co_node_t *node, co_time_us_t t)
+{
+    if (t < node->next_due) {
+        node->next_due = t;
+    }
+}
+
 /* Queues/sends a frame through the port; frames are retried when the port is busy. */
 void co_node_send(co_node_t *node, const co_frame_t *frame);
 void co_node_event(co_node_t *node, co_event_kind_t kind, uint16_t index, uint8_t sub, uint32_t value,
                    uint32_t code);
 void co_node_set_state(co_node_t *node, co_nmt_state_t state);
+/* co_node_rx() of a frame that may be the node's (after its early return). */
+bool co_node_take(co_node_t *node, const co_frame_t *frame);
+/* The processing pass of co_node_process() (after its early return). */
+co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now);
+/* Rebuilds the frame router's table (after a reset and whenever a COB-ID the node takes changes); reports
+ * CO_EV_RX_FILTER. */
+void co_node_routes_update(co_node_t *node);
 
 /* ---- NMT (co_nmt.c) ---- */
 void co_nmt_rx(co_node_t *node, const co_frame_t *f);
@@ -79,6 +123,7 @@ void co_hb_written(co_node_t *node, const co_od_entry_t *e);
 
 /* ---- Heartbeat consumer (co_hb_consumer.c) ---- */
 void co_hbc_reset(co_node_t *node);
+/* A data frame on 0x701..0x77F: true when it is a heartbeat this node consumes. */
 bool co_hbc_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_hbc_process(co_node_t *node);
 uint32_t co_hbc_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
@@ -88,6 +133,7 @@ void co_hbc_written(co_node_t *node, const co_od_entry_t *e);
 void co_guard_reset(co_node_t *node);
 void co_guard_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_guard_process(co_node_t *node);
+void co_guard_written(co_node_t *node);
 
 /* The modules' write checks take `stored`: true for a stored value being loaded (co_od_check_stored), which is
  * judged as a value only, not as a change of the present configuration (CiA 301's procedures for changing a
@@ -98,6 +144,7 @@ void co_emcy_reset(co_node_t *node);
 co_time_us_t co_emcy_process(co_node_t *node);
 uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
 uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e);
+void co_emcy_written(co_node_t *node);
 bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 
 /* ---- SDO server (co_sdo_server.c; block transfer in co_sdo_block.c) ---- */
@@ -116,7 +163,6 @@ void co_sdo_reset(co_node_t *node);
 void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
 co_time_us_t co_sdo_process(co_node_t *node);
 #if CO_CONFIG_SDO_SERVERS
-bool co_sdo_rx_extra(co_node_t *node, const co_frame_t *f);
 uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
 void co_sdo_written(co_node_t *node, const co_od_entry_t *e);
 #endif
@@ -148,14 +194,15 @@ int co_mpdo_receive(co_node_t *node, const co_rpdo_t *p, const uint8_t frame[8])
 
 /* ---- SYNC (co_sync.c) ---- */
 void co_sync_reset(co_node_t *node);
-bool co_sync_rx(co_node_t *node, const co_frame_t *f);
+void co_sync_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_sync_process(co_node_t *node);
 uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len, bool stored);
 void co_sync_written(co_node_t *node, const co_od_entry_t *e);
 
 /* ---- PDO (co_pdo.c) ---- */
 void co_pdo_reset(co_node_t *node);
-bool co_pdo_rx(co_node_t *node, const co_frame_t *f);
+/* A frame on the COB-ID of RPDO n. */
+void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f);
 co_time_us_t co_pdo_process(co_node_t *node);
 void co_pdo_on_sync(co_node_t *node, uint8_t counter);
 void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to);

@@ -12,6 +12,7 @@
 #include "fake_port.h"
 #include "pro_ionizer/pro_ionizer.h"
 #include "pro_ionizer_od.h"
+#include "sds_od.h"
 #include "unity.h"
 
 static fake_port_t port;
@@ -203,9 +204,45 @@ static void a_value_that_wrapped_into_the_eltex_heartbeat_rule_is_refused(void)
     TEST_ASSERT_EQUAL_UINT16(1000U, heartbeat_time());
 }
 
+/* The generated object table gives every look-up the answer the rows alone give (the search without it). */
+static void check_object_table(const co_od_t *od)
+{
+    co_od_t rows_only = *od;
+    rows_only.objects = NULL;
+    rows_only.n_objects = 0U;
+    TEST_ASSERT_NOT_NULL(od->objects);
+    for (uint16_t k = 0U; k < od->n_objects; k++) {
+        const co_od_object_t *o = &od->objects[k];
+        TEST_ASSERT_TRUE(k == 0U || o[-1].index < o->index);
+        TEST_ASSERT_EQUAL_HEX16(o->index, od->entries[o->first].index);
+        TEST_ASSERT_TRUE(o->first == 0U || od->entries[o->first - 1U].index != o->index);
+    }
+    static const uint8_t probe_subs[] = {0U, 1U, 2U, 3U, 7U, 0x7FU, 0xFEU, 0xFFU};
+    for (uint32_t index = 0U; index <= 0xFFFFU; index++) {
+        const bool present = co_od_has_index(&rows_only, (uint16_t)index);
+        TEST_ASSERT_EQUAL(present, co_od_has_index(od, (uint16_t)index));
+        for (uint32_t i = 0U; i < (present ? 256U : sizeof probe_subs); i++) {
+            const uint8_t sub = present ? (uint8_t)i : probe_subs[i];
+            if (co_od_find(od, (uint16_t)index, sub) != co_od_find(&rows_only, (uint16_t)index, sub)) {
+                char msg[64];
+                (void)snprintf(msg, sizeof msg, "%s 0x%04X:%02X", od->name, (unsigned)index, (unsigned)sub);
+                TEST_FAIL_MESSAGE(msg);
+            }
+        }
+    }
+}
+
+static void object_tables_find_what_the_rows_hold(void)
+{
+    check_object_table(&pro_ionizer_od);
+    check_object_table(&sds_od);
+    check_object_table(&buerkert_fc_od);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
+    RUN_TEST(object_tables_find_what_the_rows_hold);
     RUN_TEST(numbers_are_decimal_or_0x_hex_never_octal);
     RUN_TEST(anything_else_is_not_a_number);
     RUN_TEST(overflow_is_refused_not_clamped);

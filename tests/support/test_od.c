@@ -140,4 +140,5 @@ const co_od_t test_od = {
     "test-device", entries, (uint16_t)(sizeof entries / sizeof entries[0]), &defaults,
     (uint32_t)sizeof(test_od_values_t), 0x7E570D01UL,
     1U << CO_T_UNSIGNED8, /* dummy UNSIGNED8 entries in RPDOs (test_pdo) */
+    NULL, 0U,             /* no object table: look-ups search the rows (the generated tables have one) */
 };

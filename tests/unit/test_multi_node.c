@@ -45,7 +45,7 @@ static const co_od_entry_t mini_entries[] = {
 };
 static const mini_values_t mini_defaults = {0x00000191UL, 0U, 50U, 1U, 0x39UL, 2U, 0x180UL, 255U, 1U, 0x60000008UL, 0U};
 static const co_od_t mini_od = {"mini", mini_entries, (uint16_t)(sizeof mini_entries / sizeof mini_entries[0]),
-                                &mini_defaults, (uint32_t)sizeof(mini_values_t), 0x12345678UL, 0U};
+                                &mini_defaults, (uint32_t)sizeof(mini_values_t), 0x12345678UL, 0U, NULL, 0U};
 
 /* One bus: every node's port records into the same fake port; frames are delivered to all nodes. */
 static fake_port_t bus;
@@ -66,7 +66,7 @@ static void deliver(uint32_t id, uint8_t len, const uint8_t *data)
 
 static void start_node(size_t i, const co_od_t *od, void *values, uint8_t id)
 {
-    const co_node_cfg_t cfg = {od, values, &bus.port, &bus, NULL, NULL, id, 4U, NULL, 0U, NULL, 0U, NULL, 0U, NULL, 0U};
+    const co_node_cfg_t cfg = {.od = od, .values = values, .port = &bus.port, .port_ctx = &bus, .node_id = id, .bit_timing = 4U};
     TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&node[i], &cfg, now));
 }
 
@@ -146,7 +146,7 @@ static void many_nodes_of_one_type(void)
     static test_od_values_t vals[TEST_MULTI_NODE_COUNT];
     bus.n_sent = 0U;
     for (uint8_t i = 0U; i < TEST_MULTI_NODE_COUNT; i++) {
-        const co_node_cfg_t cfg = {&test_od, &vals[i], &bus.port, &bus, NULL, NULL, (uint8_t)(i + 1U), 4U, NULL, 0U, NULL, 0U, NULL, 0U, NULL, 0U};
+        const co_node_cfg_t cfg = {.od = &test_od, .values = &vals[i], .port = &bus.port, .port_ctx = &bus, .node_id = (uint8_t)(i + 1U), .bit_timing = 4U};
         TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&nodes[i], &cfg, now));
     }
     TEST_ASSERT_EQUAL_UINT32(TEST_MULTI_NODE_COUNT, bus.n_sent);

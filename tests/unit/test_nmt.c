@@ -148,13 +148,13 @@ static services_seen_t probe_services(void)
     s.sdo = fx_count(0x585U) > 0U && fx.port.n_sent > n;
     /* Heartbeat (0x1017 set directly: the SDO may be silent) */
     fx.values.x1017_producer_hb = 10U;
+    co_od_changed(&fx.node, 0x1017U, 0U); /* a new period starts now */
     fake_port_clear(&fx.port);
-    RX(0x000, 0x7F, 0x7F); /* nothing: unknown command, just to run process */
-    fx.node.hb.due = fx.now; /* due now */
-    (void)fx_process();
+    RX(0x000, 0x7F, 0x7F); /* nothing: unknown command */
+    fx_advance(10000U);
     s.heartbeat = fx_count(0x705U) == 1U;
     fx.values.x1017_producer_hb = 0U;
-    fx.node.hb.due = CO_NEVER;
+    co_od_changed(&fx.node, 0x1017U, 0U);
     /* Node guarding */
     fake_port_clear(&fx.port);
     fx_rx_rtr(0x705U);
@@ -174,6 +174,7 @@ static services_seen_t probe_services(void)
     /* TPDO: entering Operational sends TPDO1 at once; elsewhere nothing on 0x185 */
     fake_port_clear(&fx.port);
     fx.values.x1001_error_register ^= 0x80U; /* a change of the mapped value */
+    co_node_values_changed(&fx.node);
     (void)fx_process();
     s.tpdo = fx_count(0x185U) > 0U;
     /* RPDO */

@@ -190,6 +190,7 @@ static void option_no_cos_sends_only_on_trigger_and_timer(void)
     start();
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x185U)); /* entering Operational still sends once */
     fx.values.x1001_error_register = 0x42U;
+    co_node_values_changed(&fx.node);
     fx_advance(100000U);
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x185U)); /* a change alone sends nothing */
     co_tpdo_trigger(&fx.node, 0U);
@@ -205,10 +206,13 @@ static void inhibit_time_spaces_transmissions(void)
     W(0x1800, 1, 0x00000185UL, 4);
     start(); /* t = 0: first transmission */
     fx.values.x1001_error_register = 1U;
+    co_node_values_changed(&fx.node);
     fx_advance(1000U);
     fx.values.x1001_error_register = 2U;
+    co_node_values_changed(&fx.node);
     fx_advance(1000U);
     fx.values.x1001_error_register = 3U;
+    co_node_values_changed(&fx.node);
     fx_advance(7999U); /* t = 9.999 ms */
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x185U));
     fx_advance(1U);

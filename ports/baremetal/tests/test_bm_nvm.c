@@ -397,7 +397,7 @@ static void node_power_on(void)
     reboot();
     co_bm_clock_init(&clk, read_timer, NULL, 1000000UL, 32U, 0U);
     co_bm_port_init(&port, &can, &nvm, &clk);
-    const co_node_cfg_t cfg = {&test_od, &values, &port.port, &port, NULL, NULL, 5U, 4U, NULL, 0U, NULL, 0U, NULL, 0U, NULL, 0U};
+    const co_node_cfg_t cfg = {.od = &test_od, .values = &values, .port = &port.port, .port_ctx = &port, .node_id = 5U, .bit_timing = 4U};
     TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&node, &cfg, 0U));
 }
 

@@ -21,7 +21,7 @@ int main(void)
     static co_node_t node;
     static sds_od_values_t values;
     static const co_port_t port = {record_frame, NULL, NULL, NULL, NULL};
-    const co_node_cfg_t cfg = {&sds_od, &values, &port, NULL, NULL, NULL, NODE_ID, 4U, NULL, 0U, NULL, 0U, NULL, 0U, NULL, 0U};
+    const co_node_cfg_t cfg = {.od = &sds_od, .values = &values, .port = &port, .node_id = NODE_ID, .bit_timing = 4U};
     co_time_us_t now = 0U;
     if (co_node_init(&node, &cfg, now) != CO_OK) {
         fprintf(stderr, "co_node_init failed\n");
