@@ -107,7 +107,7 @@ void fz_note_event(fz_t *h, const co_event_t *ev);
  * was (correctly) refused: the input ends there. h->port is ready. */
 bool fzt_init(fz_t *h, const uint8_t hdr[4]);
 void fzt_fini(fz_t *h);
-void fzt_rx(fz_t *h, const co_frame_t *f);
+bool fzt_rx(fz_t *h, const co_frame_t *f);
 /* direct: the device target calls co_node_process without the model step. */
 co_time_us_t fzt_process(fz_t *h, bool direct);
 /* A control command / application call decoded from the input. Returns true when it may have changed

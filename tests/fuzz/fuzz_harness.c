@@ -224,7 +224,7 @@ void fz_note_reset(fz_t *h, co_reset_t what)
 
 void fz_note_event(fz_t *h, const co_event_t *ev)
 {
-    if (ev == NULL || ev->kind < CO_EV_NMT_STATE || ev->kind > CO_EV_NVM_REFUSED) {
+    if (ev == NULL || ev->kind < CO_EV_NMT_STATE || ev->kind > CO_EV_RX_FILTER) {
         fz_fail(h, "on_event with an unknown event kind");
     }
     if (ev->kind == CO_EV_SDO_ABORT && ev->code == CO_ABORT_TIMEOUT) {
@@ -722,9 +722,23 @@ static void deliver(fz_t *h, const co_frame_t *f, bool process_after)
     if (tracing()) {
         trace_frame("rx", h->now, f);
     }
+    /* The router's oracle: a frame is taken only on a COB-ID the node lists, and a data frame on a listed one
+     * (a heartbeat aside: one of the wrong length is not taken) always is. */
+    uint16_t ids[CO_RX_ROUTES_FIXED + 512U + 130U];
+    const uint16_t n = co_node_rx_ids(h->node, ids, (uint16_t)(sizeof ids / sizeof ids[0]));
+    bool listed = false;
+    for (uint16_t i = 0U; i < n && i < sizeof ids / sizeof ids[0]; i++) {
+        listed = listed || ids[i] == f->id;
+    }
     begin_call(h, FZ_CALL_RX, f);
-    fzt_rx(h, f);
+    const bool taken = fzt_rx(h, f);
     end_call(h, false);
+    if (taken && !listed) {
+        fz_fail(h, "co_node_rx took a frame on 0x%03lX, which co_node_rx_ids does not list", (unsigned long)f->id);
+    }
+    if (!taken && listed && f->flags == 0U && f->len <= 8U && (f->id < 0x701U || f->id > 0x77FU)) {
+        fz_fail(h, "co_node_rx ignored a data frame on 0x%03lX, which co_node_rx_ids lists", (unsigned long)f->id);
+    }
     h->dirty = true;
     if (process_after) {
         (void)do_process(h, false);

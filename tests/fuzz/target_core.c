@@ -251,7 +251,7 @@ void fzt_fini(fz_t *h)
     g_core.values = NULL;
 }
 
-void fzt_rx(fz_t *h, const co_frame_t *f) { co_node_rx(g_core.node, f, h->now); }
+bool fzt_rx(fz_t *h, const co_frame_t *f) { return co_node_rx(g_core.node, f, h->now); }
 
 co_time_us_t fzt_process(fz_t *h, bool direct)
 {

@@ -154,7 +154,7 @@ void fzt_fini(fz_t *h)
     g_dev = NULL;
 }
 
-void fzt_rx(fz_t *h, const co_frame_t *f) { device_rx(g_dev, f, h->now); }
+bool fzt_rx(fz_t *h, const co_frame_t *f) { return device_rx(g_dev, f, h->now); }
 
 co_time_us_t fzt_process(fz_t *h, bool direct)
 {
