@@ -409,7 +409,8 @@ struct co_node {
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now);
 
 /**
- * Feeds one received frame (with its arrival time). Frames for other nodes/services are ignored. O(PDOs).
+ * Feeds one received frame (with its arrival time). Frames for other nodes/services are ignored: most in a few
+ * instructions (a hash of the COB-IDs the node takes), the others after a search of its table (O(log COB-IDs)).
  * @return true when the frame concerned this node (NMT, LSS, its SDO/RPDO/SYNC/guarding COB-IDs, a consumed
  *         heartbeat): call co_node_process() before sleeping, as the frame may have changed the next deadline
  *         or queued an answer. false: the frame was ignored and the last deadline still holds, so a runner
@@ -418,8 +419,11 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
 bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
 
 /**
- * Runs every timed service and sends what is due. Never blocks.
- * @return the absolute time when it must be called again at the latest (CO_NEVER if nothing is pending).
+ * Runs the timed services and sends what is due. Never blocks. Runs every service when a deadline has come, only
+ * those a frame or an API call changed otherwise, nothing at all (a few instructions) when neither happened.
+ * @return the absolute time when it must be called again at the latest (CO_NEVER if nothing is pending); it may be
+ *         earlier than needed (a pass then finds nothing to do), or now itself (call again at once: a hook marked a
+ *         service the pass had already run).
  */
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now);
 

@@ -2,7 +2,8 @@
  * The canopen-emu runtime's state, shared by its modules. Where each concern lives:
  *   canopen_emu.c   main: the options, then emu_runtime
  *   emu_runtime.c   start (buses, nodes), the main loop (one poll for everything), the exit summary
- *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing to its nodes
+ *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing each frame to
+ *                   the nodes that take its CAN-ID
  *   emu_node.c      one emulated node: the device, its port (CAN through its bus, NVM files)
  *   emu_faults.c    protocol faults injected between a node and its bus
  *   emu_events.c    what the nodes report (NMT changes, EMCY, aborts, stores...) turned into log lines
@@ -74,6 +75,7 @@ typedef struct emu_bus {
     size_t local_count;
     unsigned long local_lost;
     int log_level;
+    uint64_t takes[0x800][2]; /* bit i (word i / 64): node i takes frames on this CAN-ID (co_node_rx_ids) */
 } emu_bus_t;
 
 typedef struct emu {

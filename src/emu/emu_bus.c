@@ -33,6 +33,43 @@ void bus_add_node(emu_bus_t *b, emu_node_t *n)
     b->nodes[b->n_nodes++] = n;
 }
 
+void bus_routes_remove(emu_bus_t *b, const emu_node_t *n)
+{
+    const uint64_t bit = (uint64_t)1U << (n->index & 63U);
+    for (size_t id = 0U; id < 0x800U; id++) {
+        b->takes[id][n->index >> 6] &= ~bit;
+    }
+}
+
+void bus_routes_update(emu_bus_t *b, const emu_node_t *n)
+{
+    static uint16_t ids[0x800];
+    bus_routes_remove(b, n);
+    const uint16_t count = co_node_rx_ids(&n->dev.node, ids, (uint16_t)(sizeof ids / sizeof ids[0]));
+    for (uint16_t i = 0U; i < count && i < sizeof ids / sizeof ids[0]; i++) {
+        b->takes[ids[i] & 0x7FFU][n->index >> 6] |= (uint64_t)1U << (n->index & 63U);
+    }
+}
+
+/* Gives a frame to the nodes that take its CAN-ID (but its sender's): the core would ignore it everywhere else. */
+static void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_time_us_t now)
+{
+    if ((f->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) != 0U || f->id > 0x7FFU) {
+        return; /* CANopen nodes take 11-bit frames only */
+    }
+    for (size_t w = 0U; w < 2U; w++) {
+        uint64_t bits = b->takes[f->id][w]; /* a copy: a node's reset may change the table meanwhile */
+        while (bits != 0U) {
+            const size_t i = w * 64U + (size_t)__builtin_ctzll(bits);
+            bits &= bits - 1U;
+            if (i != sender && i < b->n_nodes && faults_rx(b->nodes[i], f, now) &&
+                device_rx(&b->nodes[i]->dev, f, now)) {
+                b->nodes[i]->dirty = true;
+            }
+        }
+    }
+}
+
 co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
 {
     const co_status_t st = socketcan_send(&b->can, f);
@@ -67,11 +104,7 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
             const local_frame_t l = b->local[b->local_head];
             b->local_head = (b->local_head + 1U) % LOCAL_QUEUE_LEN;
             b->local_count--;
-            for (size_t i = 0U; i < b->n_nodes; i++) {
-                if (i != l.sender && faults_rx(b->nodes[i], &l.frame, now) && device_rx(&b->nodes[i]->dev, &l.frame, now)) {
-                    b->nodes[i]->dirty = true;
-                }
-            }
+            deliver(b, &l.frame, l.sender, now);
         }
         /* Only nodes that are due or were concerned by a frame or a command run: with 127 nodes on one bus,
          * processing every node at every wake-up cost O(nodes^2) per second (docs/performance.md). */
@@ -105,11 +138,7 @@ void bus_receive(emu_bus_t *b, co_time_us_t now)
             logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
         }
         events_frame(b, NULL, &f, now);
-        for (size_t i = 0U; i < b->n_nodes; i++) {
-            if (faults_rx(b->nodes[i], &f, now) && device_rx(&b->nodes[i]->dev, &f, now)) {
-                b->nodes[i]->dirty = true;
-            }
-        }
+        deliver(b, &f, MAX_NODES, now);
     }
 }
 

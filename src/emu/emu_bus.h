@@ -1,7 +1,8 @@
 /*
  * One CAN interface of canopen-emu and the nodes on it. All nodes of a bus share one CAN socket: a frame read from
- * the bus is offered to every node of the bus (the core ignores what is not for it), and a frame one node sends is
- * also offered to the bus's other nodes (the kernel does not loop a socket's frames back to itself), through a
+ * the bus is given to the nodes of the bus that take its CAN-ID (a table per CAN-ID, from each node's
+ * co_node_rx_ids, kept up to date by CO_EV_RX_FILTER: the cost of a frame does not grow with the number of nodes),
+ * and a frame one node sends is also given to the bus's other nodes (the kernel does not loop a socket's frames back to itself), through a
  * queue drained by the main loop so that no node is re-entered while it runs. One socket instead of one per node
  * keeps the system calls per bus frame at one, which matters with 127 nodes. Buses are independent: a node-ID is
  * unique per bus, each bus has its own socket and its own error handling (socketcan.c).
@@ -17,6 +18,12 @@ int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t 
 /** Adds a node (at most MAX_NODES); sets its bus and index. */
 void bus_add_node(emu_bus_t *b, emu_node_t *n);
 
+/** The node's CAN-IDs changed (CO_EV_RX_FILTER, and once it is added): the routing table follows. */
+void bus_routes_update(emu_bus_t *b, const emu_node_t *n);
+
+/** The node leaves the routing table (its start failed). */
+void bus_routes_remove(emu_bus_t *b, const emu_node_t *n);
+
 /** A node's frame: onto the interface, and, once sent, queued for the bus's other nodes. */
 co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f);
 
@@ -25,7 +32,7 @@ co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f);
  *  interface; *tx_pending tells whether a node has frames the interface did not take yet. */
 co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending);
 
-/** Reads what the interface has (at most 1024 frames) and offers each frame to every node. */
+/** Reads what the interface has (at most 1024 frames) and gives each frame to the nodes that take it. */
 void bus_receive(emu_bus_t *b, co_time_us_t now);
 
 /** The interface has room again: the nodes with queued frames retry in the next pass. */

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "emu_bus.h"
 #include "emu_output.h"
 
 void events_add_session(emu_t *emu, emu_session_t *s)
@@ -241,6 +242,9 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         break;
     case CO_EV_GUARD_TIMEOUT:
         report(n, EVENT_GUARDING, LOG_NORMAL, NULL, "life guarding: no guard request in time");
+        break;
+    case CO_EV_RX_FILTER:
+        bus_routes_update(n->bus, n);
         break;
     case CO_EV_TX_DROPPED:
         if (dev->cls != NULL) {

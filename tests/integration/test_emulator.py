@@ -159,6 +159,39 @@ def test_stored_parameters_survive_a_restart_and_damage_is_reported(emulator, ne
     assert node.sdo.upload(0x1017, 0) == struct.pack("<H", od[0x1017].default)
 
 
+def test_frames_reach_the_nodes_that_take_them_as_their_cob_ids_change(emulator, network, capture):
+    # canopen-emu gives each frame only to the nodes whose core takes its CAN-ID (co_node_rx_ids), and follows their
+    # changes: an RPDO moved to another COB-ID takes frames there and no longer on the old one; a heartbeat consumer
+    # configured at run time hears the other local node's heartbeat (a frame between local nodes, not read from the
+    # interface) and misses it when it stops.
+    emu = emulator("buerkert:0x31", "buerkert:0x32")
+    for node_id in (0x31, 0x32):
+        capture.wait_for(0x700 + node_id, data=b"\x00", timeout=3)
+    a, b = remote(network, "buerkert", 0x31), remote(network, "buerkert", 0x32)
+    network.send_message(0, bytes([0x01, 0]))  # all Operational
+    capture.wait_for(0x180 + 0x31, timeout=3)
+    a.sdo.download(0x1400, 1, struct.pack("<I", 0x80000231))
+    a.sdo.download(0x1400, 1, struct.pack("<I", 0x00000299))  # RPDO1 of node 0x31 now on 0x299
+    network.send_message(0x231, struct.pack("<f", 11.5))  # the old COB-ID: nobody takes it
+    network.send_message(0x299, struct.pack("<f", 12.5))
+    time.sleep(0.1)
+    assert struct.unpack("<f", a.sdo.upload(0x2540, 1))[0] == 12.5
+    network.send_message(0x232, struct.pack("<f", 13.5))  # node 0x32's RPDO1 is where it was
+    time.sleep(0.1)
+    assert struct.unpack("<f", b.sdo.upload(0x2540, 1))[0] == 13.5
+    assert struct.unpack("<f", a.sdo.upload(0x2540, 1))[0] == 12.5
+    # node 0x31 monitors node 0x32 (500 ms); node 0x32 produces every 100 ms, then stops: EMCY 0x8130 from 0x31
+    b.sdo.download(0x1017, 0, struct.pack("<H", 100))
+    a.sdo.download(0x1016, 1, struct.pack("<I", (0x32 << 16) | 500))
+    time.sleep(0.8)
+    assert not [m for m in capture.matching(0x80 + 0x31) if bytes(m.data[:2]) == b"\x30\x81"], "heartbeat not heard"
+    since = time.time()
+    b.sdo.download(0x1017, 0, struct.pack("<H", 0))
+    emcy = capture.wait_for(0x80 + 0x31, timeout=3, since=since)[0]
+    assert bytes(emcy.data[:2]) == b"\x30\x81", bytes(emcy.data).hex()
+    assert emu.proc.poll() is None
+
+
 def test_three_devices_in_one_process(emulator, network, capture):
     emulator("pro-ionizer:0x41", "sds:0x42", "buerkert:0x43")
     for node_id, device in ((0x41, "pro-ionizer"), (0x42, "sds"), (0x43, "buerkert")):
