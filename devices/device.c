@@ -18,6 +18,7 @@ static uint32_t tramp_write(void *ctx, co_node_t *node, const co_od_entry_t *e, 
 {
     device_t *dev = dev_of(ctx);
     (void)node;
+    dev->touched = true;
     return dev->cls->on_write != NULL ? dev->cls->on_write(dev, e, data, len, origin) : 0U;
 }
 
@@ -32,6 +33,7 @@ static void tramp_nmt(void *ctx, co_node_t *node, co_nmt_state_t from, co_nmt_st
 {
     device_t *dev = dev_of(ctx);
     (void)node;
+    dev->touched = true;
     if (dev->cls->on_nmt_change != NULL) {
         dev->cls->on_nmt_change(dev, from, to);
     }
@@ -40,6 +42,7 @@ static void tramp_nmt(void *ctx, co_node_t *node, co_nmt_state_t from, co_nmt_st
 static void tramp_reset(void *ctx, co_node_t *node, co_reset_t what)
 {
     device_t *dev = dev_of(ctx);
+    dev->touched = true;
     if (what == CO_RESET_COMMUNICATION && dev->cfg.serial != 0U) {
         (void)co_od_set_u32(node, 0x1018, 4, dev->cfg.serial); /* the 0x1000 area was just re-initialised */
     }
@@ -52,6 +55,7 @@ static co_status_t tramp_store(void *ctx, co_node_t *node, uint16_t index, uint8
 {
     device_t *dev = dev_of(ctx);
     (void)node;
+    dev->touched = true;
     return dev->cls->on_store != NULL ? dev->cls->on_store(dev, index, sub) : CO_OK;
 }
 
@@ -59,6 +63,9 @@ static void tramp_event(void *ctx, co_node_t *node, const co_event_t *ev)
 {
     device_t *dev = dev_of(ctx);
     (void)node;
+    if (ev->kind != CO_EV_RX_FILTER && ev->kind != CO_EV_TX_DROPPED) {
+        dev->touched = true; /* an LSS change, a timeout, an EMCY...: the model may follow it */
+    }
     if (dev->cls->on_event != NULL) {
         dev->cls->on_event(dev, ev);
     }
@@ -70,6 +77,7 @@ static void tramp_event(void *ctx, co_node_t *node, const co_event_t *ev)
 static co_status_t boot(device_t *dev, co_time_us_t now)
 {
     dev->now = now;
+    dev->touched = true;
     memcpy(dev->values, dev->cls->od->defaults, dev->cls->od->values_size);
     /* The model block is not cleared here: power_on re-initialises the running state and keeps the
      * environment (device.h). */
@@ -182,8 +190,12 @@ co_time_us_t device_process(device_t *dev, co_time_us_t now)
     dev->now = now;
     co_time_us_t next = CO_NEVER;
     if (dev->cls->step != NULL) {
-        next = dev->cls->step(dev, now);
-        co_node_values_changed(&dev->node); /* the models write their process values directly */
+        if (dev->touched || now >= dev->step_due) {
+            dev->touched = false;
+            dev->step_due = dev->cls->step(dev, now);
+            co_node_values_changed(&dev->node); /* the models write their process values directly */
+        }
+        next = dev->step_due;
     }
     const co_time_us_t core = co_node_process(&dev->node, now);
     return core < next ? core : next;
@@ -484,6 +496,7 @@ static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *
 device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now)
 {
     dev->now = now;
+    dev->touched = true;
     if (argc < 1) {
         return DEVICE_CMD_UNKNOWN;
     }

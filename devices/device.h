@@ -68,7 +68,9 @@ typedef struct device_class {
     uint32_t (*on_read)(device_t *dev, const co_od_entry_t *e);
     void (*on_nmt_change)(device_t *dev, co_nmt_state_t from, co_nmt_state_t to);
     void (*on_reset)(device_t *dev, co_reset_t what);
-    /** Advances the model to now (values move, timers run). Returns its next deadline or CO_NEVER. */
+    /** Advances the model to now (values move, timers run). Returns its next deadline or CO_NEVER. Called at that
+     *  deadline and after anything that may change the model: a hook or a core event of the node, a command, a
+     *  power-on; not for every frame (a frame that reaches no hook cannot change the model). */
     co_time_us_t (*step)(device_t *dev, co_time_us_t now);
     /** A control command (argv[0] is the command word). */
     device_cmd_result_t (*command)(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
@@ -113,6 +115,8 @@ struct device {
     co_hooks_t hooks;              /**< Trampolines to cls (set by device_init). */
     uint8_t variant;               /**< Index into cls->variants. */
     co_time_us_t now;              /**< Time of the call in progress. */
+    co_time_us_t step_due;         /**< What cls->step returned last. */
+    bool touched;                  /**< A hook, a core event or a command ran since: step at the next process. */
 };
 
 /**
@@ -130,7 +134,7 @@ co_status_t device_power_cycle(device_t *dev, co_time_us_t now);
  *  (call device_process before sleeping), false when it was ignored (the node's deadline is unchanged). */
 bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now);
 
-/** Runs the model and the core; returns the earliest deadline of both. */
+/** Runs the model (when due or touched) and the core; returns the earliest deadline of both. */
 co_time_us_t device_process(device_t *dev, co_time_us_t now);
 
 /** Runs a control command: the device's own first, then the common ones (see device.c). */

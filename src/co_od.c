@@ -463,22 +463,16 @@ static void comm_written(co_node_t *node, const co_od_entry_t *e)
     }
 }
 
-uint32_t co_od_lookup(const co_od_t *od, uint16_t index, uint8_t sub, const co_od_entry_t **out)
-{
-    *out = co_od_find(od, index, sub);
-    if (*out != NULL) {
-        return CO_ABORT_NONE;
-    }
-    return co_od_has_index(od, index) ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NO_OBJECT;
-}
 
 uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, size_t cap, size_t *len,
                     co_od_origin_t origin)
 {
-    const co_od_entry_t *e;
-    const uint32_t r = co_od_lookup(node->od, index, sub, &e);
-    *len = 0U;
-    return r != CO_ABORT_NONE ? r : co_od_read_entry(node, e, buf, cap, len, origin);
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    if (e == NULL) {
+        *len = 0U;
+        return co_od_missing(node->od, index);
+    }
+    return co_od_read_entry(node, e, buf, cap, len, origin);
 }
 
 uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, size_t cap, size_t *len,
@@ -503,16 +497,20 @@ uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, si
     if (n > cap) {
         return CO_ABORT_LENGTH_HIGH;
     }
-    *len = copy_wire(node, e, (uint8_t *)buf, cap);
+    if (is_bytes(e)) {
+        memcpy(buf, co_od_ptr(node, e), n);
+    } else {
+        native_to_wire(e, co_od_ptr(node, e), (uint8_t *)buf);
+    }
+    *len = n;
     return CO_ABORT_NONE;
 }
 
 uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *data, size_t len,
                      co_od_origin_t origin)
 {
-    const co_od_entry_t *e;
-    const uint32_t r = co_od_lookup(node->od, index, sub, &e);
-    return r != CO_ABORT_NONE ? r : co_od_write_entry(node, e, data, len, origin);
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    return e != NULL ? co_od_write_entry(node, e, data, len, origin) : co_od_missing(node->od, index);
 }
 
 uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *data, size_t len,

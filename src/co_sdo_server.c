@@ -46,8 +46,8 @@ static bool segmented_enabled(const co_node_t *node)
 static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
                                const uint8_t *data)
 {
-    const co_od_entry_t *e;
-    uint32_t r = co_od_lookup(node->od, index, sub, &e);
+    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    uint32_t r = e != NULL ? CO_ABORT_NONE : co_od_missing(node->od, index);
     size_t len = 4U;
     if ((cmd & 0x01U) != 0U) {
         len = 4U - ((cmd >> 2) & 0x03U);

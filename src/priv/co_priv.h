@@ -49,8 +49,11 @@ void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last);
 uint8_t co_od_sub_count(const co_od_t *od, uint16_t index);
 /* Index of the first row of an object, or od->count. */
 uint16_t co_od_first_row(const co_od_t *od, uint16_t index);
-/* Finds a row: 0, or the abort code of a missing one (0x06020000 no object, 0x06090011 no such sub-index). */
-uint32_t co_od_lookup(const co_od_t *od, uint16_t index, uint8_t sub, const co_od_entry_t **out);
+/* The abort code of a row co_od_find did not find: 0x06020000 no such object, 0x06090011 no such sub-index. */
+static inline uint32_t co_od_missing(const co_od_t *od, uint16_t index)
+{
+    return co_od_has_index(od, index) ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NO_OBJECT;
+}
 /* co_od_read/co_od_write of a row already found (no second look-up). */
 uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, size_t cap, size_t *len,
                           co_od_origin_t origin);

@@ -89,9 +89,14 @@ def walk_values(emulator, network, capture, nvm_dir):
 def test_random_walk_repeats_with_its_seed(emulator, network, capture, tmp_path):
     first = walk_values(emulator, network, capture, tmp_path / "a")
     second = walk_values(emulator, network, capture, tmp_path / "b")
-    n = min(len(first), len(second))
-    assert n >= 6, (first, second)  # a value every 100 ms unless a step rounds to the same
-    assert first[:n] == second[:n]
+    assert min(len(first), len(second)) >= 8, (first, second)  # a value every 100 ms unless a step rounds to the same
+    # The walk runs from the node's start; the capture begins on entering Operational, after the SDO set-up, whose
+    # time varies on a loaded machine: one run may see its first value a step or two later in the walk. The same
+    # seed gives the same walk: the sequences agree, aligned, on all they share.
+    def agree(a, b):
+        n = min(len(a), len(b))
+        return n >= 6 and a[:n] == b[:n]
+    assert any(agree(first[k:], second) or agree(first, second[k:]) for k in range(3)), (first, second)
     assert all(470 <= v <= 490 for v in first) and len(set(first)) > 2
 
 
