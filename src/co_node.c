@@ -300,6 +300,7 @@ void co_node_routes_update(co_node_t *node)
             node->route_hash[CO_ROUTE_HASH(id)] = 0xFFU; /* a consumed heartbeat: not in the table, looked at */
         }
     }
+    node->rx_ids_version++;
     co_node_event(node, CO_EV_RX_FILTER, 0U, 0U, node->n_route, 0U);
 }
 

@@ -389,6 +389,8 @@ struct co_node {
                                      service once next_due has come. 0: it returns next_due at once. */
     bool cos_pending;           /**< A TPDO-mappable value was written: event-driven TPDOs compare what they
                                      would send with what they sent last at the next pass. */
+    uint16_t rx_ids_version;    /**< Changes whenever co_node_rx_ids() may answer differently (with each
+                                     CO_EV_RX_FILTER): a port that polls it needs no event hook. */
     uint16_t n_route;           /**< Entries of route[] in use. */
     uint16_t route_cap;
     uint8_t route_hash[16];     /**< Per CO_ROUTE_HASH(id): 0 no route has it, 1 + the entry of the only one, 0xFF
@@ -432,7 +434,7 @@ co_time_us_t co_node_process(co_node_t *node, co_time_us_t now);
  * RPDOs), the heartbeats it consumes, and its node-guarding request (a remote frame on 0x700 + node-ID, when the
  * OD has node guarding). co_node_rx() ignores every other frame, so a port may filter on these in hardware and a
  * runner of many nodes may give a frame only to the nodes that take it. Changes are reported with
- * CO_EV_RX_FILTER. @return the number of IDs (at most 2 + 4 + route entries + 127); at most cap are written.
+ * CO_EV_RX_FILTER and change co_node_t.rx_ids_version. @return the number of IDs (at most 2 + 4 + route entries + 127); at most cap are written.
  */
 uint16_t co_node_rx_ids(const co_node_t *node, uint16_t *ids, uint16_t cap);
 

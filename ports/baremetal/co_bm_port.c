@@ -44,12 +44,27 @@ void co_bm_port_init(co_bm_port_t *p, const co_bm_can_t *can, co_bm_nvm_t *nvm, 
     p->port.nvm_commit = nvm != NULL ? port_nvm_commit : NULL;
     p->port.nvm_read = nvm != NULL ? port_nvm_read : NULL;
     co_bm_ring_init(&p->rx);
+    p->filters_set = false;
+}
+
+/* The controller takes the node's CAN-IDs only: fewer frames to read and to reject in software. */
+static void update_filters(co_bm_port_t *p, const co_node_t *node)
+{
+    const uint16_t n = co_node_rx_ids(node, p->filter_ids, CO_BM_FILTER_MAX);
+    if (n > CO_BM_FILTER_MAX || p->can->set_filters(p->can->ctx, p->filter_ids, n) != CO_OK) {
+        (void)p->can->set_filters(p->can->ctx, NULL, 0U); /* more than the filters hold: every frame */
+    }
+    p->filters_version = node->rx_ids_version;
+    p->filters_set = true;
 }
 
 bool co_bm_port_rx_isr(co_bm_port_t *p, const co_frame_t *frame) { return co_bm_ring_push(&p->rx, frame); }
 
 co_time_us_t co_bm_port_poll(co_bm_port_t *p, co_node_t *node)
 {
+    if (p->can->set_filters != NULL && (!p->filters_set || p->filters_version != node->rx_ids_version)) {
+        update_filters(p, node);
+    }
     co_frame_t f;
     while (co_bm_ring_pop(&p->rx, &f)) {
         co_node_rx(node, &f, co_bm_clock_now(p->clock));

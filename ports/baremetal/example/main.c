@@ -10,10 +10,12 @@
 uint32_t board_timer_read(void *ctx);                          /* free-running 32-bit 1 MHz counter */
 co_status_t board_can_send(void *ctx, const co_frame_t *frame); /* free TX mailbox or CO_ERR_BUSY */
 co_status_t board_can_set_bit_rate(void *ctx, uint32_t kbit);
+/* acceptance filters: exactly these CAN-IDs, or (ids == NULL) every frame */
+co_status_t board_can_set_filters(void *ctx, const uint16_t *ids, uint16_t n);
 co_status_t board_flash_erase(void *ctx, uint32_t page_addr);
 co_status_t board_flash_program(void *ctx, uint32_t addr, const void *data, size_t len);
 co_status_t board_flash_read(void *ctx, uint32_t addr, void *data, size_t len);
-void board_can_start(void);                                   /* filters, bit rate, RX interrupt on */
+void board_can_start(void);                                   /* bit rate, RX interrupt on */
 void board_wait_for_event(co_time_us_t now, co_time_us_t deadline, co_bm_clock_t *clock); /* WFI + timer */
 
 /* ---- Static storage: the node, its values, the port ----------------------------------------------- */
@@ -24,7 +26,8 @@ static co_bm_clock_t clock_us;
 static co_bm_nvm_t nvm;
 static uint8_t nvm_stage[512];
 
-static const co_bm_can_t can = {board_can_send, board_can_set_bit_rate, NULL};
+static const co_bm_can_t can = {.send = board_can_send, .set_bit_rate = board_can_set_bit_rate,
+                                 .set_filters = board_can_set_filters};
 /* 2 KiB pages (e.g. STM32G4), 8-byte program unit, the last 12 pages of a 128 KiB part. */
 static const co_bm_flash_t flash = {board_flash_erase, board_flash_program, board_flash_read, NULL, 2048U, 8U, 0xFFU};
 static const co_bm_nvm_area_t areas[CO_BM_NVM_AREAS] = {

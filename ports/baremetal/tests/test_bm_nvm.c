@@ -390,7 +390,23 @@ static co_node_t node;
 static test_od_values_t values;
 static co_bm_port_t port;
 static co_bm_clock_t clk;
-static const co_bm_can_t can = {can_send, NULL, NULL};
+static uint16_t filters[CO_BM_FILTER_MAX];
+static int n_filters = -1; /* -1: never set; 0 with accept_all: every frame */
+static bool accept_all;
+static co_status_t can_set_filters(void *ctx, const uint16_t *ids, uint16_t n)
+{
+    (void)ctx;
+    if (n > 6U) {
+        return CO_ERR_RANGE; /* a controller with 6 filters */
+    }
+    accept_all = ids == NULL;
+    n_filters = n;
+    for (uint16_t i = 0U; i < n; i++) {
+        filters[i] = ids[i];
+    }
+    return CO_OK;
+}
+static const co_bm_can_t can = {.send = can_send, .set_filters = can_set_filters};
 
 static void node_power_on(void)
 {
@@ -459,6 +475,31 @@ static void node_store_cut_at_every_step_loads_old_or_new(void)
     TEST_ASSERT_EQUAL_UINT32(0U, sim.violations);
 }
 
+static void acceptance_filters_follow_the_node(void)
+{
+    node_power_on();
+    n_filters = -1;
+    (void)co_bm_port_poll(&port, &node);
+    const uint16_t first[6] = {0x000U, 0x080U, 0x205U, 0x605U, 0x705U, 0x7E5U};
+    TEST_ASSERT_EQUAL_INT(6, n_filters);
+    TEST_ASSERT_FALSE(accept_all);
+    TEST_ASSERT_EQUAL_HEX16_ARRAY(first, filters, 6);
+    n_filters = -1;
+    (void)co_bm_port_poll(&port, &node);
+    TEST_ASSERT_EQUAL_INT(-1, n_filters); /* nothing changed: not programmed again */
+    TEST_ASSERT_EQUAL_HEX8(0x60, sdo(0x23, 0x1400, 1, 0x80000205UL)); /* RPDO1 not valid: 0x205 leaves */
+    const uint16_t second[5] = {0x000U, 0x080U, 0x605U, 0x705U, 0x7E5U};
+    TEST_ASSERT_EQUAL_INT(-1, n_filters); /* seen at the next poll */
+    (void)co_bm_port_poll(&port, &node);
+    TEST_ASSERT_EQUAL_INT(5, n_filters);
+    TEST_ASSERT_EQUAL_HEX16_ARRAY(second, filters, 5);
+    TEST_ASSERT_EQUAL_HEX8(0x60, sdo(0x23, 0x1016, 1, 0x00070064UL)); /* consume node 7's heartbeat */
+    TEST_ASSERT_EQUAL_HEX8(0x60, sdo(0x23, 0x1016, 2, 0x00080064UL)); /* and node 8's: 7 IDs, 6 filters */
+    (void)co_bm_port_poll(&port, &node);
+    TEST_ASSERT_TRUE(accept_all);
+    TEST_ASSERT_EQUAL_INT(0, n_filters);
+}
+
 static void ring_overrun_drops_frames_not_the_node(void)
 {
     node_power_on();
@@ -490,5 +531,6 @@ int main(void)
     RUN_TEST(node_stores_and_reloads_through_flash);
     RUN_TEST(node_store_cut_at_every_step_loads_old_or_new);
     RUN_TEST(ring_overrun_drops_frames_not_the_node);
+    RUN_TEST(acceptance_filters_follow_the_node);
     return UNITY_END();
 }
