@@ -264,7 +264,10 @@ static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, uint32_t tot
     return node->port->nvm_commit(node->port_ctx, own, total_len) == CO_OK ? CO_OK : CO_ERR_IO;
 }
 
-/* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay). */
+/* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay).
+ * CO_ERR_RANGE: a value to save is one its load would refuse (co_od_check_stored: a value the application wrote
+ * past the object's limits, which only a local write can do); nothing of the store is kept, rather than a save
+ * confirmed now and loaded as defaults at the next start. */
 static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
 {
     record_reader_t old;
@@ -283,6 +286,15 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
             if (!at_relative_default(node, e)) {
                 uint8_t value[255];
                 const size_t n = co_od_sample(node, e, value, sizeof value);
+                /* As the load will check it (a sub-index the node hides is skipped there); a check that depends on
+                 * another stored value sees the present one here, the loaded one there: the same for every value
+                 * saved before it in index order. */
+                const uint32_t refused = co_od_check_stored(node, e, value, n);
+                if (refused != CO_ABORT_NONE && refused != CO_ABORT_NO_SUBINDEX) {
+                    co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 1U, refused);
+                    (void)commit_store(node, CO_NVM_PARAMS, 0U, false);
+                    return CO_ERR_RANGE;
+                }
                 writer_put(&w, e->index, e->sub, value, (uint8_t)n);
             }
         } else if (stored && (save || !in_group(group, e->index) || (e->flags & CO_OD_KEEP) != 0U)) {
@@ -308,8 +320,9 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
         return CO_ABORT_STORE; /* wrong signature */
     }
     uint32_t r = CO_ABORT_NONE;
-    if (!have_write(node) || rewrite(node, e->sub, save) != CO_OK) {
-        r = CO_ABORT_HARDWARE;
+    const co_status_t st = have_write(node) ? rewrite(node, e->sub, save) : CO_ERR_IO;
+    if (st != CO_OK) {
+        r = st == CO_ERR_RANGE ? CO_ABORT_STORE : CO_ABORT_HARDWARE; /* a value that could not be loaded: 0x08000020 */
     }
     co_node_event(node, save ? CO_EV_STORE : CO_EV_RESTORE, e->index, e->sub, 0U, r);
     return r;

@@ -58,7 +58,9 @@ typedef enum co_event_kind {
     CO_EV_GUARD_TIMEOUT,      /**< life guarding: no guard request within the node life time. */
     CO_EV_TX_DROPPED,         /**< a frame could not be queued or sent; value = CAN-ID. */
     CO_EV_NVM_REFUSED,        /**< a stored value an SDO write of it would be refused: index/sub of the object,
-                                   code = the abort code; the area then loads as CO_NVM_REFUSED (defaults). */
+                                   code = the abort code, value 0: the area then loads as CO_NVM_REFUSED (defaults).
+                                   value 1: at a 0x1010 save, the object holds a value its load would refuse (the
+                                   application wrote it past the limits): the save fails (0x08000020), nothing kept. */
     CO_EV_RX_FILTER           /**< the COB-IDs the node takes changed (co_node_rx_ids): a port with hardware
                                    filters reprograms them, a runner of many nodes its frame routing. */
 } co_event_kind_t;

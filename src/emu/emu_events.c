@@ -219,10 +219,16 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
     case CO_EV_NVM_LOADED:
         nvm_report(n, ev);
         break;
-    case CO_EV_NVM_REFUSED: /* then CO_EV_NVM_LOADED with CO_NVM_REFUSED */
-        report(n, EVENT_NVM, LOG_QUIET, pack_state("index", ev->index, "sub", ev->sub),
-               "stored parameters refused: 0x%04X:%02X holds a value a write would be refused for (%s); starting from "
-               "defaults", ev->index, ev->sub, co_abort_text(ev->code));
+    case CO_EV_NVM_REFUSED: /* value 0: then CO_EV_NVM_LOADED with CO_NVM_REFUSED; 1: a save that fails */
+        if (ev->value == 1U) {
+            report(n, EVENT_NVM, LOG_QUIET, pack_state("index", ev->index, "sub", ev->sub),
+                   "save refused: 0x%04X:%02X holds a value its load would refuse (%s); nothing stored", ev->index,
+                   ev->sub, co_abort_text(ev->code));
+        } else {
+            report(n, EVENT_NVM, LOG_QUIET, pack_state("index", ev->index, "sub", ev->sub),
+                   "stored parameters refused: 0x%04X:%02X holds a value a write would be refused for (%s); starting "
+                   "from defaults", ev->index, ev->sub, co_abort_text(ev->code));
+        }
         break;
     case CO_EV_LSS_NODE_ID:
         report(n, EVENT_LSS, LOG_NORMAL, pack_state("pending_node_id", ev->value, NULL, 0U), "LSS pending node-ID %lu",

@@ -962,6 +962,30 @@ static void empty_parameter_blob_is_damaged(void)
     TEST_ASSERT_EQUAL_UINT32(CO_NVM_NONE, nvm_loaded_event());
 }
 
+/* A value the application wrote past the object's limits (a local write checks none) would be refused at the next
+ * load: the save fails as a whole (0x08000020) instead of being confirmed and then lost to defaults. Found by the
+ * long run of fuzz_nvm_file (an SDS whose 0x2002:07 had been set to 9 locally). */
+static void a_value_its_load_would_refuse_fails_the_save(void)
+{
+    wr(0x2000, 0, 2000U, 2U);
+    save(1U);
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_set_u16(&fx.node, 0x2000U, 0U, 50U)); /* below the limit 100 */
+    fx.n_events = 0U;
+    TEST_ASSERT_EQUAL_HEX32(0x08000020UL, fx_sdo_write_u32(0x1010, 1, SAVE, 4U));
+    const int refused = find_event_of(CO_EV_NVM_REFUSED, 0x2000U);
+    TEST_ASSERT_TRUE(refused >= 0);
+    TEST_ASSERT_EQUAL_UINT32(1U, fx.events[refused].value); /* at a save */
+    TEST_ASSERT_EQUAL_HEX32(0x06090032UL, fx.events[refused].code);
+    TEST_ASSERT_EQUAL_HEX32(0x08000020UL, fx.events[find_event_of(CO_EV_STORE, 0x1010U)].code);
+    power_cycle(); /* the save before it holds */
+    TEST_ASSERT_EQUAL_INT(CO_NVM_LOADED, fx.node.nvm_status);
+    TEST_ASSERT_EQUAL_UINT16(2000U, fx.values.x2000_cycle_ms);
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_set_u16(&fx.node, 0x2000U, 0U, 150U)); /* in range again: saved */
+    save(1U);
+    power_cycle();
+    TEST_ASSERT_EQUAL_UINT16(150U, fx.values.x2000_cycle_ms);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -1011,5 +1035,6 @@ int main(void)
     RUN_TEST(stored_valid_pdo_with_new_cob_id_loads);
     RUN_TEST(failed_device_area_fails_the_store);
     RUN_TEST(failed_last_commit_drops_the_device_area);
+    RUN_TEST(a_value_its_load_would_refuse_fails_the_save);
     return UNITY_END();
 }
