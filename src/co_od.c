@@ -336,6 +336,72 @@ static int64_t wire_integer(const co_od_entry_t *e, const uint8_t *data)
     return (int64_t)u;
 }
 
+/* IEEE 754 values compared as integers, so that a REAL limit check needs no floating point (on a core without an
+ * FPU, soft-float comparisons and float-to-double conversion would be linked for it). */
+#define CO_REAL64_MAGNITUDE 0x7FFFFFFFFFFFFFFFULL
+#define CO_REAL64_INFINITY 0x7FF0000000000000ULL
+
+/* The double a REAL32's bits stand for, exactly (every float is a double), as the bits of that double. */
+static uint64_t real32_as_real64(uint32_t f)
+{
+    const uint64_t sign = (uint64_t)(f >> 31) << 63;
+    uint32_t exponent = (f >> 23) & 0xFFU;
+    uint32_t mantissa = f & 0x7FFFFFU;
+    if (exponent == 0xFFU) { /* infinity or NaN */
+        return sign | CO_REAL64_INFINITY | ((uint64_t)mantissa << 29);
+    }
+    if (exponent == 0U) {
+        if (mantissa == 0U) {
+            return sign; /* zero */
+        }
+        exponent = 1U; /* subnormal: normal as a double, normalise */
+        while ((mantissa & 0x800000U) == 0U) {
+            mantissa <<= 1;
+            exponent--;
+        }
+        mantissa &= 0x7FFFFFU;
+    }
+    return sign | ((uint64_t)(exponent + 1023U - 127U) << 52) | ((uint64_t)mantissa << 29);
+}
+
+/* A key that orders doubles (not NaN) as their values: sign and magnitude to two's complement (-0 = +0). */
+static int64_t real64_order(uint64_t bits)
+{
+    const int64_t magnitude = (int64_t)(bits & CO_REAL64_MAGNITUDE);
+    return (bits >> 63) != 0U ? -magnitude : magnitude;
+}
+
+static bool real64_is_nan(uint64_t bits) { return (bits & CO_REAL64_MAGNITUDE) > CO_REAL64_INFINITY; }
+
+/* A limit's bits as a double's (where double is 32 bits wide, as on AVR, the limit is a float). */
+static uint64_t limit_bits(const double *limit)
+{
+    if (sizeof(double) == sizeof(uint32_t)) {
+        uint32_t b;
+        memcpy(&b, limit, sizeof b);
+        return real32_as_real64(b);
+    }
+    uint64_t b;
+    memcpy(&b, limit, sizeof b);
+    return b;
+}
+
+static uint32_t check_real_limits(const co_od_entry_t *e, const co_od_limits_t *l, uint64_t bits)
+{
+    if (e->type == CO_T_REAL32) {
+        bits = real32_as_real64((uint32_t)bits);
+    }
+    if (real64_is_nan(bits)) {
+        return CO_ABORT_INVALID_VALUE; /* NaN is inside no limits: an invalid value */
+    }
+    const uint64_t high = limit_bits(&l->high.r), low = limit_bits(&l->low.r);
+    const int64_t v = real64_order(bits);
+    if (!real64_is_nan(high) && v > real64_order(high)) {
+        return CO_ABORT_VALUE_HIGH;
+    }
+    return !real64_is_nan(low) && v < real64_order(low) ? CO_ABORT_VALUE_LOW : CO_ABORT_NONE;
+}
+
 uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
     if (e->limits == NULL || is_bytes(e) || len < e->size) {
@@ -343,21 +409,7 @@ uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t 
     }
     const co_od_limits_t *l = e->limits;
     if (e->type == CO_T_REAL32 || e->type == CO_T_REAL64) {
-        double v;
-        const uint64_t bits = (uint64_t)wire_integer(e, data);
-        if (e->type == CO_T_REAL32) {
-            const uint32_t b32 = (uint32_t)bits;
-            float f;
-            memcpy(&f, &b32, sizeof f);
-            v = (double)f;
-        } else {
-            memcpy(&v, &bits, sizeof v);
-        }
-        if (v > l->high.r) {
-            return CO_ABORT_VALUE_HIGH;
-        }
-        /* NaN is inside no limits: refused as an invalid value (0x06090030) */
-        return v < l->low.r ? CO_ABORT_VALUE_LOW : (v == v ? CO_ABORT_NONE : CO_ABORT_INVALID_VALUE);
+        return check_real_limits(e, l, (uint64_t)wire_integer(e, data));
     }
     if (e->type == CO_T_UNSIGNED64) {
         const uint64_t v = (uint64_t)wire_integer(e, data);

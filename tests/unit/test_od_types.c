@@ -2,6 +2,7 @@
  * limits of REAL32, REAL64 and UNSIGNED64 rows, [DummyUsage], and PDO state sized by the caller for an OD with
  * more PDOs than CO_TPDO_MAX (what canopen-emu does for a device read from its EDS). */
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "fake_port.h"
@@ -37,6 +38,7 @@ typedef struct types_values {
     uint64_t u64;
     uint8_t text[12];
     uint16_t word;
+    float r32_narrow;
 } types_values_t;
 
 #define V(m) (uint16_t)sizeof(((types_values_t *)0)->m), (uint32_t)offsetof(types_values_t, m)
@@ -44,6 +46,8 @@ typedef struct types_values {
 static const co_od_limits_t lim_i24 = {{.i = -1000}, {.i = 1000}};
 static const co_od_limits_t lim_r32 = {{.r = 0.0}, {.r = 10.0}};
 static const co_od_limits_t lim_r64 = {{.r = -1e300}, {.r = 1.5}};
+/* limits no float can hold: a REAL32 value is compared as the double it is */
+static const co_od_limits_t lim_r32_narrow = {{.r = -1e-40}, {.r = 0.1}};
 static const co_od_limits_t lim_u64 = {{.u = 0x10U}, {.u = 0x8000000000000000ULL}};
 #define TPDO_ROWS(k)                                                                                               \
     {0x1800 + (k), 0, CO_T_UNSIGNED8, CO_OD_READ, V(tpdo[k].n), NULL},                                             \
@@ -73,6 +77,7 @@ static const co_od_entry_t rows[] = {
     {0x2005, 0, CO_T_UNSIGNED64, RW, V(u64), &lim_u64},
     {0x2006, 0, CO_T_UNICODE_STRING, CO_OD_READ, V(text), NULL},
     {0x2007, 0, CO_T_UNSIGNED16, RW | CO_OD_TPDO | CO_OD_RPDO, V(word), NULL},
+    {0x2008, 0, CO_T_REAL32, RW, V(r32_narrow), &lim_r32_narrow},
 };
 typedef char six_tpdos_in_rows[N_TPDO == 6U ? 1 : -1]; /* TPDO_ROWS above are written out for 6 */
 
@@ -203,6 +208,64 @@ static void real_and_unsigned64_limits_are_checked(void)
     TEST_ASSERT_EQUAL_HEX64(0x8000000000000000ULL, values.u64);
 }
 
+/* The answer of a floating-point comparison with the row's limits: what the core's integer comparison must give. */
+static uint32_t real_limits_reference(double v, const co_od_limits_t *l)
+{
+    if (v != v) {
+        return CO_ABORT_INVALID_VALUE;
+    }
+    return v > l->high.r ? CO_ABORT_VALUE_HIGH : (v < l->low.r ? CO_ABORT_VALUE_LOW : CO_ABORT_NONE);
+}
+
+static uint32_t next_random(uint32_t *state)
+{
+    *state = (uint32_t)(*state * 1664525UL + 1013904223UL);
+    return *state;
+}
+
+/* Every class of float (zeros, subnormals, normals, infinities, NaNs) at and around limits a float cannot hold, and
+ * random bit patterns: the same answer as a floating-point comparison (the core compares without floating point). */
+static void real_limits_agree_with_a_floating_point_comparison(void)
+{
+    static const uint32_t special[] = {0x00000000UL, 0x80000000UL, 0x00000001UL, 0x80000001UL, 0x000116C2UL,
+                                       0x800116C2UL, 0x800116C1UL, 0x800116C3UL, 0x007FFFFFUL, 0x807FFFFFUL,
+                                       0x00800000UL, 0x3DCCCCCCUL, 0x3DCCCCCDUL, 0x3DCCCCCBUL, 0x7F800000UL,
+                                       0xFF800000UL, 0x7FC00000UL, 0xFFC00001UL, 0x7F800001UL, 0x3F800000UL};
+    uint32_t state = 12345U;
+    for (unsigned i = 0U; i < 20000U; i++) {
+        const uint32_t bits = i < sizeof special / sizeof special[0] ? special[i] : next_random(&state);
+        float f;
+        memcpy(&f, &bits, sizeof f);
+        const uint32_t expected = real_limits_reference((double)f, &lim_r32_narrow);
+        const uint32_t got = co_od_write(&node, 0x2008, 0, &bits, 4U, CO_ORIGIN_SDO);
+        if (got != expected) {
+            char what[64];
+            snprintf(what, sizeof what, "REAL32 bits 0x%08lX", (unsigned long)bits);
+            TEST_ASSERT_EQUAL_HEX32_MESSAGE(expected, got, what);
+        }
+    }
+    if (sizeof(double) != 8U) {
+        return; /* REAL64 values need a 64-bit double to be compared with (not on AVR) */
+    }
+    static const uint64_t special64[] = {0x3FF8000000000000ULL, 0x3FF8000000000001ULL, 0x3FF7FFFFFFFFFFFFULL,
+                                         0xFE27E41B4D2A8C5AULL, 0xFFF0000000000000ULL, 0x7FF0000000000001ULL,
+                                         0x8000000000000000ULL, 0x0000000000000001ULL};
+    for (unsigned i = 0U; i < 20000U; i++) {
+        const uint64_t bits = i < sizeof special64 / sizeof special64[0]
+                                  ? special64[i]
+                                  : ((uint64_t)next_random(&state) << 32) | next_random(&state);
+        double d;
+        memcpy(&d, &bits, sizeof d);
+        const uint32_t expected = real_limits_reference(d, &lim_r64);
+        const uint32_t got = co_od_write(&node, 0x2004, 0, &bits, 8U, CO_ORIGIN_SDO);
+        if (got != expected) {
+            char what[64];
+            snprintf(what, sizeof what, "REAL64 bits 0x%016llX", (unsigned long long)bits);
+            TEST_ASSERT_EQUAL_HEX32_MESSAGE(expected, got, what);
+        }
+    }
+}
+
 static void six_byte_and_unicode_rows(void)
 {
     const uint8_t tod[6] = {0x10, 0x20, 0x30, 0x04, 0x50, 0x60};
@@ -268,6 +331,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(integer24_keeps_its_three_bytes_and_limits);
     RUN_TEST(real_and_unsigned64_limits_are_checked);
+    RUN_TEST(real_limits_agree_with_a_floating_point_comparison);
     RUN_TEST(six_byte_and_unicode_rows);
     RUN_TEST(dummy_entries_follow_dummy_usage);
     RUN_TEST(more_tpdos_than_co_tpdo_max_with_caller_arrays);
