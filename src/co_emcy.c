@@ -163,7 +163,7 @@ co_time_us_t co_emcy_process(co_node_t *node)
         }
         f.id = em->cob_id & CO_COBID_CAN_ID;
         co_node_send(node, &f);
-        em->next_allowed = node->now + (co_time_us_t)em->inhibit_100us * 100U;
+        em->next_allowed = node->now + (uint32_t)em->inhibit_100us * 100U;
     }
     return CO_NEVER;
 }

@@ -12,7 +12,7 @@ static const uint8_t guard_msef[5] = {0x01U, 0U, 0U, 0U, 0U}; /* distinguishes l
 
 static co_time_us_t life_time_us(const co_node_t *node)
 {
-    return (co_time_us_t)node->guard.guard_ms * node->guard.life_factor * 1000U;
+    return co_ms_to_us((uint32_t)node->guard.guard_ms * node->guard.life_factor);
 }
 
 void co_guard_written(co_node_t *node)

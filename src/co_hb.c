@@ -4,13 +4,13 @@
  */
 #include "priv/co_priv.h"
 
-static co_time_us_t period_us(const co_node_t *node) { return (co_time_us_t)node->hb.period_ms * 1000U; }
+static uint32_t period_us(const co_node_t *node) { return (uint32_t)node->hb.period_ms * 1000U; }
 
 /* 0x1017 took the value ms: a new period starts now. */
 static void start(co_node_t *node, uint32_t ms)
 {
     node->hb.period_ms = (uint16_t)ms;
-    const co_time_us_t p = period_us(node);
+    const uint32_t p = period_us(node);
     node->hb.due = p != 0U ? node->now + p : CO_NEVER;
     co_node_due(node, node->hb.due);
 }
@@ -19,7 +19,7 @@ void co_hb_reset(co_node_t *node) { start(node, co_od_u32_or(node, 0x1017U, 0U, 
 
 co_time_us_t co_hb_process(co_node_t *node)
 {
-    const co_time_us_t p = period_us(node);
+    const uint32_t p = period_us(node);
     if (p == 0U || node->hb.due == CO_NEVER) {
         return node->hb.due = (p != 0U ? node->now + p : CO_NEVER);
     }
@@ -27,7 +27,7 @@ co_time_us_t co_hb_process(co_node_t *node)
         const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)node->nmt_state}};
         co_node_send(node, &f);
         /* Next deadline on the original grid; periods missed entirely (a very late call) are skipped. */
-        node->hb.due += p * (1U + (node->now - node->hb.due) / p);
+        node->hb.due = co_next_on_grid(node->hb.due, p, node->now);
     }
     return node->hb.due;
 }

@@ -86,7 +86,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
             (void)co_emcy_clear(node, 0x8130U, msef);
         }
         s->state = 2U;
-        s->deadline = node->now + (co_time_us_t)s->time_ms * 1000U;
+        s->deadline = node->now + (uint32_t)s->time_ms * 1000U;
         co_node_due(node, s->deadline);
     }
     return used;

@@ -214,7 +214,7 @@ static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
         break;
     }
     case 0x15: {
-        const co_time_us_t delay = (co_time_us_t)co_get_u16(&d[1]) * 1000U;
+        const uint32_t delay = (uint32_t)co_get_u16(&d[1]) * 1000U;
         l->switch_pending = true;
         l->switch_at = node->now + delay;
         l->silent_until = node->now + 2U * delay;

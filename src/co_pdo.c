@@ -216,7 +216,7 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
     } else {
         rpdo_apply(node, p, f->data);
     }
-    p->deadline = p->event_ms != 0U ? node->now + (co_time_us_t)p->event_ms * 1000U : CO_NEVER;
+    p->deadline = p->event_ms != 0U ? node->now + (uint32_t)p->event_ms * 1000U : CO_NEVER;
     co_node_due(node, p->deadline);
     if (p->timeout_error) {
         p->timeout_error = false;
@@ -276,7 +276,7 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
             p->event_due = CO_NEVER;
         } else if (timer && !changed) {
             /* Timer-driven: stay on the original grid so late calls do not accumulate drift. */
-            p->event_due += p->event_us * (1U + (node->now - p->event_due) / p->event_us);
+            p->event_due = co_next_on_grid(p->event_due, p->event_us, node->now);
         } else {
             p->event_due = node->now + p->event_us; /* the event timer restarts at every transmission */
         }

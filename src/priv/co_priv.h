@@ -30,6 +30,24 @@ static inline void co_put_u32(uint8_t *p, uint32_t v)
 }
 static inline co_time_us_t co_min_time(co_time_us_t a, co_time_us_t b) { return a < b ? a : b; }
 
+/* Time arithmetic without 64-bit multiplication or division: on a 32-bit core without them in hardware (Cortex-M0+)
+ * they would link libgcc's __aeabi_lmul and __aeabi_uldivmod (~500 bytes) for the periodic services. */
+
+/* A duration in µs from one in ms, ms < 2^32 / 125 (a 16-bit guard time times an 8-bit life factor is < 2^24):
+ * the product may exceed 32 bits, so it is built as (ms * 125) * 8 with a 32-bit multiplication and a shift. */
+static inline co_time_us_t co_ms_to_us(uint32_t ms) { return (co_time_us_t)(ms * 125U) << 3; }
+
+/* The first deadline after now on the grid due + k * period (k >= 1, due <= now, period > 0): a late call does not
+ * shift the grid. More than 2^32 µs late (71 minutes without a call), a new grid starts at now. */
+static inline co_time_us_t co_next_on_grid(co_time_us_t due, uint32_t period, co_time_us_t now)
+{
+    const co_time_us_t late = now - due;
+    if (late < period) {
+        return due + period;
+    }
+    return now + period - (late <= UINT32_MAX ? (uint32_t)late % period : 0U);
+}
+
 /* COB-ID bits (0x1005, 0x1014, 0x14xx/0x18xx sub 1). */
 #define CO_COBID_INVALID 0x80000000UL
 #define CO_COBID_NO_RTR 0x40000000UL   /* TPDO: no RTR; SYNC: bit 30 = "produce SYNC" */

@@ -133,6 +133,25 @@ static void very_late_call_sends_one_and_stays_on_grid(void)
     TEST_ASSERT_EQUAL_UINT64(600U * MS, fx.port.sent_at[last_idx(0x705U)]);
 }
 
+/* Catch-up arithmetic is 32-bit (no 64-bit division on a Cortex-M0+): a call up to 2^32 µs late stays on the
+ * grid; later than that (71 minutes without a call), a new grid starts at the call. */
+static void hours_late_call_starts_a_new_grid(void)
+{
+    set_hb_ms(700U);
+    fx_run_until(700U * MS);
+    TEST_ASSERT_EQUAL_UINT32(1U, heartbeats());
+    fx.now = 700U * MS + 0xFFFFFFFFULL; /* 4294.967295 s late: grid point 6136 (700 ms * 6137) comes next */
+    TEST_ASSERT_EQUAL_UINT64(700ULL * MS * 6137U, fx_process());
+    TEST_ASSERT_EQUAL_UINT32(2U, heartbeats());
+    fx.now = 700ULL * MS * 6137U + 0x100000000ULL + 123U; /* more than 2^32 µs late, off the grid */
+    TEST_ASSERT_EQUAL_UINT64(fx.now + 700U * MS, fx_process());
+    TEST_ASSERT_EQUAL_UINT32(3U, heartbeats());
+    const co_time_us_t grid = fx.now;
+    fx_run_until(grid + 700U * MS);
+    TEST_ASSERT_EQUAL_UINT32(4U, heartbeats());
+    TEST_ASSERT_EQUAL_UINT64(grid + 700U * MS, fx.port.sent_at[last_idx(0x705U)]);
+}
+
 static void rewrite_1017_restarts_period_from_write(void)
 {
     set_hb_ms(100U);
@@ -300,6 +319,7 @@ int main(void)
     RUN_TEST(process_returns_next_heartbeat_deadline);
     RUN_TEST(thousandth_heartbeat_at_100s_despite_late_call);
     RUN_TEST(very_late_call_sends_one_and_stays_on_grid);
+    RUN_TEST(hours_late_call_starts_a_new_grid);
     RUN_TEST(rewrite_1017_restarts_period_from_write);
     RUN_TEST(write_sends_no_immediate_heartbeat);
     RUN_TEST(write_zero_stops_heartbeat);
