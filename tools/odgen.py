@@ -321,14 +321,22 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     c = [banner, f"#include \"{c_name}_od.h\"\n\n#include <stddef.h>\n\n"]
     c.append(f"#define V {c_name}_od_values_t\n")
     c.append("#define ROW(i, s, t, f, m, l) {i, s, t, f, (uint16_t)sizeof(((V *)0)->m), (uint32_t)offsetof(V, m), l}\n\n")
+    # Rows with the same limits share one pair (the PRO IONIZER's 59 limited rows have 26 distinct pairs).
+    limit_pairs: dict = {}
+    row_limit: dict = {}
     for r in od.rows:
         if has_limits(r):
             lo = TYPES[r.dtype][3] if r.low is None else r.low
             hi = TYPES[r.dtype][4] if r.high is None else r.high
-            c.append(f"static const co_od_limits_t limits_{r.member} = {{{c_limit(lo, r.dtype)}, {c_limit(hi, r.dtype)}}};\n")
+            pair = f"{{{c_limit(lo, r.dtype)}, {c_limit(hi, r.dtype)}}}"
+            row_limit[r.member] = limit_pairs.setdefault(pair, len(limit_pairs))
+    if limit_pairs:
+        c.append(f"static const co_od_limits_t limits[{len(limit_pairs)}] = {{\n")
+        c.extend(f"    {pair}, /* {k} */\n" for pair, k in limit_pairs.items())
+        c.append("};\n")
     c.append(f"\nstatic const co_od_entry_t rows[{len(od.rows)}] = {{\n")
     for r in od.rows:
-        lim = f"&limits_{r.member}" if has_limits(r) else "NULL"
+        lim = f"&limits[{row_limit[r.member]}]" if has_limits(r) else "NULL"
         c.append(f"    ROW(0x{r.index:04X}, 0x{r.sub:02X}, {TYPE_ENUM[r.dtype]}, {flags(r)}, {r.member}, {lim}),\n")
     c.append("};\n\n")
     firsts = [i for i, r in enumerate(od.rows) if i == 0 or od.rows[i - 1].index != r.index]
