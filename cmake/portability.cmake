@@ -85,3 +85,27 @@ if(CO_TARGET_TESTS AND CO_BUILD_TESTS)
     set_tests_properties(target/${t} PROPERTIES LABELS target TIMEOUT 600)
   endforeach()
 endif()
+
+# ---- AVR tests: tests/unit on an 8-bit ATmega1284P under simavr (label avr) ------------------------------
+option(CO_AVR_TESTS "Build the unit tests for an 8-bit AVR and run them under simavr (label avr)" OFF)
+if(CO_AVR_TESTS AND CO_BUILD_TESTS)
+  include(ExternalProject)
+  set(co_avr_dir ${PROJECT_BINARY_DIR}/avr-tests)
+  ExternalProject_Add(co_avr_tests
+    SOURCE_DIR ${PROJECT_SOURCE_DIR}/tests/avr
+    BINARY_DIR ${co_avr_dir}
+    CMAKE_ARGS -DCMAKE_TOOLCHAIN_FILE=${PROJECT_SOURCE_DIR}/cmake/toolchains/avr-atmega1284p.cmake
+               -DCMAKE_BUILD_TYPE=MinSizeRel
+    BUILD_ALWAYS ON
+    INSTALL_COMMAND "")
+  file(GLOB co_unit_test_sources ${PROJECT_SOURCE_DIR}/tests/unit/test_*.c)
+  foreach(src IN LISTS co_unit_test_sources)
+    get_filename_component(t ${src} NAME_WE)
+    set(co_host_arg "")
+    if(TARGET ${t})
+      set(co_host_arg --host $<TARGET_FILE:${t}>)  # the same test on the host: results must be equal
+    endif()
+    add_test(NAME avr/${t} COMMAND ${PROJECT_SOURCE_DIR}/tools/avr-tests --run ${co_avr_dir}/${t}.elf ${co_host_arg})
+    set_tests_properties(avr/${t} PROPERTIES LABELS avr TIMEOUT 600)
+  endforeach()
+endif()

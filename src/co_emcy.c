@@ -69,7 +69,7 @@ static void enqueue(co_node_t *node, uint16_t code, const uint8_t *msef)
         em->q_count--;
         em->lost++;
     }
-    em->queue[(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN] = f;
+    em->queue[(unsigned)(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN] = f;
     em->q_count++;
     co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, f.data[2]);
 }

@@ -66,7 +66,7 @@ void co_node_send(co_node_t *node, const co_frame_t *frame)
         tx_dropped(node, frame);
         return;
     }
-    const uint8_t tail = (uint8_t)((node->txq.head + node->txq.count) % CO_TX_QUEUE_LEN);
+    const uint8_t tail = (uint8_t)((unsigned)(node->txq.head + node->txq.count) % CO_TX_QUEUE_LEN);
     node->txq.frame[tail] = *frame;
     node->txq.count++;
 }
@@ -208,7 +208,7 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         node->route_cap < CO_RX_ROUTES_FIXED + node->n_rpdo + node->n_sdo_extra) {
         return CO_ERR_RANGE;
     }
-    memcpy(node->values, node->od->defaults, node->od->values_size);
+    memcpy(node->values, node->od->defaults, (size_t)node->od->values_size);
     uint8_t node_id = cfg->node_id;
     uint8_t bit_timing = cfg->bit_timing;
     const co_nvm_status_t lss = co_store_lss_load(node, &node_id, &bit_timing);

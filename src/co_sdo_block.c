@@ -105,7 +105,7 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
             return;
         }
         const uint32_t room = (uint32_t)sizeof s->buf - s->pos;
-        memcpy(&s->buf[s->pos], &frame[1], room < BLK_SEG_DATA ? room : BLK_SEG_DATA);
+        memcpy(&s->buf[s->pos], &frame[1], (size_t)(room < BLK_SEG_DATA ? room : BLK_SEG_DATA));
         s->pos += BLK_SEG_DATA;
         s->seq = seqno;
     }
@@ -143,7 +143,7 @@ static void download_end(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const
         co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_CRC);
         return;
     }
-    const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, len, CO_ORIGIN_SDO);
+    const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, (size_t)len, CO_ORIGIN_SDO);
     if (r != CO_ABORT_NONE) {
         co_sdo_abort(node, s, s->index, s->sub, r);
         return;
@@ -170,7 +170,7 @@ static void upload_send_block(co_node_t *node, co_sdo_server_t *s)
         s->seq++;
         co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
         f.data[0] = (uint8_t)(s->seq | (left <= BLK_SEG_DATA ? BLK_LAST : 0U));
-        memcpy(&f.data[1], &s->buf[offset], left < BLK_SEG_DATA ? left : BLK_SEG_DATA);
+        memcpy(&f.data[1], &s->buf[offset], (size_t)(left < BLK_SEG_DATA ? left : BLK_SEG_DATA));
         co_node_send(node, &f);
     }
 }

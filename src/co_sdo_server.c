@@ -165,7 +165,7 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, c
         co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_LENGTH_HIGH);
         return;
     }
-    memcpy(&s->buf[s->pos], seg, n);
+    memcpy(&s->buf[s->pos], seg, (size_t)n);
     s->pos += n;
     s->toggle ^= 1U;
     s->deadline = node->now + CO_SDO_TIMEOUT_US;
@@ -177,7 +177,7 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, c
         co_sdo_abort(node, s, s->index, s->sub, s->pos > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
         return;
     }
-    const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, s->pos, CO_ORIGIN_SDO);
+    const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, (size_t)s->pos, CO_ORIGIN_SDO);
     if (r != CO_ABORT_NONE) {
         co_sdo_abort(node, s, s->index, s->sub, r);
         return;
@@ -198,7 +198,7 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd)
     const bool last = s->pos + n >= s->size;
     co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
     f.data[0] = (uint8_t)(((uint32_t)toggle << 4) | ((7U - n) << 1) | (last ? 1U : 0U));
-    memcpy(&f.data[1], &s->buf[s->pos], n);
+    memcpy(&f.data[1], &s->buf[s->pos], (size_t)n);
     co_node_send(node, &f);
     s->pos += n;
     s->toggle ^= 1U;

@@ -73,10 +73,10 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
     uint8_t chunk[32];
     for (uint32_t pos = 0U; pos < payload;) {
         const uint32_t n = (payload - pos) < sizeof chunk ? (payload - pos) : (uint32_t)sizeof chunk;
-        if (node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + pos, chunk, n) != CO_OK) {
+        if (node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + pos, chunk, (size_t)n) != CO_OK) {
             return CO_NVM_CORRUPT; /* truncated */
         }
-        crc = co_crc32(crc, chunk, n);
+        crc = co_crc32(crc, chunk, (size_t)n);
         pos += n;
     }
     if (crc != co_get_u32(&h[12])) {

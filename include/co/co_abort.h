@@ -45,14 +45,38 @@ extern "C" {
     X(DEVICE_STATE, 0x08000022UL, "data cannot be transferred because of the device state")   \
     X(NO_DATA, 0x08000024UL, "no data available")
 
-#define CO_ABORT_X_ENUM(name, code, text) CO_ABORT_##name = code,
-/** Abort codes as named constants (CO_ABORT_NO_OBJECT, ...). 0 means "no abort". */
-enum co_abort_code {
-    CO_ABORT_NONE = 0,
-    CO_ABORT_LIST(CO_ABORT_X_ENUM)
-    CO_ABORT_LAST_ = 0x7FFFFFFF
-};
-#undef CO_ABORT_X_ENUM
+/* Abort codes as named constants (CO_ABORT_NO_OBJECT, ...), 0 meaning "no abort". Macros, not an enum: the codes
+ * exceed a 16-bit int (AVR), and an enum constant must fit an int. co_abort.c checks them against the list. */
+#define CO_ABORT_NONE 0UL
+#define CO_ABORT_TOGGLE 0x05030000UL
+#define CO_ABORT_TIMEOUT 0x05040000UL
+#define CO_ABORT_COMMAND 0x05040001UL
+#define CO_ABORT_BLOCK_SIZE 0x05040002UL
+#define CO_ABORT_SEQUENCE 0x05040003UL
+#define CO_ABORT_CRC 0x05040004UL
+#define CO_ABORT_OUT_OF_MEMORY 0x05040005UL
+#define CO_ABORT_UNSUPPORTED_ACCESS 0x06010000UL
+#define CO_ABORT_WRITE_ONLY 0x06010001UL
+#define CO_ABORT_READ_ONLY 0x06010002UL
+#define CO_ABORT_NO_OBJECT 0x06020000UL
+#define CO_ABORT_NOT_MAPPABLE 0x06040041UL
+#define CO_ABORT_PDO_LENGTH 0x06040042UL
+#define CO_ABORT_PARAM_INCOMPATIBLE 0x06040043UL
+#define CO_ABORT_INTERNAL_INCOMPATIBLE 0x06040047UL
+#define CO_ABORT_HARDWARE 0x06060000UL
+#define CO_ABORT_TYPE_MISMATCH 0x06070010UL
+#define CO_ABORT_LENGTH_HIGH 0x06070012UL
+#define CO_ABORT_LENGTH_LOW 0x06070013UL
+#define CO_ABORT_NO_SUBINDEX 0x06090011UL
+#define CO_ABORT_INVALID_VALUE 0x06090030UL
+#define CO_ABORT_VALUE_HIGH 0x06090031UL
+#define CO_ABORT_VALUE_LOW 0x06090032UL
+#define CO_ABORT_MAX_LESS_MIN 0x06090036UL
+#define CO_ABORT_GENERAL 0x08000000UL
+#define CO_ABORT_STORE 0x08000020UL
+#define CO_ABORT_LOCAL_CONTROL 0x08000021UL
+#define CO_ABORT_DEVICE_STATE 0x08000022UL
+#define CO_ABORT_NO_DATA 0x08000024UL
 
 /** Text of an abort code, or "unknown abort code". For logs; never NULL. */
 const char *co_abort_text(uint32_t code);

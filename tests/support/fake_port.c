@@ -65,7 +65,7 @@ static co_status_t fake_nvm_commit(void *ctx, co_nvm_area_t area, uint32_t total
     }
     if (more) {
         fake_nvm_area_t *a = &fp->nvm[area];
-        memcpy(a->pending, a->staging, len);
+        memcpy(a->pending, a->staging, (size_t)len);
         a->pending_len = len;
         a->is_pending = true;
         a->more_commits++;
@@ -78,13 +78,13 @@ static co_status_t fake_nvm_commit(void *ctx, co_nvm_area_t area, uint32_t total
     for (int i = 0; i < 3; i++) {
         fake_nvm_area_t *a = &fp->nvm[i];
         if (a->is_pending && i != (int)area) {
-            memcpy(a->stored, a->pending, a->pending_len);
+            memcpy(a->stored, a->pending, (size_t)a->pending_len);
             a->stored_len = a->pending_len;
             a->commits++;
         }
     }
     drop_pending(fp);
-    memcpy(fp->nvm[area].stored, fp->nvm[area].staging, len);
+    memcpy(fp->nvm[area].stored, fp->nvm[area].staging, (size_t)len);
     fp->nvm[area].stored_len = len;
     fp->nvm[area].commits++;
     return CO_OK;

@@ -3,7 +3,7 @@
  * (facts §3.2, §11 #54). */
 #include "fixture.h"
 
-#define MS 1000U
+#define MS 1000UL
 
 void setUp(void)
 {

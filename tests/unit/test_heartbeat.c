@@ -2,7 +2,7 @@
  * (facts §3.1, §11 #2-#4, #10). */
 #include "fixture.h"
 
-#define MS 1000U
+#define MS 1000UL
 
 void setUp(void) { fx_start(5U, 0U); }
 void tearDown(void) {}
@@ -91,6 +91,28 @@ static void process_returns_next_heartbeat_deadline(void)
     TEST_ASSERT_EQUAL_UINT32(1U, heartbeats());
 }
 
+/* Heartbeats and frames counted by run_counting() before the recorded ones. */
+static uint32_t hb_counted, frames_counted;
+
+/* Runs until the time in steps of 5 s, counting and forgetting the frames of each step: a small target
+ * (tests/avr/) records fewer frames than a long run sends. */
+static void count_and_forget(void)
+{
+    hb_counted += heartbeats();
+    frames_counted += fx.port.n_sent;
+    fake_port_clear(&fx.port);
+}
+
+static void run_counting(co_time_us_t until)
+{
+    count_and_forget();
+    while (fx.now + 5000U * MS < until) {
+        fx_run_until(fx.now + 5000U * MS);
+        count_and_forget();
+    }
+    fx_run_until(until);
+}
+
 static void thousandth_heartbeat_at_100s_despite_late_call(void)
 {
     set_hb_ms(100U);
@@ -110,14 +132,16 @@ static void thousandth_heartbeat_at_100s_despite_late_call(void)
     fx_run_until(7000U * MS);
     fx.now = 7100U * MS + 99999U;
     TEST_ASSERT_EQUAL_UINT64(7200U * MS, fx_process());
-    fx_run_until(100000U * MS - 1U);
-    TEST_ASSERT_EQUAL_UINT32(999U, heartbeats());
+    hb_counted = 0U;
+    frames_counted = 0U;
+    run_counting(100000U * MS - 1U);
+    TEST_ASSERT_EQUAL_UINT32(999U, hb_counted + heartbeats());
     fx_run_until(100000U * MS);
-    TEST_ASSERT_EQUAL_UINT32(1000U, heartbeats());
+    TEST_ASSERT_EQUAL_UINT32(1000U, hb_counted + heartbeats());
     const uint32_t i = last_idx(0x705U);
     ASSERT_FRAME(i, 0x705U, 1, 0x7F);
     TEST_ASSERT_EQUAL_UINT64(100000U * MS, fx.port.sent_at[i]);
-    TEST_ASSERT_EQUAL_UINT32(1000U, fx.port.n_sent); /* nothing else was sent */
+    TEST_ASSERT_EQUAL_UINT32(1000U, frames_counted + fx.port.n_sent); /* nothing else was sent */
 }
 
 static void very_late_call_sends_one_and_stays_on_grid(void)

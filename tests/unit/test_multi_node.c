@@ -50,7 +50,9 @@ static const co_od_t mini_od = {"mini", mini_entries, (uint16_t)(sizeof mini_ent
 /* One bus: every node's port records into the same fake port; frames are delivered to all nodes. */
 static fake_port_t bus;
 static co_time_us_t now;
-static co_node_t node[3];
+/* The three nodes of most tests, and every node of many_nodes_of_one_type (setUp starts the first three again). */
+#define NODE_SLOTS (TEST_MULTI_NODE_COUNT > 3U ? TEST_MULTI_NODE_COUNT : 3U)
+static co_node_t node[NODE_SLOTS];
 static test_od_values_t values_a, values_b;
 static mini_values_t values_c;
 
@@ -142,7 +144,7 @@ static void emcy_of_one_node_stays_there(void)
 
 static void many_nodes_of_one_type(void)
 {
-    static co_node_t nodes[TEST_MULTI_NODE_COUNT];
+    co_node_t *nodes = node;
     static test_od_values_t vals[TEST_MULTI_NODE_COUNT];
     bus.n_sent = 0U;
     for (uint8_t i = 0U; i < TEST_MULTI_NODE_COUNT; i++) {

@@ -34,7 +34,7 @@ typedef struct types_values {
     uint8_t u48[6];
     uint8_t tod[6];
     float r32;
-    double r64;
+    uint64_t r64; /* the bits of a REAL64 (a double is 32 bits wide on AVR) */
     uint64_t u64;
     uint8_t text[12];
     uint16_t word;
@@ -45,7 +45,7 @@ typedef struct types_values {
 #define RW (CO_OD_READ | CO_OD_WRITE)
 static const co_od_limits_t lim_i24 = {{.i = -1000}, {.i = 1000}};
 static const co_od_limits_t lim_r32 = {{.r = 0.0}, {.r = 10.0}};
-static const co_od_limits_t lim_r64 = {{.r = -1e300}, {.r = 1.5}};
+static const co_od_limits_t lim_r64 = {{.r = -1e30}, {.r = 1.5}};
 /* limits no float can hold: a REAL32 value is compared as the double it is */
 static const co_od_limits_t lim_r32_narrow = {{.r = -1e-40}, {.r = 0.1}};
 static const co_od_limits_t lim_u64 = {{.u = 0x10U}, {.u = 0x8000000000000000ULL}};
@@ -198,7 +198,7 @@ static void real_and_unsigned64_limits_are_checked(void)
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_INVALID_VALUE, sdo_write(0x2003, 0, (uint8_t[]){0x00, 0x00, 0xC0, 0x7F}, 4U)); /* NaN */
     TEST_ASSERT_TRUE(values.r32 == 10.0f);
     /* REAL64 and UNSIGNED64 through the local API (8 bytes do not fit an expedited transfer) */
-    const double d_ok = 1.5, d_high = 1.5000001;
+    const uint64_t d_ok = 0x3FF8000000000000ULL, d_high = 0x3FF8000000000001ULL; /* 1.5, the next double */
     TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&node, 0x2004, 0, &d_ok, 8U, CO_ORIGIN_SDO));
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_write(&node, 0x2004, 0, &d_high, 8U, CO_ORIGIN_SDO));
     const uint8_t top[8] = {0, 0, 0, 0, 0, 0, 0, 0x80}, over[8] = {1, 0, 0, 0, 0, 0, 0, 0x80}, under[8] = {0x0F};

@@ -29,7 +29,7 @@ static void heartbeat_has_no_drift_over_10000_periods(void)
         next = fx_process();
     }
     TEST_ASSERT_EQUAL_UINT32(10000U, fx.node.stats.tx_frames - sent_before); /* one heartbeat per period */
-    TEST_ASSERT_EQUAL_UINT64(t0 + 10001U * 10000U, next);
+    TEST_ASSERT_EQUAL_UINT64(t0 + 10001UL * 10000U, next);
 }
 
 static void heartbeat_skips_periods_missed_entirely(void)

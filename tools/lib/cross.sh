@@ -33,3 +33,8 @@ need_cross_riscv() {
 need_qemu_arm() {
   need_tools "qemu-system-arm:qemu-system-arm timeout:coreutils"
 }
+
+need_avr() {
+  need_tools "avr-gcc:gcc-avr simavr:simavr timeout:coreutils" &&
+    need_files "/usr/lib/avr/include/avr/io.h:avr-libc"
+}
