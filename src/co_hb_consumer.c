@@ -5,6 +5,8 @@
  */
 #include "priv/co_priv.h"
 
+#if CO_CONFIG_HB_CONSUMER
+
 static void slot_msef(uint8_t node_id, uint8_t msef[5])
 {
     msef[0] = 0x02U; /* heartbeat consumer */
@@ -142,3 +144,5 @@ void co_hbc_written(co_node_t *node, const co_od_entry_t *e)
         co_node_routes_update(node); /* the heartbeats it takes changed */
     }
 }
+
+#endif /* CO_CONFIG_HB_CONSUMER */

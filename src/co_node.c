@@ -126,7 +126,9 @@ static void reset_communication(co_node_t *node, bool loaded)
 #if CO_CONFIG_NODE_GUARDING
     co_guard_reset(node);
 #endif
+#if CO_CONFIG_HB_CONSUMER
     co_hbc_reset(node);
+#endif
 #if CO_CONFIG_SYNC
     co_sync_reset(node);
 #endif
@@ -204,7 +206,7 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         node->route_cap = (uint16_t)(sizeof node->route_own / sizeof node->route_own[0]);
     }
     if (co_pdo_count(node) != CO_OK || co_sdo_count(node, cfg->sdo_servers, cfg->sdo_server_count) != CO_OK ||
-        co_od_sub_count(node->od, 0x1016U) > CO_HB_CONSUMER_MAX ||
+        co_od_sub_count(node->od, 0x1016U) > (CO_CONFIG_HB_CONSUMER ? CO_HB_CONSUMER_MAX : 0U) ||
         node->route_cap < CO_RX_ROUTES_FIXED + node->n_rpdo + node->n_sdo_extra) {
         return CO_ERR_RANGE;
     }
@@ -259,8 +261,14 @@ static void route_add(co_node_t *node, uint16_t id, uint16_t target)
 /* A heartbeat (0x701..0x77F) of a node this one monitors. */
 static bool monitored(const co_node_t *node, uint32_t id)
 {
+#if CO_CONFIG_HB_CONSUMER
     const uint32_t other = id - 0x700U;
     return other - 1U < 127U && (node->hbc.monitored[other >> 3] & (1U << (other & 7U))) != 0U;
+#else
+    (void)node;
+    (void)id;
+    return false;
+#endif
 }
 
 void co_node_routes_update(co_node_t *node)
@@ -335,8 +343,7 @@ uint16_t co_node_rx_ids(const co_node_t *node, uint16_t *ids, uint16_t cap)
     if (services_run(node)) { /* heartbeats consumed and the guard request, between the table's ids */
         for (uint16_t id = 0x701U; id <= 0x77FU; id++) {
             const co_frame_t guard = {id, 0U, CO_FRAME_RTR, {0U}};
-            const uint8_t other = (uint8_t)(id - 0x700U);
-            if (guarding_request(node, &guard) || (node->hbc.monitored[other >> 3] & (1U << (other & 7U))) != 0U) {
+            if (guarding_request(node, &guard) || monitored(node, id)) {
                 put_id(ids, cap, &n, id);
             }
         }
@@ -392,7 +399,11 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
     const uint16_t id = (uint16_t)frame->id;
     const co_rx_route_t *route = route_find(node, id);
     if (route == NULL) {
+#if CO_CONFIG_HB_CONSUMER
         return monitored(node, id) && services_run(node) && co_hbc_rx(node, frame);
+#else
+        return false;
+#endif
     }
     const uint16_t target = route->target;
     const uint16_t n = (uint16_t)(target & 0x0FFFU);
@@ -469,9 +480,11 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
             next = co_min_time(next, co_guard_process(node));
         }
 #endif
+#if CO_CONFIG_HB_CONSUMER
         if (take(node, CO_SVC_HBC, all)) {
             next = co_min_time(next, co_hbc_process(node));
         }
+#endif
         if (take(node, CO_SVC_SDO, all)) {
             next = co_min_time(next, co_sdo_process(node));
         }

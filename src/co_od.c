@@ -450,8 +450,10 @@ static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const 
         const uint32_t r = co_store_check_write(node, e, data, len);
         return r == CO_ABORT_NONE ? CO_HANDLED : r;
     }
+#if CO_CONFIG_HB_CONSUMER
     case 0x1016:
         return co_hbc_check_write(node, e, data, len);
+#endif
     case 0x1017:
         return co_hb_check_write(node, e, data, len);
     default:
@@ -481,10 +483,12 @@ static void comm_written(co_node_t *node, const co_od_entry_t *e)
         co_node_wake(node, CO_SVC_SYNC);
         break;
 #endif
+#if CO_CONFIG_HB_CONSUMER
     case 0x1016:
         co_hbc_written(node, e);
         co_node_wake(node, CO_SVC_HBC);
         break;
+#endif
     case 0x1017:
         co_hb_written(node, e); /* life guarding, which a heartbeat producer ends, sees it at its deadline */
         break;

@@ -15,14 +15,14 @@
  * - LSS fastscan kept: both manuals claim CiA 305 LSS, and the emulator relies on fastscan to
  *   tell several nodes of one type apart (distinct serial numbers).
  * - PDO counts: 1 RPDO (both), 3 TPDOs (PRO IONIZER; the SDS has 2).
- * - Heartbeat consumer: neither dictionary has 0x1016; one slot is the C99 minimum (no zero-length array).
+ * - No heartbeat consumer: neither dictionary has 0x1016.
  * - EMCY: the defaults (8 active errors, 8 queued frames): the PRO IONIZER can have several warnings and
  *   errors active at once and logs when the list is full; keeping the default keeps its behaviour.
  * - TX queue: 8 frames. The largest burst of these devices is boot-up + 3 TPDOs on entering
  *   Operational + an EMCY + an SDO response + a heartbeat (7 frames) against a port that is busy.
  *
- * The device tests of both devices pass with this profile on the host (see docs/footprint.md, which
- * also gives sizeof(co_node_t) with it).
+ * The device tests of both devices pass with this profile on the host (tools/profile-tests eltex, ctest
+ * profile/eltex; docs/footprint.md gives sizeof(co_node_t) with it).
  */
 #ifndef CO_PROFILE_ELTEX_H
 #define CO_PROFILE_ELTEX_H
@@ -38,7 +38,7 @@
 #define CO_CONFIG_LSS_FASTSCAN 1
 #define CO_RPDO_MAX 1U
 #define CO_TPDO_MAX 3U
-#define CO_HB_CONSUMER_MAX 1U
+#define CO_CONFIG_HB_CONSUMER 0
 #define CO_TX_QUEUE_LEN 8U
 
 #endif /* CO_PROFILE_ELTEX_H */

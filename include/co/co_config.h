@@ -79,6 +79,12 @@
 #define CO_CONFIG_NODE_GUARDING 1
 #endif
 
+/** 1: the heartbeat consumer (0x1016) is compiled in, with CO_HB_CONSUMER_MAX slots. 0: none (a node whose OD has
+ *  entries in 0x1016 is then refused by co_node_init with CO_ERR_RANGE). */
+#ifndef CO_CONFIG_HB_CONSUMER
+#define CO_CONFIG_HB_CONSUMER 1
+#endif
+
 /** 1: the SYNC consumer and synchronous PDOs are compiled in. */
 #ifndef CO_CONFIG_SYNC
 #define CO_CONFIG_SYNC 1

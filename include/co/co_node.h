@@ -367,7 +367,9 @@ struct co_node {
 #if CO_CONFIG_NODE_GUARDING
     co_guard_t guard;
 #endif
+#if CO_CONFIG_HB_CONSUMER
     co_hb_consumer_t hbc;
+#endif
     co_emcy_t emcy;
     co_sdo_server_t sdo;        /**< The default SDO server (0x1200: 0x600/0x580 + node-ID). */
     co_sdo_server_t *sdo_extra; /**< co_node_cfg_t.sdo_servers: the servers of 0x1201.. present in the OD. */

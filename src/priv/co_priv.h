@@ -104,12 +104,17 @@ enum co_service {
     CO_SVC_EMCY = 0x80U,
     CO_SVC_ALL = 0xFFU
 };
+/* The services compiled in: a mark of one left out would never be taken, and every pass would return now. */
+#define CO_SVC_PRESENT                                                                                            \
+    ((unsigned)CO_SVC_ALL & ~((CO_CONFIG_NODE_GUARDING ? 0U : (unsigned)CO_SVC_GUARD) |                             \
+                              (CO_CONFIG_HB_CONSUMER ? 0U : (unsigned)CO_SVC_HBC) |                                \
+                              (CO_CONFIG_SYNC ? 0U : (unsigned)CO_SVC_SYNC)))
 /* Bucket of a CAN-ID in co_node_t.route_hash: the low node-ID bits mixed with the function code, so that the
  * COB-IDs of one node and those of its neighbours fall apart. */
 #define CO_ROUTE_HASH(id) ((unsigned)((id) ^ ((id) >> 7)) & 15U)
 static inline void co_node_wake(co_node_t *node, unsigned services)
 {
-    node->wake = (uint8_t)(node->wake | services);
+    node->wake = (uint8_t)(node->wake | (services & CO_SVC_PRESENT));
 }
 /* A service's new deadline, where its change needs no pass of the service now (a timer restarted by a frame):
  * the next pass comes no later than t. */
