@@ -60,18 +60,17 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
 static void enqueue(co_node_t *node, uint16_t code, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
-    co_frame_t f = {0U, 8U, 0U, {0U}};
-    co_put_u16(f.data, code);
-    f.data[2] = error_register(node);
-    memcpy(&f.data[3], msef, 5U);
     if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way */
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
         em->lost++;
     }
-    em->queue[(unsigned)(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN] = f;
+    uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN];
+    co_put_u16(data, code);
+    data[2] = error_register(node);
+    memcpy(&data[3], msef, 5U);
     em->q_count++;
-    co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, f.data[2]);
+    co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, data[2]);
 }
 
 bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8_t *msef)
@@ -155,7 +154,8 @@ co_time_us_t co_emcy_process(co_node_t *node)
         if (node->now < em->next_allowed) {
             return em->next_allowed;
         }
-        co_frame_t f = em->queue[em->q_head];
+        co_frame_t f = {0U, 8U, 0U, {0U}};
+        memcpy(f.data, em->queue[em->q_head], 8U);
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
         if ((em->cob_id & CO_COBID_INVALID) != 0U) {

@@ -66,8 +66,10 @@ void co_node_send(co_node_t *node, const co_frame_t *frame)
         tx_dropped(node, frame);
         return;
     }
-    const uint8_t tail = (uint8_t)((unsigned)(node->txq.head + node->txq.count) % CO_TX_QUEUE_LEN);
-    node->txq.frame[tail] = *frame;
+    co_txq_frame_t *q = &node->txq.frame[(unsigned)(node->txq.head + node->txq.count) % CO_TX_QUEUE_LEN];
+    q->id = (uint16_t)frame->id;
+    q->len = frame->len;
+    memcpy(q->data, frame->data, 8U);
     node->txq.count++;
 }
 
@@ -78,14 +80,17 @@ static co_time_us_t txq_flush(co_node_t *node)
         return node->lss.silent_until; /* CiA 305 bit-rate switch: queued frames wait for its end */
     }
     while (node->txq.count > 0U) {
-        const co_status_t st = node->port->send(node->port_ctx, &node->txq.frame[node->txq.head]);
+        const co_txq_frame_t *q = &node->txq.frame[node->txq.head];
+        co_frame_t f = {q->id, q->len, 0U, {0U}};
+        memcpy(f.data, q->data, 8U);
+        const co_status_t st = node->port->send(node->port_ctx, &f);
         if (st == CO_ERR_BUSY) {
             return node->now + CO_TX_RETRY_US;
         }
         if (st == CO_OK) {
             node->stats.tx_frames++;
         } else {
-            tx_dropped(node, &node->txq.frame[node->txq.head]);
+            tx_dropped(node, &f);
         }
         node->txq.head = (uint8_t)((node->txq.head + 1U) % CO_TX_QUEUE_LEN);
         node->txq.count--;

@@ -49,7 +49,7 @@ static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_
         return CO_ABORT_NOT_MAPPABLE;
     }
     out->len = (uint8_t)(bits / 8U);
-    out->entry = NULL;
+    out->row = CO_PDO_MAP_DUMMY;
     if (receive && index >= 0x0001U && index <= 0x0007U && sub == 0U) {
         if ((node->od->dummy_usage & (1U << index)) == 0U) {
             return CO_ABORT_NOT_MAPPABLE; /* the device does not take dummy entries of this type ([DummyUsage]) */
@@ -64,7 +64,7 @@ static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_
     if ((e->flags & (receive ? CO_OD_RPDO : CO_OD_TPDO)) == 0U || e->size != out->len) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    out->entry = e;
+    out->row = (uint16_t)(e - node->od->entries);
     return CO_ABORT_NONE;
 }
 
@@ -161,10 +161,9 @@ static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
 {
     uint8_t pos = 0U;
     for (uint8_t i = 0U; i < p->n_map; i++) {
-        const co_od_entry_t *e = p->map[i].entry;
-        if (e != NULL) {
+        if (p->map[i].row != CO_PDO_MAP_DUMMY) {
             /* The device hook may refuse a value; an RPDO has no way to answer, so it is dropped. */
-            (void)co_od_write_entry(node, e, &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
+            (void)co_od_write_entry(node, &node->od->entries[p->map[i].row], &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
         }
         pos = (uint8_t)(pos + p->map[i].len);
     }
@@ -229,7 +228,7 @@ static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
     uint8_t pos = 0U;
     memset(buf, 0, 8U);
     for (uint8_t i = 0U; i < p->n_map; i++) {
-        (void)co_od_sample(node, p->map[i].entry, &buf[pos], p->map[i].len);
+        (void)co_od_sample(node, &node->od->entries[p->map[i].row], &buf[pos], p->map[i].len);
         pos = (uint8_t)(pos + p->map[i].len);
     }
     return pos;

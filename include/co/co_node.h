@@ -173,8 +173,15 @@ typedef enum co_nvm_status {
 
 /* ---- Service state (read-only for the application) ------------------------------------------------ */
 
+/** A frame waiting in the TX queue: the core sends only data frames with 11-bit CAN-IDs (12 bytes, not 16). */
+typedef struct co_txq_frame {
+    uint16_t id;
+    uint8_t len;
+    uint8_t data[8];
+} co_txq_frame_t;
+
 typedef struct co_txq {
-    co_frame_t frame[CO_TX_QUEUE_LEN];
+    co_txq_frame_t frame[CO_TX_QUEUE_LEN];
     uint8_t head;
     uint8_t count;
 } co_txq_t;
@@ -219,7 +226,7 @@ typedef struct co_emcy_error {
 typedef struct co_emcy {
     co_emcy_error_t active[CO_EMCY_ACTIVE_MAX];
     uint8_t n_active;
-    co_frame_t queue[CO_EMCY_QUEUE_LEN];
+    uint8_t queue[CO_EMCY_QUEUE_LEN][8]; /**< The 8 bytes of each EMCY waiting (its COB-ID is taken at sending). */
     uint8_t q_head;
     uint8_t q_count;
     co_time_us_t next_allowed;  /**< Inhibit time 0x1015: earliest time of the next EMCY. */
@@ -260,8 +267,11 @@ typedef struct co_sync {
     bool length_error;
 } co_sync_t;
 
+/** co_pdo_map_t.row of a dummy entry (RPDO): its bytes are skipped. */
+#define CO_PDO_MAP_DUMMY 0xFFFFU
+
 typedef struct co_pdo_map {
-    const co_od_entry_t *entry; /**< NULL for a dummy entry (RPDO) */
+    uint16_t row;               /**< The mapped object's row in co_od_t.entries, or CO_PDO_MAP_DUMMY. */
     uint8_t len;                /**< Bytes. */
 } co_pdo_map_t;
 
