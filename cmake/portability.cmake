@@ -59,6 +59,21 @@ if(CO_FOOTPRINT_TEST AND CO_BUILD_TESTS)
   set_tests_properties(footprint/docs PROPERTIES LABELS footprint TIMEOUT 1800)
 endif()
 
+# One ctest test per unit test, <label>/test_*, that runs <dir>/test_*.elf with RUNNER --run ELF [ARGS...] and,
+# where the host build has the same test, --host <its binary> (the per-case results must be the host's).
+function(co_add_cross_unit_tests label dir runner)
+  file(GLOB co_unit_test_sources ${PROJECT_SOURCE_DIR}/tests/unit/test_*.c)
+  foreach(src IN LISTS co_unit_test_sources)
+    get_filename_component(t ${src} NAME_WE)
+    set(co_host_arg "")
+    if(TARGET ${t})
+      set(co_host_arg --host $<TARGET_FILE:${t}>)
+    endif()
+    add_test(NAME ${label}/${t} COMMAND ${runner} --run ${dir}/${t}.elf ${ARGN} ${co_host_arg})
+    set_tests_properties(${label}/${t} PROPERTIES LABELS ${label} TIMEOUT 600)
+  endforeach()
+endfunction()
+
 # ---- Target tests: tests/unit on a Cortex-M3 under QEMU (label target) ---------------------------------
 option(CO_TARGET_TESTS "Build the unit tests for Cortex-M3 and run them under qemu-system-arm (label target)" OFF)
 set(CO_TARGET_BOARD mps2-an385 CACHE STRING "QEMU board of the target tests: mps2-an385 or lm3s6965evb")
@@ -72,18 +87,7 @@ if(CO_TARGET_TESTS AND CO_BUILD_TESTS)
                -DCO_TARGET_BOARD=${CO_TARGET_BOARD} -DCMAKE_BUILD_TYPE=MinSizeRel
     BUILD_ALWAYS ON
     INSTALL_COMMAND "")
-  file(GLOB co_unit_test_sources ${PROJECT_SOURCE_DIR}/tests/unit/test_*.c)
-  foreach(src IN LISTS co_unit_test_sources)
-    get_filename_component(t ${src} NAME_WE)
-    set(co_host_arg "")
-    if(TARGET ${t})
-      set(co_host_arg --host $<TARGET_FILE:${t}>)  # the same test on the host: results must be equal
-    endif()
-    add_test(NAME target/${t}
-             COMMAND ${PROJECT_SOURCE_DIR}/tools/target-tests --run ${co_target_dir}/${t}.elf --board ${CO_TARGET_BOARD}
-                     ${co_host_arg})
-    set_tests_properties(target/${t} PROPERTIES LABELS target TIMEOUT 600)
-  endforeach()
+  co_add_cross_unit_tests(target ${co_target_dir} ${PROJECT_SOURCE_DIR}/tools/target-tests --board ${CO_TARGET_BOARD})
 endif()
 
 # ---- AVR tests: tests/unit on an 8-bit ATmega1284P under simavr (label avr) ------------------------------
@@ -98,14 +102,5 @@ if(CO_AVR_TESTS AND CO_BUILD_TESTS)
                -DCMAKE_BUILD_TYPE=MinSizeRel
     BUILD_ALWAYS ON
     INSTALL_COMMAND "")
-  file(GLOB co_unit_test_sources ${PROJECT_SOURCE_DIR}/tests/unit/test_*.c)
-  foreach(src IN LISTS co_unit_test_sources)
-    get_filename_component(t ${src} NAME_WE)
-    set(co_host_arg "")
-    if(TARGET ${t})
-      set(co_host_arg --host $<TARGET_FILE:${t}>)  # the same test on the host: results must be equal
-    endif()
-    add_test(NAME avr/${t} COMMAND ${PROJECT_SOURCE_DIR}/tools/avr-tests --run ${co_avr_dir}/${t}.elf ${co_host_arg})
-    set_tests_properties(avr/${t} PROPERTIES LABELS avr TIMEOUT 600)
-  endforeach()
+  co_add_cross_unit_tests(avr ${co_avr_dir} ${PROJECT_SOURCE_DIR}/tools/avr-tests)
 endif()

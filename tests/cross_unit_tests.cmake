@@ -1,0 +1,39 @@
+# Shared by the cross-built unit-test projects (tests/target/ for Cortex-M3 under QEMU, tests/avr/ for an AVR
+# under simavr): the core, the Unity harness and the test support built for the target, one <test>.elf per
+# tests/unit/test_*.c, and <build>/tests.txt (a first line FIRST_LINE, then one test name a line).
+#   co_cross_unit_tests(RUNTIME <library: output, startup, exit> UNITY_CONFIG_DIR <dir of unity_config.h>
+#                       FIRST_LINE <text> [CORE_DEFS <definitions of the core's configuration>...]
+#                       [FIXTURE_DEFS <sizes of the test fixtures>...])
+# Expects CO_ROOT (the repository) and CO_WARNINGS.
+function(co_cross_unit_tests)
+  cmake_parse_arguments(arg "" "RUNTIME;UNITY_CONFIG_DIR;FIRST_LINE" "CORE_DEFS;FIXTURE_DEFS" ${ARGN})
+  file(GLOB co_core_sources ${CO_ROOT}/src/co_*.c)
+  add_library(co_core STATIC ${co_core_sources})
+  target_include_directories(co_core PUBLIC ${CO_ROOT}/include PRIVATE ${CO_ROOT}/src)
+  target_compile_definitions(co_core PUBLIC ${arg_CORE_DEFS})
+  target_compile_options(co_core PRIVATE ${CO_WARNINGS})
+
+  add_library(unity STATIC ${CO_ROOT}/tests/unity/unity.c)
+  target_include_directories(unity PUBLIC ${CO_ROOT}/tests/unity ${arg_UNITY_CONFIG_DIR})
+  target_compile_definitions(unity PUBLIC UNITY_INCLUDE_CONFIG_H)
+  target_link_libraries(unity PUBLIC ${arg_RUNTIME})
+
+  add_library(co_test_support STATIC ${CO_ROOT}/tests/support/fake_port.c ${CO_ROOT}/tests/support/test_od.c
+              ${CO_ROOT}/tests/support/fixture.c)
+  target_include_directories(co_test_support PUBLIC ${CO_ROOT}/tests/support ${CO_ROOT}/src)
+  target_compile_definitions(co_test_support PUBLIC ${arg_FIXTURE_DEFS})
+  target_link_libraries(co_test_support PUBLIC co_core unity)
+  target_compile_options(co_test_support PRIVATE ${CO_WARNINGS})
+
+  # Same list as the host build: every tests/unit/test_*.c.
+  file(GLOB co_unit_test_sources ${CO_ROOT}/tests/unit/test_*.c)
+  file(WRITE ${CMAKE_BINARY_DIR}/tests.txt "${arg_FIRST_LINE}\n")
+  foreach(src IN LISTS co_unit_test_sources)
+    get_filename_component(t ${src} NAME_WE)
+    add_executable(${t} ${src})
+    set_target_properties(${t} PROPERTIES SUFFIX .elf)
+    target_link_libraries(${t} PRIVATE co_test_support)
+    target_compile_options(${t} PRIVATE ${CO_WARNINGS})
+    file(APPEND ${CMAKE_BINARY_DIR}/tests.txt "${t}\n")
+  endforeach()
+endfunction()
