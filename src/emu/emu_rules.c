@@ -23,10 +23,10 @@ typedef struct rule {
     double a, b, c, d;             /* per kind: see rule_value */
     double lo, hi;                 /* random_walk bounds */
     uint64_t seed;
-    uint32_t every_us;
+    uint64_t every_us;             /* up to a day: more than 32 bits of µs */
     bool repeat;
     double *values;                /* steps */
-    uint32_t *durations_us;
+    uint64_t *durations_us;
     uint32_t n_steps;
 } rule_t;
 
@@ -45,7 +45,7 @@ struct rules {
     uint32_t n_alarms;
     bool cia402;
     cia402_objects_t drive;
-    uint32_t tick_us;
+    uint64_t tick_us;
     char *device;
 };
 
@@ -225,14 +225,15 @@ static double key_number(parse_t *p, const yaml_node_t *map, const char *key, do
     return number(p, n, what);
 }
 
-static uint32_t key_ms(parse_t *p, const yaml_node_t *map, const char *key, double dflt, const char *what)
+/* A duration given in ms (1 ms .. 1 day), in µs. */
+static uint64_t key_ms(parse_t *p, const yaml_node_t *map, const char *key, double dflt, const char *what)
 {
     const double ms = key_number(p, map, key, dflt, false, what);
     if (!(ms >= 1.0 && ms <= 86400000.0)) {
         fail(p, lookup(p, map, key), "%s: %s must be 1 ms .. 1 day", what, key);
         return 1000U;
     }
-    return (uint32_t)(ms * 1000.0);
+    return (uint64_t)(ms * 1000.0); /* a day is 8.64e10 µs: past 32 bits (found by the long run of fuzz_rules) */
 }
 
 /* true/false (absent: false) */
@@ -312,7 +313,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         only_keys(p, v, (const char *const[]){"offset", "amplitude", "period_ms", "phase_deg", NULL}, "sine");
         r->a = key_number(p, v, "offset", 0.0, false, "sine");
         r->b = key_number(p, v, "amplitude", 0.0, true, "sine");
-        r->c = key_ms(p, v, "period_ms", 1000.0, "sine") / 1e6;
+        r->c = (double)key_ms(p, v, "period_ms", 1000.0, "sine") / 1e6;
         r->d = key_number(p, v, "phase_deg", 0.0, false, "sine");
         break;
     case B_WALK:
@@ -374,7 +375,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
                 fail(p, item, "steps: a step lasts 1 ms .. 1 day%s%s", NULL, NULL);
                 break;
             }
-            r->durations_us[i] = (uint32_t)(ms * 1000.0);
+            r->durations_us[i] = (uint64_t)(ms * 1000.0);
             r->n_steps++;
         }
         break;
