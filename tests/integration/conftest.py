@@ -175,6 +175,14 @@ class Emulator:
         return "\n".join([f"{' '.join(self.args)}", f"{state}; stderr{f' (last {lines} lines)' if skipped else ''}:"]
                          + tail)
 
+    def wait(self, timeout=5.0):
+        """Waits for the program to end by itself and for its last output lines to be read: the readers run in
+        their own threads and may still hold lines when the process is gone."""
+        rc = self.proc.wait(timeout=timeout)
+        for t in self._threads:
+            t.join(timeout=timeout)
+        return rc
+
     def stop(self, sig=None, timeout=5.0):
         if self.proc.poll() is None:
             if sig is None:

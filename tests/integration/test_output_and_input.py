@@ -120,7 +120,7 @@ def test_an_overlong_stdin_line_is_refused_whole_and_its_tail_never_runs(emulato
     emu.command("list" + " " * 2043, expect=f"node {NODE}: sds")
     assert emu.proc.poll() is None
     emu.command("#" + "y" * 5000 + "\nquit")
-    assert emu.proc.wait(timeout=5) == 0
+    assert emu.wait(timeout=5) == 0
     assert "error: stdin line 4 is longer than 2047 bytes: ignored" in emu.out_lines
 
 
