@@ -143,7 +143,7 @@ int runtime_loop(emu_t *emu)
         now = socketcan_now_us();
         for (size_t i = 0U; i < emu->n_buses; i++) {
             if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
-                bus_receive(emu->buses[i], now);
+                bus_receive(emu->buses[i], now, next);
             }
             if ((pfd[i].revents & POLLOUT) != 0) {
                 bus_tx_ready(emu->buses[i]); /* room in the socket's buffer: nodes with queued frames retry now */
