@@ -21,6 +21,10 @@
 
 #include "co/co.h"
 
+#if CO_CONFIG_TIME32
+#error "the device models (and canopen-emu) need 64-bit time: build them with CO_CONFIG_TIME32 0"
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif

@@ -140,18 +140,21 @@ void co_emcy_reset(co_node_t *node)
     node->emcy.n_active = 0U;
     node->emcy.q_count = 0U;
     node->emcy.q_head = 0U;
-    node->emcy.next_allowed = 0U;
+    node->emcy.next_allowed = CO_NEVER;
     update_register(node);
 }
 
 co_time_us_t co_emcy_process(co_node_t *node)
 {
     co_emcy_t *em = &node->emcy;
+    if (co_time_reached(node->now, em->next_allowed)) {
+        em->next_allowed = CO_NEVER; /* the inhibit time is over: retired (a past time must not wrap into the future) */
+    }
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
-        return CO_NEVER; /* kept until the node leaves Stopped */
+        return CO_TIME32_RETIRE(em->next_allowed); /* kept until the node leaves Stopped */
     }
     while (em->q_count > 0U) {
-        if (node->now < em->next_allowed) {
+        if (em->next_allowed != CO_NEVER) {
             return em->next_allowed;
         }
         co_frame_t f = {0U, 8U, 0U, {0U}};
@@ -163,9 +166,9 @@ co_time_us_t co_emcy_process(co_node_t *node)
         }
         f.id = em->cob_id & CO_COBID_CAN_ID;
         co_node_send(node, &f);
-        em->next_allowed = node->now + (uint32_t)em->inhibit_100us * 100U;
+        em->next_allowed = em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
     }
-    return CO_NEVER;
+    return CO_TIME32_RETIRE(em->next_allowed);
 }
 
 uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)

@@ -10,10 +10,7 @@
 
 static const uint8_t guard_msef[5] = {0x01U, 0U, 0U, 0U, 0U}; /* distinguishes life guarding from HB consumers */
 
-static co_time_us_t life_time_us(const co_node_t *node)
-{
-    return co_ms_to_us((uint32_t)node->guard.guard_ms * node->guard.life_factor);
-}
+static uint32_t life_time_ms(const co_node_t *node) { return (uint32_t)node->guard.guard_ms * node->guard.life_factor; }
 
 void co_guard_written(co_node_t *node)
 {
@@ -40,9 +37,9 @@ void co_guard_rx(co_node_t *node, const co_frame_t *f)
     const co_frame_t reply = {0x700U + node->node_id, 1U, 0U, {(uint8_t)(node->guard.toggle | (uint8_t)node->nmt_state)}};
     co_node_send(node, &reply);
     node->guard.toggle ^= 0x80U;
-    const co_time_us_t life = life_time_us(node);
+    const uint32_t life = life_time_ms(node);
     node->guard.armed = life != 0U;
-    node->guard.deadline = life != 0U ? node->now + life : CO_NEVER;
+    node->guard.deadline = life != 0U ? co_long_timer_start(node->now, life, &node->guard.rest_ms) : CO_NEVER;
     co_node_due(node, node->guard.deadline);
     if (node->guard.failed) {
         node->guard.failed = false;
@@ -59,7 +56,8 @@ co_time_us_t co_guard_process(co_node_t *node)
         node->guard.armed = false;
         return CO_NEVER;
     }
-    if (node->now >= node->guard.deadline) {
+    if (co_time_reached(node->now, node->guard.deadline) &&
+        co_long_timer_expired(&node->guard.deadline, &node->guard.rest_ms)) {
         node->guard.failed = true;
         co_node_event(node, CO_EV_GUARD_TIMEOUT, 0x100CU, 0U, 0U, 0U);
         (void)co_emcy_raise(node, 0x8130U, 0x10U, guard_msef);

@@ -11,7 +11,7 @@ static void start(co_node_t *node, uint32_t ms)
 {
     node->hb.period_ms = (uint16_t)ms;
     const uint32_t p = period_us(node);
-    node->hb.due = p != 0U ? node->now + p : CO_NEVER;
+    node->hb.due = p != 0U ? co_time_after(node->now, p) : CO_NEVER;
     co_node_due(node, node->hb.due);
 }
 
@@ -21,9 +21,9 @@ co_time_us_t co_hb_process(co_node_t *node)
 {
     const uint32_t p = period_us(node);
     if (p == 0U || node->hb.due == CO_NEVER) {
-        return node->hb.due = (p != 0U ? node->now + p : CO_NEVER);
+        return node->hb.due = (p != 0U ? co_time_after(node->now, p) : CO_NEVER);
     }
-    if (node->now >= node->hb.due) {
+    if (co_time_reached(node->now, node->hb.due)) {
         const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)node->nmt_state}};
         co_node_send(node, &f);
         /* Next deadline on the original grid; periods missed entirely (a very late call) are skipped. */

@@ -88,7 +88,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
             (void)co_emcy_clear(node, 0x8130U, msef);
         }
         s->state = 2U;
-        s->deadline = node->now + (uint32_t)s->time_ms * 1000U;
+        s->deadline = co_time_after(node->now, (uint32_t)s->time_ms * 1000U);
         co_node_due(node, s->deadline);
     }
     return used;
@@ -102,7 +102,7 @@ co_time_us_t co_hbc_process(co_node_t *node)
         if (s->state != 2U) {
             continue;
         }
-        if (node->now >= s->deadline) {
+        if (co_time_reached(node->now, s->deadline)) {
             uint8_t msef[5];
             s->state = 3U;
             slot_msef(s->node_id, msef);

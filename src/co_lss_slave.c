@@ -36,7 +36,7 @@ void co_lss_init(co_node_t *node)
     l->ident_step = 0U;
     l->fastscan_pos = 0U;
     l->switch_pending = false;
-    l->silent_until = 0U;
+    l->silent_until = CO_NEVER;
 }
 
 bool co_lss_set_pending_node_id(co_node_t *node, uint8_t node_id)
@@ -216,8 +216,8 @@ static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
     case 0x15: {
         const uint32_t delay = (uint32_t)co_get_u16(&d[1]) * 1000U;
         l->switch_pending = true;
-        l->switch_at = node->now + delay;
-        l->silent_until = node->now + 2U * delay;
+        l->switch_at = co_time_after(node->now, delay);
+        l->silent_until = co_time_after(node->now, 2U * delay);
         break;
     }
     case 0x17: {
@@ -275,7 +275,7 @@ co_time_us_t co_lss_process(co_node_t *node)
 {
     co_lss_slave_t *l = &node->lss;
     if (l->switch_pending) {
-        if (node->now < l->switch_at) {
+        if (!co_time_reached(node->now, l->switch_at)) {
             return l->switch_at;
         }
         l->switch_pending = false;
@@ -286,11 +286,11 @@ co_time_us_t co_lss_process(co_node_t *node)
         }
         co_node_event(node, CO_EV_LSS_ACTIVATE, 0U, 0U, kbit, 0U);
     }
-    if (l->silent_until != 0U) {
-        if (node->now < l->silent_until) {
+    if (l->silent_until != CO_NEVER) {
+        if (!co_time_reached(node->now, l->silent_until)) {
             return l->silent_until;
         }
-        l->silent_until = 0U;
+        l->silent_until = CO_NEVER; /* retired: a past time would look ahead again once 32-bit time wraps */
     }
     return CO_NEVER;
 }

@@ -47,7 +47,7 @@ static void tx_dropped(co_node_t *node, const co_frame_t *frame)
 
 void co_node_send(co_node_t *node, const co_frame_t *frame)
 {
-    if (node->lss.silent_until != 0U && node->now < node->lss.silent_until) {
+    if (node->lss.silent_until != CO_NEVER && !co_time_reached(node->now, node->lss.silent_until)) {
         node->stats.tx_suppressed++; /* CiA 305: no frame during the bit-rate switch */
         return;
     }
@@ -76,7 +76,7 @@ void co_node_send(co_node_t *node, const co_frame_t *frame)
 /* Sends queued frames in order until the port is busy. Returns the retry deadline or CO_NEVER. */
 static co_time_us_t txq_flush(co_node_t *node)
 {
-    if (node->txq.count > 0U && node->lss.silent_until != 0U && node->now < node->lss.silent_until) {
+    if (node->txq.count > 0U && node->lss.silent_until != CO_NEVER && !co_time_reached(node->now, node->lss.silent_until)) {
         return node->lss.silent_until; /* CiA 305 bit-rate switch: queued frames wait for its end */
     }
     while (node->txq.count > 0U) {
@@ -85,7 +85,7 @@ static co_time_us_t txq_flush(co_node_t *node)
         memcpy(f.data, q->data, 8U);
         const co_status_t st = node->port->send(node->port_ctx, &f);
         if (st == CO_ERR_BUSY) {
-            return node->now + CO_TX_RETRY_US;
+            return co_time_after(node->now, CO_TX_RETRY_US);
         }
         if (st == CO_OK) {
             node->stats.tx_frames++;
@@ -456,7 +456,7 @@ static bool take(co_node_t *node, unsigned service, bool all)
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
 {
     node->now = now;
-    if (node->wake == 0U && now < node->next_due && node->txq.count == 0U) {
+    if (node->wake == 0U && !co_time_reached(now, node->next_due) && node->txq.count == 0U) {
         return node->next_due; /* nothing happened since the last pass and nothing is due */
     }
     return co_node_pass(node, now);
@@ -469,7 +469,7 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
     /* At a deadline every service runs and the deadlines are taken afresh. Otherwise only the marked ones: the
      * others' deadlines are as they were, none earlier than next_due, which therefore stays a bound (at worst
      * early, when a marked service's deadline moved later: the pass then is a full one). */
-    const bool all = now >= node->next_due;
+    const bool all = co_time_reached(now, node->next_due);
     co_time_us_t next = all ? CO_NEVER : node->next_due;
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
     next = co_min_time(next, txq_flush(node));
@@ -508,7 +508,7 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
         node->wake = 0U; /* nothing but LSS runs; a reset that starts the services wakes them all */
     }
     if (node->txq.count > 0U) {
-        next = co_min_time(next, now + CO_TX_RETRY_US);
+        next = co_min_time(next, co_time_after(now, CO_TX_RETRY_US));
     }
     if (node->wake != 0U) {
         next = now; /* a service earlier in the order was marked meanwhile (by a hook): call again at once */

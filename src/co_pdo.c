@@ -139,7 +139,7 @@ static void configure_tpdo(co_node_t *node, uint16_t n)
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
     p->sent_once = false;
     p->event = false;
-    p->next_allowed = 0U;
+    p->next_allowed = CO_NEVER;
     p->event_due = CO_NEVER;
     p->sync_count = 0U;
     p->sync_started = p->sync_start == 0U;
@@ -215,7 +215,7 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
     } else {
         rpdo_apply(node, p, f->data);
     }
-    p->deadline = p->event_ms != 0U ? node->now + (uint32_t)p->event_ms * 1000U : CO_NEVER;
+    p->deadline = p->event_ms != 0U ? co_time_after(node->now, (uint32_t)p->event_ms * 1000U) : CO_NEVER;
     co_node_due(node, p->deadline);
     if (p->timeout_error) {
         p->timeout_error = false;
@@ -242,14 +242,14 @@ static void tpdo_send(co_node_t *node, co_tpdo_t *p, const uint8_t buf[8])
     memcpy(p->last, buf, 8U);
     p->sent_once = true;
     p->event = false;
-    p->next_allowed = node->now + p->inhibit_us;
+    p->next_allowed = p->inhibit_us != 0U ? co_time_after(node->now, p->inhibit_us) : CO_NEVER;
 }
 
 static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
 {
     uint8_t buf[8];
     bool cos = false;
-    const bool timer = p->event_due != CO_NEVER && node->now >= p->event_due;
+    const bool timer = co_time_reached(node->now, p->event_due);
     /* Mapped values change only where a write says so (node->cos_pending, co_node_values_changed): sampled then,
      * and when something is to be sent anyway. */
     if (p->mpdo == 0U && (node->cos_pending || !p->sent_once || p->event || timer)) {
@@ -258,7 +258,7 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
     }
     const bool changed = !p->sent_once || p->event || cos;
     if (changed || timer) {
-        if (node->now < p->next_allowed) {
+        if (p->next_allowed != CO_NEVER) { /* (co_pdo_process retires it when it has come) */
             p->event = true; /* waits for the inhibit time; the timer (if it fired) is served with it */
             return p->next_allowed;
         }
@@ -277,10 +277,10 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
             /* Timer-driven: stay on the original grid so late calls do not accumulate drift. */
             p->event_due = co_next_on_grid(p->event_due, p->event_us, node->now);
         } else {
-            p->event_due = node->now + p->event_us; /* the event timer restarts at every transmission */
+            p->event_due = co_time_after(node->now, p->event_us); /* the event timer restarts at every transmission */
         }
     }
-    return p->event_due;
+    return co_min_time(p->event_due, CO_TIME32_RETIRE(p->next_allowed));
 }
 
 co_time_us_t co_pdo_process(co_node_t *node)
@@ -295,7 +295,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
         if (!p->valid || p->deadline == CO_NEVER) {
             continue;
         }
-        if (node->now >= p->deadline) {
+        if (co_time_reached(node->now, p->deadline)) {
             p->deadline = CO_NEVER;
             p->timeout_error = true;
             (void)co_emcy_raise(node, 0x8250U, 0x10U, rpdo_msef);
@@ -306,11 +306,16 @@ co_time_us_t co_pdo_process(co_node_t *node)
     const bool cos = node->cos_pending;
     for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
+        if (co_time_reached(node->now, p->next_allowed)) {
+            p->next_allowed = CO_NEVER; /* the inhibit time is over (a past time must not wrap into the future) */
+        }
         if (!p->valid || p->type < 254U) {
+            next = co_min_time(next, CO_TIME32_RETIRE(p->next_allowed));
             continue;
         }
-        if (!cos && p->sent_once && !p->event && node->now < p->event_due) {
-            next = co_min_time(next, p->event_due); /* nothing to compare, nothing asked for, the timer not due */
+        if (!cos && p->sent_once && !p->event && !co_time_reached(node->now, p->event_due)) {
+            /* nothing to compare, nothing asked for, the timer not due */
+            next = co_min_time(next, co_min_time(p->event_due, CO_TIME32_RETIRE(p->next_allowed)));
             continue;
         }
         next = co_min_time(next, tpdo_event_driven(node, p));
@@ -372,7 +377,7 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
         co_tpdo_t *p = &node->tpdo[n];
         p->sent_once = false;
         p->event = false;
-        p->next_allowed = 0U;
+        p->next_allowed = CO_NEVER;
         p->event_due = CO_NEVER;
         p->sync_count = 0U;
         p->sync_started = p->sync_start == 0U;

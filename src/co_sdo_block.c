@@ -43,7 +43,7 @@ static void start_transfer(co_sdo_server_t *s, uint8_t state, uint16_t index, ui
     s->sub = sub;
     s->pos = 0U;
     s->seq = 0U;
-    s->deadline = now + CO_SDO_TIMEOUT_US;
+    s->deadline = co_time_after(now, CO_SDO_TIMEOUT_US);
 }
 
 /* Initiate block download (byte 0 0b110x_xcs0: c client CRC, s size indicated) or block upload (0b101x_xc00, byte 4
@@ -211,7 +211,7 @@ bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
     const uint8_t cmd = f->data[0];
     const uint8_t state = s->state;
     if (state == CO_SDO_BLK_DOWNLOAD) {
-        s->deadline = node->now + CO_SDO_TIMEOUT_US;
+        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
         download_segment(node, s, f->data); /* every frame but an abort (0x80, handled before) is a segment */
         return true;
     }
@@ -221,12 +221,12 @@ bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
     }
     if (state == CO_SDO_BLK_UPLOAD_START && (cmd & 0xE3U) == 0xA3U) {
         s->state = CO_SDO_BLK_UPLOAD;
-        s->deadline = node->now + CO_SDO_TIMEOUT_US;
+        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
         upload_send_block(node, s);
         return true;
     }
     if (state == CO_SDO_BLK_UPLOAD && (cmd & 0xE3U) == 0xA2U) {
-        s->deadline = node->now + CO_SDO_TIMEOUT_US;
+        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
         upload_confirmation(node, s, f->data);
         return true;
     }
@@ -240,7 +240,7 @@ bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s)
 {
     upload_send_block(node, s);
-    return upload_block_sent(s) ? CO_NEVER : node->now + CO_TX_RETRY_US;
+    return upload_block_sent(s) ? CO_NEVER : co_time_after(node->now, CO_TX_RETRY_US);
 }
 
 #endif /* CO_CONFIG_SDO_BLOCK */

@@ -114,7 +114,7 @@ void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, u
     s->size = (uint32_t)len;
     s->pos = 0U;
     s->toggle = 0U;
-    s->deadline = node->now + CO_SDO_TIMEOUT_US;
+    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
 }
 
 /* The checks of a segmented or block download initiate before the transfer (the object's existence, access and
@@ -149,7 +149,7 @@ static void download_initiate_segmented(co_node_t *node, co_sdo_server_t *s, uin
     s->size = size;
     s->pos = 0U;
     s->toggle = 0U;
-    s->deadline = node->now + CO_SDO_TIMEOUT_US;
+    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
     co_sdo_respond(node, s, 0x60U, index, sub, NULL, 0U);
 }
 
@@ -168,7 +168,7 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, c
     memcpy(&s->buf[s->pos], seg, (size_t)n);
     s->pos += n;
     s->toggle ^= 1U;
-    s->deadline = node->now + CO_SDO_TIMEOUT_US;
+    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
     if ((cmd & 0x01U) == 0U) {
         co_sdo_respond(node, s, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
         return;
@@ -202,7 +202,7 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd)
     co_node_send(node, &f);
     s->pos += n;
     s->toggle ^= 1U;
-    s->deadline = node->now + CO_SDO_TIMEOUT_US;
+    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
     if (last) {
         s->state = SDO_IDLE;
     }
@@ -289,7 +289,7 @@ static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)
         s->state = SDO_IDLE; /* Stopped: the transfer ends silently (SDO says nothing in Stopped) */
         return CO_NEVER;
     }
-    if (node->now >= s->deadline) {
+    if (co_time_reached(node->now, s->deadline)) {
         co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_TIMEOUT);
         return CO_NEVER;
     }

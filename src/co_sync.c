@@ -10,10 +10,18 @@
 
 static const uint8_t sync_msef[5] = {0x03U, 0U, 0U, 0U, 0U};
 
-static co_time_us_t timeout_after(const co_node_t *node)
+/* 1.5 periods after now: exact to the µs up to 16.7 minutes, to the ms beyond (a long timer, co_priv.h). */
+static co_time_us_t timeout_after(co_node_t *node)
 {
-    const co_time_us_t period = node->sync.period_us;
-    return period != 0U ? node->now + period + period / 2U : CO_NEVER;
+    const uint32_t period = node->sync.period_us;
+    node->sync.rest_ms = 0U;
+    if (period == 0U) {
+        return CO_NEVER;
+    }
+    if (period <= CO_TIME_STEP_MS / 3U * 2000U) {
+        return co_time_after(node->now, period + period / 2U);
+    }
+    return co_long_timer_start(node->now, period / 1000U + period / 2000U, &node->sync.rest_ms);
 }
 
 /* The parameters the consumer uses at every SYNC, from the OD (at a reset and when one is written). The
@@ -69,7 +77,8 @@ co_time_us_t co_sync_process(co_node_t *node)
     if (node->sync.timeout_error || node->sync.timeout_due == CO_NEVER) {
         return CO_NEVER;
     }
-    if (node->now >= node->sync.timeout_due) {
+    if (co_time_reached(node->now, node->sync.timeout_due) &&
+        co_long_timer_expired(&node->sync.timeout_due, &node->sync.rest_ms)) {
         node->sync.timeout_error = true;
         (void)co_emcy_raise(node, 0x8100U, 0x10U, sync_msef);
         return CO_NEVER;

@@ -18,6 +18,8 @@
  * - No heartbeat consumer: neither dictionary has 0x1016.
  * - EMCY: the defaults (8 active errors, 8 queued frames): the PRO IONIZER can have several warnings and
  *   errors active at once and logs when the list is full; keeping the default keeps its behaviour.
+ * - 32-bit time (CO_CONFIG_TIME32): a Cortex-M or AVR firmware then has no 64-bit arithmetic in the core. The device
+ *   models of the emulator assume 64-bit time: their tests with this profile (tools/profile-tests) set it to 0.
  * - TX queue: 8 frames. The largest burst of these devices is boot-up + 3 TPDOs on entering
  *   Operational + an EMCY + an SDO response + a heartbeat (7 frames) against a port that is busy.
  *
@@ -40,5 +42,8 @@
 #define CO_TPDO_MAX 3U
 #define CO_CONFIG_HB_CONSUMER 0
 #define CO_TX_QUEUE_LEN 8U
+#ifndef CO_CONFIG_TIME32
+#define CO_CONFIG_TIME32 1
+#endif
 
 #endif /* CO_PROFILE_ELTEX_H */

@@ -12,6 +12,14 @@
 #include CO_CONFIG_HEADER
 #endif
 
+/** 1: co_time_us_t is 32 bits wide and wraps every 2^32 µs (71.6 minutes): no 64-bit arithmetic on a 32-bit (or
+ *  8-bit) core and 4 bytes less per deadline. The core then compares times wrap-safe, which holds while the
+ *  caller calls co_node_process() no later than 2^31 µs (35.8 minutes) after the deadline it returned (a main
+ *  loop calls it every few ms). 0 (the default): 64-bit time that never wraps. */
+#ifndef CO_CONFIG_TIME32
+#define CO_CONFIG_TIME32 0
+#endif
+
 /** Most receive PDOs one node can have (the OD may declare fewer). */
 #ifndef CO_RPDO_MAX
 #define CO_RPDO_MAX 4U

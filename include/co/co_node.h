@@ -198,7 +198,8 @@ typedef struct co_guard {
     bool present;               /**< The OD has 0x100C and 0x100D (else guard requests are not answered). */
     uint8_t life_factor;        /**< 0x100D, kept here by the write path. */
     uint16_t guard_ms;          /**< 0x100C, kept here by the write path. */
-    co_time_us_t deadline;      /**< Life-guarding deadline. */
+    co_time_us_t deadline;      /**< Life-guarding deadline (or a step towards it: rest_ms). */
+    uint32_t rest_ms;           /**< Life time still to wait after the deadline (long life times, src/priv/co_priv.h). */
 } co_guard_t;
 
 typedef struct co_hb_consumer_slot {
@@ -259,7 +260,8 @@ typedef struct co_sdo_server {
 } co_sdo_server_t;
 
 typedef struct co_sync {
-    co_time_us_t timeout_due;   /**< 1.5 x 0x1006 after the last SYNC, or CO_NEVER. */
+    co_time_us_t timeout_due;   /**< 1.5 x 0x1006 after the last SYNC (or a step towards it: rest_ms), or CO_NEVER. */
+    uint32_t rest_ms;           /**< Time still to wait after timeout_due (periods above 11 minutes). */
     uint32_t period_us;         /**< 0x1006, kept here by the write path. */
     uint16_t can_id;            /**< CAN-ID of 0x1005, CO_NO_CAN_ID without the object. */
     uint8_t overflow;           /**< 0x1019 (0: SYNC without a counter). */

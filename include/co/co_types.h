@@ -2,8 +2,9 @@
  * @file co_types.h
  * @brief Basic types shared by every part of the CANopen slave core: time, CAN frames, status codes.
  *
- * Contract: time is always a caller-supplied monotonic count of microseconds (co_time_us_t). It never
- * wraps in practice (2^64 µs is 584,000 years), so the core compares times with plain < and >=.
+ * Contract: time is always a caller-supplied monotonic count of microseconds (co_time_us_t). With 64-bit time (the
+ * default) it never wraps in practice (2^64 µs is 584,000 years). With CO_CONFIG_TIME32 (co_config.h) it is 32 bits
+ * wide and wraps every 71.6 minutes: compare times with co_time_before() / co_time_reached(), never with < or >=.
  */
 #ifndef CO_TYPES_H
 #define CO_TYPES_H
@@ -12,15 +13,34 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "co_config.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+#if CO_CONFIG_TIME32
+/** Monotonic time in microseconds, supplied by the caller; wraps every 2^32 µs. */
+typedef uint32_t co_time_us_t;
+/** "No deadline": returned by the process functions when nothing is due, ever. Never a deadline itself. */
+#define CO_NEVER UINT32_MAX
+/** Time a is earlier than time b (they are less than 2^31 µs apart). */
+static inline bool co_time_before(co_time_us_t a, co_time_us_t b) { return (int32_t)(a - b) < 0; }
+/** The deadline has come at time now (CO_NEVER never comes). */
+static inline bool co_time_reached(co_time_us_t now, co_time_us_t deadline)
+{
+    return deadline != CO_NEVER && (int32_t)(now - deadline) >= 0;
+}
+#else
 /** Monotonic time in microseconds, supplied by the caller. */
 typedef uint64_t co_time_us_t;
-
 /** "No deadline": returned by the process functions when nothing is due, ever. */
 #define CO_NEVER UINT64_MAX
+/** Time a is earlier than time b. */
+static inline bool co_time_before(co_time_us_t a, co_time_us_t b) { return a < b; }
+/** The deadline has come at time now (CO_NEVER never comes: no time reaches it). */
+static inline bool co_time_reached(co_time_us_t now, co_time_us_t deadline) { return now >= deadline; }
+#endif
 
 /** Frame flag: remote transmission request (RTR). */
 #define CO_FRAME_RTR 0x01U

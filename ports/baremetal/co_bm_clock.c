@@ -22,7 +22,7 @@ co_time_us_t co_bm_clock_now(co_bm_clock_t *c)
     } else {
         /* ticks * 10^6 < 2^52: no overflow; the remainder stays below hz. */
         const uint64_t scaled = (uint64_t)ticks * 1000000U + c->rem;
-        c->us += scaled / c->hz;
+        c->us += (co_time_us_t)(scaled / c->hz);
         c->rem = (uint32_t)(scaled % c->hz);
     }
     return c->us;
@@ -30,10 +30,13 @@ co_time_us_t co_bm_clock_now(co_bm_clock_t *c)
 
 uint32_t co_bm_clock_ticks_until(const co_bm_clock_t *c, co_time_us_t now, co_time_us_t deadline, uint32_t max_ticks)
 {
-    if (deadline <= now) {
+    if (deadline == CO_NEVER) {
+        return max_ticks;
+    }
+    if (!co_time_before(now, deadline)) { /* (wrap-safe with CO_CONFIG_TIME32) */
         return 0U;
     }
-    const uint64_t us = deadline - now;
+    const uint64_t us = (co_time_us_t)(deadline - now);
     if (us >= (UINT64_MAX / c->hz)) {
         return max_ticks;
     }

@@ -1,5 +1,6 @@
 /*
- * 64-bit microsecond time (co_time_us_t, never wraps) from a wrapping hardware counter: a free-running
+ * Microsecond time (co_time_us_t: 64 bits that never wrap, or 32 bits with CO_CONFIG_TIME32) from a wrapping
+ * hardware counter: a free-running
  * timer (16, 24 or 32 bits, any frequency) or a millisecond tick counter incremented by an interrupt
  * (SysTick: 32 bits at 1000 Hz). The conversion is exact (the remainder is kept), so there is no drift.
  *

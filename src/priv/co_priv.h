@@ -28,14 +28,61 @@ static inline void co_put_u32(uint8_t *p, uint32_t v)
     p[2] = (uint8_t)(v >> 16);
     p[3] = (uint8_t)(v >> 24);
 }
-static inline co_time_us_t co_min_time(co_time_us_t a, co_time_us_t b) { return a < b ? a : b; }
+/* The earlier of two deadlines (CO_NEVER is later than any). */
+static inline co_time_us_t co_min_time(co_time_us_t a, co_time_us_t b)
+{
+#if CO_CONFIG_TIME32
+    if (a == CO_NEVER || b == CO_NEVER) {
+        return a == CO_NEVER ? b : a;
+    }
+#endif
+    return co_time_before(b, a) ? b : a;
+}
+
+/* The time us after t, as a deadline: with 32-bit time a sum that lands on CO_NEVER (no deadline) is taken 1 µs
+ * earlier, or the service would never be due again. */
+static inline co_time_us_t co_time_after(co_time_us_t t, uint32_t us)
+{
+    const co_time_us_t d = (co_time_us_t)(t + us);
+#if CO_CONFIG_TIME32
+    return d == CO_NEVER ? d - 1U : d;
+#else
+    return d;
+#endif
+}
+
+/* What a service whose state holds a past-to-be time t (an inhibit time's end) returns when nothing else is due:
+ * with 32-bit time, t itself, so that a pass comes then and retires it (sets it to CO_NEVER) before the clock
+ * wraps far enough to make it look ahead again; with 64-bit time nothing (a past time stays past). */
+#if CO_CONFIG_TIME32
+#define CO_TIME32_RETIRE(t) (t)
+#else
+#define CO_TIME32_RETIRE(t) CO_NEVER
+#endif
 
 /* Time arithmetic without 64-bit multiplication or division: on a 32-bit core without them in hardware (Cortex-M0+)
  * they would link libgcc's __aeabi_lmul and __aeabi_uldivmod (~500 bytes) for the periodic services. */
 
-/* A duration in µs from one in ms, ms < 2^32 / 125 (a 16-bit guard time times an 8-bit life factor is < 2^24):
- * the product may exceed 32 bits, so it is built as (ms * 125) * 8 with a 32-bit multiplication and a shift. */
-static inline co_time_us_t co_ms_to_us(uint32_t ms) { return (co_time_us_t)(ms * 125U) << 3; }
+/* Long timers (life guarding: up to 4.6 hours; the SYNC timeout: up to 107 minutes): a deadline at most
+ * CO_TIME_STEP_MS ahead, which a 32-bit time holds safely, and the ms still to wait after it. */
+#define CO_TIME_STEP_MS 1000000U /* 16.7 minutes */
+static inline co_time_us_t co_long_timer_start(co_time_us_t now, uint32_t ms, uint32_t *rest_ms)
+{
+    const uint32_t step = ms > CO_TIME_STEP_MS ? CO_TIME_STEP_MS : ms;
+    *rest_ms = ms - step;
+    return co_time_after(now, step * 1000U);
+}
+/* At its deadline: true when the timer has run out, else the deadline moves on by the next step. */
+static inline bool co_long_timer_expired(co_time_us_t *deadline, uint32_t *rest_ms)
+{
+    if (*rest_ms == 0U) {
+        return true;
+    }
+    const uint32_t step = *rest_ms > CO_TIME_STEP_MS ? CO_TIME_STEP_MS : *rest_ms;
+    *rest_ms -= step;
+    *deadline = co_time_after(*deadline, step * 1000U);
+    return false;
+}
 
 /* The first deadline after now on the grid due + k * period (k >= 1, due <= now, period > 0): a late call does not
  * shift the grid. More than 2^32 µs late (71 minutes without a call), a new grid starts at now. */
@@ -43,9 +90,13 @@ static inline co_time_us_t co_next_on_grid(co_time_us_t due, uint32_t period, co
 {
     const co_time_us_t late = now - due;
     if (late < period) {
-        return due + period;
+        return co_time_after(due, period);
     }
-    return now + period - (late <= UINT32_MAX ? (uint32_t)late % period : 0U);
+#if CO_CONFIG_TIME32
+    return co_time_after(now, period - late % period);
+#else
+    return co_time_after(now, period - (late <= UINT32_MAX ? (uint32_t)late % period : 0U));
+#endif
 }
 
 /* COB-ID bits (0x1005, 0x1014, 0x14xx/0x18xx sub 1). */
@@ -118,12 +169,7 @@ static inline void co_node_wake(co_node_t *node, unsigned services)
 }
 /* A service's new deadline, where its change needs no pass of the service now (a timer restarted by a frame):
  * the next pass comes no later than t. */
-static inline void co_node_due(co_node_t *node, co_time_us_t t)
-{
-    if (t < node->next_due) {
-        node->next_due = t;
-    }
-}
+static inline void co_node_due(co_node_t *node, co_time_us_t t) { node->next_due = co_min_time(node->next_due, t); }
 
 /* Queues/sends a frame through the port; frames are retried when the port is busy. */
 void co_node_send(co_node_t *node, const co_frame_t *frame);

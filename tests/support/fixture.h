@@ -38,6 +38,8 @@ extern co_hooks_t fixture_hooks;
 /* Powers the node on with node-ID id (options as co_node_cfg_t.options); clears the recorded frames
  * unless keep_bootup. */
 void fx_start(uint8_t id, uint32_t options);
+/* The same at time t0 instead of 0 (near the wrap of a 32-bit clock: tests/unit/test_time_wrap.c). */
+void fx_start_at(uint8_t id, uint32_t options, co_time_us_t t0);
 /* Re-runs co_node_init on the same values/port (a power cycle that keeps NVM). */
 void fx_power_cycle(void);
 /* Feeds a frame: fx_rx(0x605, 8, (uint8_t[]){...}). */

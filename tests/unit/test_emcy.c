@@ -2,7 +2,7 @@
  * COB-ID 0x1014, inhibit time 0x1015, Stopped queueing, Eltex format (facts §7, §11 #36-#38, #55, #56). */
 #include "fixture.h"
 
-#define MS 1000UL
+#define MS ((co_time_us_t)1000U)
 
 static const uint8_t m12345[5] = {0x01, 0x02, 0x03, 0x04, 0x05};
 

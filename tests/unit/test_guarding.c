@@ -2,7 +2,7 @@
  * disabled while the heartbeat producer runs (facts §3.3, §11 #12-#17). */
 #include "fixture.h"
 
-#define MS 1000UL
+#define MS ((co_time_us_t)1000U)
 
 /* #12 precondition: HB = 0, guard time 100 ms, life time factor 3, Pre-operational. */
 void setUp(void)

@@ -3,7 +3,7 @@
  * (facts §3.2, §11 #54). */
 #include "fixture.h"
 
-#define MS 1000UL
+#define MS ((co_time_us_t)1000U)
 
 void setUp(void)
 {

@@ -2,7 +2,7 @@
  * (facts §3.1, §11 #2-#4, #10). */
 #include "fixture.h"
 
-#define MS 1000UL
+#define MS ((co_time_us_t)1000U)
 
 void setUp(void) { fx_start(5U, 0U); }
 void tearDown(void) {}
@@ -158,9 +158,13 @@ static void very_late_call_sends_one_and_stays_on_grid(void)
 }
 
 /* Catch-up arithmetic is 32-bit (no 64-bit division on a Cortex-M0+): a call up to 2^32 µs late stays on the
- * grid; later than that (71 minutes without a call), a new grid starts at the call. */
+ * grid; later than that (71 minutes without a call), a new grid starts at the call. (With 32-bit time a call may
+ * be at most 2^31 µs late: nothing to test.) */
 static void hours_late_call_starts_a_new_grid(void)
 {
+#if CO_CONFIG_TIME32
+    TEST_PASS();
+#else
     set_hb_ms(700U);
     fx_run_until(700U * MS);
     TEST_ASSERT_EQUAL_UINT32(1U, heartbeats());
@@ -174,6 +178,7 @@ static void hours_late_call_starts_a_new_grid(void)
     fx_run_until(grid + 700U * MS);
     TEST_ASSERT_EQUAL_UINT32(4U, heartbeats());
     TEST_ASSERT_EQUAL_UINT64(grid + 700U * MS, fx.port.sent_at[last_idx(0x705U)]);
+#endif
 }
 
 static void rewrite_1017_restarts_period_from_write(void)

@@ -3,7 +3,7 @@
  * (facts §5.2, §6, §11 #42, #52, #53). EMCY bytes 3..7 of SYNC errors are not fixed (facts §7.1). */
 #include "fixture.h"
 
-#define MS 1000UL
+#define MS ((co_time_us_t)1000U)
 
 void setUp(void)
 {
