@@ -147,14 +147,12 @@ void co_emcy_reset(co_node_t *node)
 co_time_us_t co_emcy_process(co_node_t *node)
 {
     co_emcy_t *em = &node->emcy;
-    if (co_time_reached(node->now, em->next_allowed)) {
-        em->next_allowed = CO_NEVER; /* the inhibit time is over: retired (a past time must not wrap into the future) */
-    }
+    co_time_retire(node->now, &em->next_allowed);
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
         return CO_TIME32_RETIRE(em->next_allowed); /* kept until the node leaves Stopped */
     }
     while (em->q_count > 0U) {
-        if (em->next_allowed != CO_NEVER) {
+        if (co_time_pending(node->now, em->next_allowed)) {
             return em->next_allowed;
         }
         co_frame_t f = {0U, 8U, 0U, {0U}};

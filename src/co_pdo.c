@@ -258,7 +258,7 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
     }
     const bool changed = !p->sent_once || p->event || cos;
     if (changed || timer) {
-        if (p->next_allowed != CO_NEVER) { /* (co_pdo_process retires it when it has come) */
+        if (co_time_pending(node->now, p->next_allowed)) {
             p->event = true; /* waits for the inhibit time; the timer (if it fired) is served with it */
             return p->next_allowed;
         }
@@ -306,9 +306,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
     const bool cos = node->cos_pending;
     for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
-        if (co_time_reached(node->now, p->next_allowed)) {
-            p->next_allowed = CO_NEVER; /* the inhibit time is over (a past time must not wrap into the future) */
-        }
+        co_time_retire(node->now, &p->next_allowed);
         if (!p->valid || p->type < 254U) {
             next = co_min_time(next, CO_TIME32_RETIRE(p->next_allowed));
             continue;

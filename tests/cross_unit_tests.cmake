@@ -26,7 +26,7 @@ function(co_cross_unit_tests)
   target_compile_options(co_test_support PRIVATE ${CO_WARNINGS})
 
   # Same list as the host build: every tests/unit/test_*.c.
-  file(GLOB co_unit_test_sources ${CO_ROOT}/tests/unit/test_*.c)
+  file(GLOB co_unit_test_sources CONFIGURE_DEPENDS ${CO_ROOT}/tests/unit/test_*.c)
   file(WRITE ${CMAKE_BINARY_DIR}/tests.txt "${arg_FIRST_LINE}\n")
   foreach(src IN LISTS co_unit_test_sources)
     get_filename_component(t ${src} NAME_WE)

@@ -51,6 +51,23 @@ static inline co_time_us_t co_time_after(co_time_us_t t, uint32_t us)
 #endif
 }
 
+/* A time that has not come yet; CO_NEVER: none. */
+static inline bool co_time_pending(co_time_us_t now, co_time_us_t t) { return t != CO_NEVER && !co_time_reached(now, t); }
+
+/* With 32-bit time, a time that has come is set to CO_NEVER: kept, it would look ahead again 2^31 µs later. (64-bit
+ * time keeps it: a past time stays past.) */
+static inline void co_time_retire(co_time_us_t now, co_time_us_t *t)
+{
+#if CO_CONFIG_TIME32
+    if (co_time_reached(now, *t)) {
+        *t = CO_NEVER;
+    }
+#else
+    (void)now;
+    (void)t;
+#endif
+}
+
 /* What a service whose state holds a past-to-be time t (an inhibit time's end) returns when nothing else is due:
  * with 32-bit time, t itself, so that a pass comes then and retires it (sets it to CO_NEVER) before the clock
  * wraps far enough to make it look ahead again; with 64-bit time nothing (a past time stays past). */

@@ -5,6 +5,7 @@
 #include "fixture.h"
 
 #define MS ((co_time_us_t)1000U)
+#define MINUTE ((co_time_us_t)60000000UL) /* (a 16-bit int would wrap 40U * 60000U) */
 #define T0 ((co_time_us_t)(0xFFFFFFFFUL - 2500000UL + 1UL)) /* 2^32 µs - 2.5 s */
 
 void setUp(void)
@@ -21,7 +22,7 @@ static co_time_us_t since_start(co_time_us_t t) { return (co_time_us_t)(t - T0);
  * 35.8 minutes after a deadline it returned) also holds where it has nothing to do for a long time. */
 static void run_to(co_time_us_t offset)
 {
-    const co_time_us_t step = 10U * 60000U * MS;
+    const co_time_us_t step = 10U * MINUTE;
     while (offset - since_start(fx.now) > step) {
         fx_run_until(at(since_start(fx.now) + step));
     }
@@ -71,12 +72,12 @@ static void an_old_inhibit_time_never_delays_an_emcy(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1015, 0, 10U, 2U)); /* 1 ms */
     (void)co_emcy_raise(&fx.node, 0x5000U, 0x01U, NULL);
-    run_to(50U * 60000U * MS); /* 50 minutes */
+    run_to(50U * MINUTE); /* 50 minutes */
     fake_port_clear(&fx.port);
     (void)co_emcy_raise(&fx.node, 0x5001U, 0x01U, NULL);
     (void)fx_process();
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x085U));
-    TEST_ASSERT_EQUAL_UINT64(50U * 60000U * MS, nth_at(0x085U, 0));
+    TEST_ASSERT_EQUAL_UINT64(50U * MINUTE, nth_at(0x085U, 0));
 }
 
 static void tpdo_event_timer_and_inhibit_across_the_wrap(void)
@@ -126,9 +127,9 @@ static void life_guarding_across_the_wrap_and_for_40_minutes(void)
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x100D, 0, 40U, 1U));
     fx_rx_rtr(0x705U); /* at 4 s: the error clears (error reset EMCY) */
     fake_port_clear(&fx.port);
-    run_to(4000U * MS + 40U * 60000U * MS - 1U);
+    run_to(4000U * MS + 40U * MINUTE - 1U);
     TEST_ASSERT_EQUAL_UINT32(0U, fx_count(0x085U));
-    run_to(4000U * MS + 40U * 60000U * MS);
+    run_to(4000U * MS + 40U * MINUTE);
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x085U));
 }
 
@@ -145,9 +146,9 @@ static void sync_timeout_across_the_wrap_and_after_25_minutes(void)
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1006, 0, 1000000000UL, 4U));
     fx_rx(0x080U, 0U, NULL); /* at 4 s: clears the timeout error */
     fake_port_clear(&fx.port);
-    run_to(4000U * MS + 1500U * 1000U * MS - 1U);
+    run_to(4000U * MS + 25U * MINUTE - 1U);
     TEST_ASSERT_EQUAL_UINT32(0U, fx_count(0x085U));
-    run_to(4000U * MS + 1500U * 1000U * MS);
+    run_to(4000U * MS + 25U * MINUTE);
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x085U));
 }
 
