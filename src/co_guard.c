@@ -56,8 +56,7 @@ co_time_us_t co_guard_process(co_node_t *node)
         node->guard.armed = false;
         return CO_NEVER;
     }
-    if (co_time_reached(node->now, node->guard.deadline) &&
-        co_long_timer_expired(&node->guard.deadline, &node->guard.rest_ms)) {
+    if (co_long_timer_expired(node->now, &node->guard.deadline, &node->guard.rest_ms)) {
         node->guard.failed = true;
         co_node_event(node, CO_EV_GUARD_TIMEOUT, 0x100CU, 0U, 0U, 0U);
         (void)co_emcy_raise(node, 0x8130U, 0x10U, guard_msef);

@@ -77,8 +77,7 @@ co_time_us_t co_sync_process(co_node_t *node)
     if (node->sync.timeout_error || node->sync.timeout_due == CO_NEVER) {
         return CO_NEVER;
     }
-    if (co_time_reached(node->now, node->sync.timeout_due) &&
-        co_long_timer_expired(&node->sync.timeout_due, &node->sync.rest_ms)) {
+    if (co_long_timer_expired(node->now, &node->sync.timeout_due, &node->sync.rest_ms)) {
         node->sync.timeout_error = true;
         (void)co_emcy_raise(node, 0x8100U, 0x10U, sync_msef);
         return CO_NEVER;

@@ -89,15 +89,18 @@ static inline co_time_us_t co_long_timer_start(co_time_us_t now, uint32_t ms, ui
     *rest_ms = ms - step;
     return co_time_after(now, step * 1000U);
 }
-/* At its deadline: true when the timer has run out, else the deadline moves on by the next step. */
-static inline bool co_long_timer_expired(co_time_us_t *deadline, uint32_t *rest_ms)
+/* True when the timer has run out at time now; else its deadline moves on by as many steps as have passed (a late
+ * call may have missed several: the deadline returned is never in the past). */
+static inline bool co_long_timer_expired(co_time_us_t now, co_time_us_t *deadline, uint32_t *rest_ms)
 {
-    if (*rest_ms == 0U) {
-        return true;
+    while (co_time_reached(now, *deadline)) {
+        if (*rest_ms == 0U) {
+            return true;
+        }
+        const uint32_t step = *rest_ms > CO_TIME_STEP_MS ? CO_TIME_STEP_MS : *rest_ms;
+        *rest_ms -= step;
+        *deadline = co_time_after(*deadline, step * 1000U);
     }
-    const uint32_t step = *rest_ms > CO_TIME_STEP_MS ? CO_TIME_STEP_MS : *rest_ms;
-    *rest_ms -= step;
-    *deadline = co_time_after(*deadline, step * 1000U);
     return false;
 }
 

@@ -256,7 +256,7 @@ static void check_frame(fz_t *h, const co_frame_t *f)
             fz_fail(h, "frame %03lX [%u]: byte %u past the length is not zero", (unsigned long)f->id, f->len, i);
         }
     }
-    if (n->lss.silent_until != 0U && n->now < n->lss.silent_until &&
+    if (n->lss.silent_until != CO_NEVER && n->now < n->lss.silent_until &&
         !(n->txq.count > 0U && fz_known("lss-silence-flush"))) {
         fz_fail(h, "frame %03lX sent at %llu us, inside the LSS bit-rate switch silence (until %llu us)",
                 (unsigned long)f->id, (unsigned long long)n->now, (unsigned long long)n->lss.silent_until);
@@ -495,7 +495,7 @@ static void begin_call(fz_t *h, fz_call_t call, const co_frame_t *f)
     h->sdo_open0 = n->sdo.state != 0U;
     h->sdo_state0 = n->sdo.state;
     h->clean0 = h->fp.busy_count == 0U && !h->fp.send_io_error && n->txq.count == 0U &&
-                !(n->lss.silent_until != 0U && h->now < n->lss.silent_until);
+                !(n->lss.silent_until != CO_NEVER && h->now < n->lss.silent_until);
     h->sdo_resp = 0U;
     h->lss_resp = 0U;
     h->guard_resp = 0U;
@@ -677,7 +677,7 @@ static co_time_us_t known_tpdo_deadline(const fz_t *h, co_time_us_t next)
     }
     for (uint8_t k = 0U; k < n->n_tpdo && k < CO_TPDO_MAX; k++) {
         const co_tpdo_t *p = &n->tpdo[k];
-        if (p->valid && p->type >= 254U && p->event_due == next && h->now < p->next_allowed) {
+        if (p->valid && p->type >= 254U && p->event_due == next && p->next_allowed != CO_NEVER && h->now < p->next_allowed) {
             return p->next_allowed;
         }
     }

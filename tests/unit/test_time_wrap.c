@@ -133,6 +133,22 @@ static void life_guarding_across_the_wrap_and_for_40_minutes(void)
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x085U));
 }
 
+/* A call 18 minutes after the first step's deadline (within the 35.8 minutes 32-bit time allows): the steps it
+ * missed are taken at once, the deadline returned is the timeout's, not a past one. */
+static void a_late_call_takes_the_missed_steps_of_a_long_timer(void)
+{
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x100C, 0, 60000U, 2U));
+    TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x100D, 0, 40U, 1U)); /* 40 minutes, steps of 16.7 */
+    fx_rx_rtr(0x705U);
+    fake_port_clear(&fx.port);
+    fx.now = at(35U * MINUTE);
+    TEST_ASSERT_EQUAL_UINT64(at(40U * MINUTE), fx_process());
+    TEST_ASSERT_EQUAL_UINT32(0U, fx_count(0x085U));
+    fx.now = at(40U * MINUTE);
+    (void)fx_process();
+    TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x085U));
+}
+
 static void sync_timeout_across_the_wrap_and_after_25_minutes(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1006, 0, 200000U, 4U)); /* 200 ms: timeout 300 ms */
@@ -161,6 +177,7 @@ int main(void)
     RUN_TEST(tpdo_event_timer_and_inhibit_across_the_wrap);
     RUN_TEST(consumer_timeout_across_the_wrap);
     RUN_TEST(life_guarding_across_the_wrap_and_for_40_minutes);
+    RUN_TEST(a_late_call_takes_the_missed_steps_of_a_long_timer);
     RUN_TEST(sync_timeout_across_the_wrap_and_after_25_minutes);
     return UNITY_END();
 }
