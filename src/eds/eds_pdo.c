@@ -76,6 +76,8 @@ static void disable(eds_file_t *f, uint16_t comm, uint16_t map)
         if (count->param.kind == EDS_V_UINT) {
             count->param.u = 0U;
         }
+        /* A LowLimit above 0 would refuse the empty mapping: the written DCF would not read back as written. */
+        count->low.kind = EDS_V_NONE;
     }
 }
 

@@ -61,7 +61,7 @@ EXPECTED_DIAGNOSTICS = {
         "missing-info.eds:9: warning: [DeviceInfo] has no VendorNumber; taken from object 0x1018 (or 0)",
         "missing-info.eds:9: warning: [DeviceInfo] has no ProductName; left empty",
         "missing-info.eds:9: warning: [DeviceInfo] has no RevisionNumber; taken from object 0x1018 (or 0)"],
-    "dummy-usage.eds": ["dummy-usage.eds:210: warning: [1601sub1] DefaultValue 0x00070020 maps dummy 0x0007 while "
+    "dummy-usage.eds": ["dummy-usage.eds:211: warning: [1601sub1] DefaultValue 0x00070020 maps dummy 0x0007 while "
                         "[DummyUsage] Dummy0007 is not 1; the PDO is disabled"],
     "broken-refs.eds": [
         "broken-refs.eds:106: warning: object 0x2002 is listed but has no section [2002]; left out",
@@ -151,6 +151,7 @@ def test_dummy_mapping_only_where_allowed():
     assert entry(m, 0x1600, 0)["default"] == 2 and entry(m, 0x1600, 1)["default"] == 0x00050008
     assert entry(m, 0x1400, 1)["default"] == 0x200 and entry(m, 0x1400, 1)["nodeid"]
     assert entry(m, 0x1601, 0)["default"] == 0                      # disabled: empty mapping ...
+    assert entry(m, 0x1601, 0)["low"] is None                       # (its LowLimit 1 would refuse it)
     assert entry(m, 0x1401, 1)["default"] & 0x80000000              # ... and not valid
     assert m["device"]["dummy_usage"] == (1 << 2) | (1 << 5)
 
