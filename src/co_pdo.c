@@ -81,6 +81,12 @@ static bool mpdo_mapping(uint32_t n, bool receive)
 #endif
 }
 
+#if CO_CONFIG_MPDO
+#define IS_MPDO(p) ((p)->mpdo != 0U)
+#else
+#define IS_MPDO(p) false
+#endif
+
 /* Resolves a whole mapping; returns the mapped byte count (8 for an MPDO), or -1 when invalid. */
 static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, co_pdo_map_t map[8], uint8_t *n_out)
 {
@@ -113,12 +119,16 @@ static void configure_rpdo(co_node_t *node, uint16_t n)
     p->cob_id = co_od_u32_or(node, comm, 1U, CO_COBID_INVALID);
     p->type = (uint8_t)co_od_u32_or(node, comm, 2U, 255U);
     const int len = resolve_all(node, (uint16_t)(RPDO_MAP + n), true, p->map, &p->n_map);
+#if CO_CONFIG_MPDO
     const uint32_t entries = co_od_u32_or(node, (uint16_t)(RPDO_MAP + n), 0U, 0U);
     p->mpdo = mpdo_mapping(entries, true) ? (uint8_t)entries : 0U;
+#endif
     p->map_len = len > 0 ? (uint8_t)len : 0U;
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
     p->event_ms = (uint16_t)co_od_u32_or(node, comm, 5U, 0U);
+#if CO_CONFIG_SYNC
     p->sync_pending = false;
+#endif
     p->deadline = CO_NEVER;
 }
 
@@ -130,19 +140,23 @@ static void configure_tpdo(co_node_t *node, uint16_t n)
     p->type = (uint8_t)co_od_u32_or(node, comm, 2U, 255U);
     p->inhibit_us = co_od_u32_or(node, comm, 3U, 0U) * 100U;
     p->event_us = co_od_u32_or(node, comm, 5U, 0U) * 1000U;
-    p->sync_start = (uint8_t)co_od_u32_or(node, comm, 6U, 0U);
     const int len = resolve_all(node, (uint16_t)(TPDO_MAP + n), false, p->map, &p->n_map);
+#if CO_CONFIG_MPDO
     const uint32_t entries = co_od_u32_or(node, (uint16_t)(TPDO_MAP + n), 0U, 0U);
     p->mpdo = mpdo_mapping(entries, false) ? (uint8_t)entries : 0U;
     p->scan_next = 0U;
+#endif
     p->map_len = len > 0 ? (uint8_t)len : 0U;
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
     p->sent_once = false;
     p->event = false;
     p->next_allowed = CO_NEVER;
     p->event_due = CO_NEVER;
+#if CO_CONFIG_SYNC
+    p->sync_start = (uint8_t)co_od_u32_or(node, comm, 6U, 0U);
     p->sync_count = 0U;
     p->sync_started = p->sync_start == 0U;
+#endif
 }
 
 void co_pdo_reset(co_node_t *node)
@@ -209,9 +223,11 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
     } else
 #endif
     if (p->type <= 240U) {
+#if CO_CONFIG_SYNC
         memcpy(p->sync_data, f->data, p->map_len);
-        p->sync_len = p->map_len;
         p->sync_pending = true;
+#endif
+        /* without SYNC support no SYNC comes to apply it: dropped */
     } else {
         rpdo_apply(node, p, f->data);
     }
@@ -252,7 +268,7 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
     const bool timer = co_time_reached(node->now, p->event_due);
     /* Mapped values change only where a write says so (node->cos_pending, co_node_values_changed): sampled then,
      * and when something is to be sent anyway. */
-    if (p->mpdo == 0U && (node->cos_pending || !p->sent_once || p->event || timer)) {
+    if (!IS_MPDO(p) && (node->cos_pending || !p->sent_once || p->event || timer)) {
         (void)tpdo_sample(node, p, buf);
         cos = (node->options & CO_OPT_TPDO_NO_COS) == 0U && memcmp(buf, p->last, 8U) != 0;
     }
@@ -324,6 +340,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
     return next;
 }
 
+#if CO_CONFIG_SYNC
 void co_pdo_on_sync(co_node_t *node, uint8_t counter)
 {
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
@@ -338,7 +355,7 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
     }
     for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
-        if (!p->valid || p->type > 240U || p->mpdo != 0U) {
+        if (!p->valid || p->type > 240U || IS_MPDO(p)) {
             continue; /* an MPDO is event-driven only (CiA 301) */
         }
         if (!p->sync_started) {
@@ -363,6 +380,7 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
         }
     }
 }
+#endif
 
 void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
 {
@@ -377,11 +395,15 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
         p->event = false;
         p->next_allowed = CO_NEVER;
         p->event_due = CO_NEVER;
+#if CO_CONFIG_SYNC
         p->sync_count = 0U;
         p->sync_started = p->sync_start == 0U;
+#endif
     }
     for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+#if CO_CONFIG_SYNC
         node->rpdo[n].sync_pending = false;
+#endif
         node->rpdo[n].deadline = CO_NEVER;
     }
 }

@@ -286,13 +286,16 @@ typedef struct co_rpdo {
     uint8_t map_len;            /**< Mapped bytes. */
     uint8_t type;
     bool valid;                 /**< COB-ID valid and mapping non-empty. */
-    bool sync_pending;          /**< Synchronous RPDO received, applied at the next SYNC. */
-    uint8_t sync_len;
-    uint8_t sync_data[8];
     bool length_error;
     bool timeout_error;
+#if CO_CONFIG_SYNC
+    bool sync_pending;          /**< Synchronous RPDO received, applied at the next SYNC. */
+    uint8_t sync_data[8];       /**< Its map_len bytes. */
+#endif
+#if CO_CONFIG_MPDO
     uint8_t mpdo;               /**< 0, or the MPDO kind of its mapping: 0xFE SAM (dispatching list), 0xFF DAM. */
     bool mpdo_error;            /**< A DAM-MPDO's object could not be written (EMCY 0x8230 active). */
+#endif
 } co_rpdo_t;
 
 typedef struct co_tpdo {
@@ -305,14 +308,18 @@ typedef struct co_tpdo {
     uint8_t n_map;
     uint8_t map_len;
     uint8_t type;
-    uint8_t sync_start;
-    uint8_t sync_count;         /**< SYNCs since the last synchronous transmission. */
     bool valid;
     bool sent_once;             /**< last[] holds what was sent last. */
     bool event;                 /**< Application event (co_tpdo_trigger) or a change waiting for the inhibit time. */
+#if CO_CONFIG_SYNC
+    uint8_t sync_start;
+    uint8_t sync_count;         /**< SYNCs since the last synchronous transmission. */
     bool sync_started;          /**< The SYNC start value was reached (or none is set). */
+#endif
+#if CO_CONFIG_MPDO
     uint8_t mpdo;               /**< 0, or 0xFE: a SAM-MPDO producer of the object scanner list. */
     uint16_t scan_next;         /**< SAM-MPDO: position in the scanner list of the next object to send. */
+#endif
     uint8_t last[8];
 } co_tpdo_t;
 
