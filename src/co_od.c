@@ -402,12 +402,12 @@ static uint32_t check_real_limits(const co_od_entry_t *e, const co_od_limits_t *
     return !real64_is_nan(low) && v < real64_order(low) ? CO_ABORT_VALUE_LOW : CO_ABORT_NONE;
 }
 
-uint32_t co_od_check_limits(const co_od_entry_t *e, const uint8_t *data, size_t len)
+uint32_t co_od_check_limits(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
-    if (e->limits == NULL || is_bytes(e) || len < e->size) {
+    const co_od_limits_t *l = co_od_entry_limits(od, e);
+    if (l == NULL || is_bytes(e) || len < e->size) {
         return CO_ABORT_NONE;
     }
-    const co_od_limits_t *l = e->limits;
     if (e->type == CO_T_REAL32 || e->type == CO_T_REAL64) {
         return check_real_limits(e, l, (uint64_t)wire_integer(e, data));
     }
@@ -592,7 +592,7 @@ uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *
         return len > e->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW;
     }
     if (origin != CO_ORIGIN_LOCAL) {
-        r = co_od_check_limits(e, bytes, len);
+        r = co_od_check_limits(node->od, e, bytes, len);
         if (r != CO_ABORT_NONE) {
             return r;
         }
@@ -633,7 +633,7 @@ void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub)
 
 uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
-    uint32_t r = co_od_check_limits(e, data, len);
+    uint32_t r = co_od_check_limits(node->od, e, data, len);
     if (r == CO_ABORT_NONE && e->index < 0x2000U) {
         r = comm_check_write(node, e, data, len, true);
         r = r == CO_HANDLED ? CO_ABORT_NONE : r;

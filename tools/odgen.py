@@ -320,7 +320,8 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
 
     c = [banner, f"#include \"{c_name}_od.h\"\n\n#include <stddef.h>\n\n"]
     c.append(f"#define V {c_name}_od_values_t\n")
-    c.append("#define ROW(i, s, t, f, m, l) {i, s, t, f, (uint16_t)sizeof(((V *)0)->m), (uint32_t)offsetof(V, m), l}\n\n")
+    c.append("#define ROW(i, s, t, f, m) CO_OD_ROW(i, s, t, f, sizeof(((V *)0)->m), offsetof(V, m))\n")
+    c.append("#define ROW_LIMITED(i, s, t, f, m, n) CO_OD_ROW_LIMITED(i, s, t, f, sizeof(((V *)0)->m), offsetof(V, m), limits, n)\n\n")
     # Rows with the same limits share one pair (the PRO IONIZER's 59 limited rows have 26 distinct pairs).
     limit_pairs: dict = {}
     row_limit: dict = {}
@@ -334,10 +335,12 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
         c.append(f"static const co_od_limits_t limits[{len(limit_pairs)}] = {{\n")
         c.extend(f"    {pair}, /* {k} */\n" for pair, k in limit_pairs.items())
         c.append("};\n")
+    c.append("\n#if CO_CONFIG_OD_COMPACT /* 16-bit value offsets, limits numbered in 8 bits (co_config.h) */\n"
+             f"typedef char compact_rows_fit[sizeof(V) <= 0xFFFFU && {len(limit_pairs)}U <= 255U ? 1 : -1];\n#endif\n")
     c.append(f"\nstatic const co_od_entry_t rows[{len(od.rows)}] = {{\n")
     for r in od.rows:
-        lim = f"&limits[{row_limit[r.member]}]" if has_limits(r) else "NULL"
-        c.append(f"    ROW(0x{r.index:04X}, 0x{r.sub:02X}, {TYPE_ENUM[r.dtype]}, {flags(r)}, {r.member}, {lim}),\n")
+        args = f"0x{r.index:04X}, 0x{r.sub:02X}, {TYPE_ENUM[r.dtype]}, {flags(r)}, {r.member}"
+        c.append(f"    ROW_LIMITED({args}, {row_limit[r.member]}),\n" if has_limits(r) else f"    ROW({args}),\n")
     c.append("};\n\n")
     firsts = [i for i, r in enumerate(od.rows) if i == 0 or od.rows[i - 1].index != r.index]
     c.append(f"static const co_od_object_t objects[{len(firsts)}] = {{\n")
@@ -363,7 +366,7 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     c.append(f"const co_od_t {c_name}_od = {{\n    \"{od.name}\", rows, {len(od.rows)}U, &defaults,\n"
              f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n"
              f"    0x{od.device_info['dummy_usage']:02X}U, /* [DummyUsage] */\n"
-             f"    objects, {len(firsts)}U,\n}};\n")
+             f"    objects, {len(firsts)}U,\n    {'limits' if limit_pairs else 'NULL'},\n}};\n")
     # The names in an object file of their own: a firmware that links the table does not link them.
     n = [banner, f"#include \"{c_name}_od.h\"\n\n#include <stddef.h>\n\n"]
     n.append(f"const char *const {c_name}_od_names[{len(od.rows)}] = {{\n")

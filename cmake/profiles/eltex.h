@@ -46,4 +46,6 @@
 #define CO_CONFIG_TIME32 1
 #endif
 
+#define CO_CONFIG_OD_COMPACT 1
+
 #endif /* CO_PROFILE_ELTEX_H */

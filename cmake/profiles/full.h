@@ -26,4 +26,6 @@
 #define CO_EMCY_QUEUE_LEN 8U
 #define CO_TX_QUEUE_LEN 16U
 
+#define CO_CONFIG_OD_COMPACT 1
+
 #endif /* CO_PROFILE_FULL_H */

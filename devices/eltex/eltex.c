@@ -67,8 +67,9 @@ static void set_value(device_t *dev, uint16_t index, uint8_t sub, uint32_t v)
 }
 
 /* E6: the EDS limits also for local writes (the core checks them for SDO and RPDO only). */
-static uint32_t local_limits(const co_od_entry_t *e, const uint8_t *data, size_t len)
+static uint32_t local_limits(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
+    const co_od_limits_t *limits = co_od_entry_limits(od, e);
     bool is_signed;
     switch (e->type) {
     case CO_T_INTEGER8:
@@ -87,7 +88,7 @@ static uint32_t local_limits(const co_od_entry_t *e, const uint8_t *data, size_t
     default:
         return 0U;
     }
-    if (e->limits == NULL || len == 0U || len > 8U) {
+    if (limits == NULL || len == 0U || len > 8U) {
         return 0U;
     }
     uint64_t u = 0U;
@@ -106,10 +107,10 @@ static uint32_t local_limits(const co_od_entry_t *e, const uint8_t *data, size_t
     } else {
         v = (int64_t)u;
     }
-    if (v > e->limits->high.i) {
+    if (v > limits->high.i) {
         return CO_ABORT_VALUE_HIGH;
     }
-    return v < e->limits->low.i ? CO_ABORT_VALUE_LOW : 0U;
+    return v < limits->low.i ? CO_ABORT_VALUE_LOW : 0U;
 }
 
 /* ---- Persistent data (E13) -------------------------------------------------------------------------------------
@@ -448,7 +449,7 @@ uint32_t eltex_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *da
 {
     eltex_t *x = eltex_of(dev);
     if (origin == CO_ORIGIN_LOCAL) {
-        const uint32_t r = local_limits(e, data, len);
+        const uint32_t r = local_limits(dev->node.od, e, data, len);
         if (r != 0U) {
             return r;
         }

@@ -20,6 +20,14 @@
 #define CO_CONFIG_TIME32 0
 #endif
 
+/** 1: compact dictionary rows (co_od_entry_t, 10 bytes instead of 16): 8-bit flags, the limits by number (at most
+ *  255 distinct pairs per dictionary), 16-bit value offsets (a values block of at most 64 KiB). For a firmware: it
+ *  saves 6 bytes of flash per row. The generated tables and CO_OD_ROW() fit either layout; canopen-emu, which builds
+ *  dictionaries from EDS files at run time, needs 0 (the default). */
+#ifndef CO_CONFIG_OD_COMPACT
+#define CO_CONFIG_OD_COMPACT 0
+#endif
+
 /** Most receive PDOs one node can have (the OD may declare fewer). */
 #ifndef CO_RPDO_MAX
 #define CO_RPDO_MAX 4U

@@ -71,16 +71,37 @@ typedef struct co_od_limits {
     co_od_limit_t high;
 } co_od_limits_t;
 
-/** One sub-index of the object dictionary. */
+/** One sub-index of the object dictionary. Two layouts (co_config.h CO_CONFIG_OD_COMPACT); write tables with
+ *  CO_OD_ROW()/CO_OD_ROW_LIMITED() and read a row's limits with co_od_entry_limits() to fit both. */
 typedef struct co_od_entry {
     uint16_t index;                /**< Object index. */
     uint8_t sub;                   /**< Sub-index. */
     uint8_t type;                  /**< co_od_type_t. */
+#if CO_CONFIG_OD_COMPACT
+    uint8_t flags;                 /**< co_od_flag bits. */
+    uint8_t limit;                 /**< 0: no limits; n: co_od_t.limits[n - 1]. */
+    uint16_t size;                 /**< Value size in bytes (for strings: capacity). */
+    uint16_t offset;               /**< Offset of the value in the node's values block. */
+#else
     uint16_t flags;                /**< co_od_flag bits. */
     uint16_t size;                 /**< Value size in bytes (for strings: capacity). */
     uint32_t offset;               /**< Offset of the value in the node's values block. */
     const co_od_limits_t *limits;  /**< NULL when the row has no limits. */
+#endif
 } co_od_entry_t;
+
+/** A row without limits, in either layout: size and offset as sizeof/offsetof of its member of the values struct
+ *  (not cast: a value that does not fit the layout's field fails the build). */
+#if CO_CONFIG_OD_COMPACT
+#define CO_OD_ROW(index, sub, type, flags, size, offset) {(index), (sub), (type), (flags), 0U, (size), (offset)}
+/** A row with limits: limits[n] of the table's limits array (which co_od_t.limits must name). */
+#define CO_OD_ROW_LIMITED(index, sub, type, flags, size, offset, limits, n)                                        \
+    {(index), (sub), (type), (flags), (n) + 1U, (size), (offset)}
+#else
+#define CO_OD_ROW(index, sub, type, flags, size, offset) {(index), (sub), (type), (flags), (size), (offset), NULL}
+#define CO_OD_ROW_LIMITED(index, sub, type, flags, size, offset, limits, n)                                        \
+    {(index), (sub), (type), (flags), (size), (offset), &(limits)[n]}
+#endif
 
 /** One object of the dictionary: its index and its first row (its rows run to the next object's first row). */
 typedef struct co_od_object {
@@ -101,7 +122,21 @@ typedef struct co_od {
      *  by index and then the object's rows by sub (fewer steps, direct when sub-index n is the object's row n). */
     const co_od_object_t *objects;
     uint16_t n_objects;
+    /** The limits pairs rows refer to by number (compact layout), or NULL when no row has limits. The default
+     *  layout's rows point at their pair and need not set it. */
+    const co_od_limits_t *limits;
 } co_od_t;
+
+/** A row's limits, or NULL when it has none (either layout). */
+static inline const co_od_limits_t *co_od_entry_limits(const co_od_t *od, const co_od_entry_t *e)
+{
+#if CO_CONFIG_OD_COMPACT
+    return e->limit != 0U ? &od->limits[e->limit - 1U] : NULL;
+#else
+    (void)od;
+    return e->limits;
+#endif
+}
 
 /** Who is accessing an object: decides which access checks apply and is passed to the write hook. */
 typedef enum co_od_origin {

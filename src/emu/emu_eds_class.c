@@ -11,6 +11,10 @@
 #include "eds.h"
 #include "emu_rules.h"
 
+#if CO_CONFIG_OD_COMPACT
+#error "canopen-emu builds dictionaries of any size at run time: build it with CO_CONFIG_OD_COMPACT 0"
+#endif
+
 typedef struct eds_class {
     device_class_t cls;
     co_od_t od;

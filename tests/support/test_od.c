@@ -4,8 +4,8 @@
 #include <stddef.h>
 
 #define V test_od_values_t
-#define E(i, s, t, f, m) {i, s, t, f, (uint16_t)sizeof(((V *)0)->m), (uint32_t)offsetof(V, m), NULL}
-#define EL(i, s, t, f, m, l) {i, s, t, f, (uint16_t)sizeof(((V *)0)->m), (uint32_t)offsetof(V, m), l}
+#define E(i, s, t, f, m) CO_OD_ROW(i, s, t, f, sizeof(((V *)0)->m), offsetof(V, m))
+#define EL(i, s, t, f, m, n) CO_OD_ROW_LIMITED(i, s, t, f, sizeof(((V *)0)->m), offsetof(V, m), limits, n)
 
 #define RO CO_OD_READ
 #define WO CO_OD_WRITE
@@ -13,8 +13,10 @@
 #define RWS (CO_OD_READ | CO_OD_WRITE | CO_OD_STORE)
 #define CONST (CO_OD_READ | CO_OD_CONST)
 
-static const co_od_limits_t lim_2000 = {{.i = 100}, {.i = 60000}};
-static const co_od_limits_t lim_2001 = {{.i = -100}, {.i = 100}};
+static const co_od_limits_t limits[] = {
+    {{.i = 100}, {.i = 60000}}, /* 0: 0x2000 */
+    {{.i = -100}, {.i = 100}},  /* 1: 0x2001 */
+};
 
 static const co_od_entry_t entries[] = {
     E(0x1000, 0x00, CO_T_UNSIGNED32, RO, x1000_device_type),
@@ -88,8 +90,8 @@ static const co_od_entry_t entries[] = {
     E(0x1800 + k, 0x06, CO_T_UNSIGNED8, RWS, tpdo_comm[k].sync_start)
     TPDO_COMM(0), TPDO_COMM(1),
     PDO_MAP(0x1A00, tpdo_map, 0), PDO_MAP(0x1A00, tpdo_map, 1),
-    EL(0x2000, 0x00, CO_T_UNSIGNED16, RWS, x2000_cycle_ms, &lim_2000),
-    EL(0x2001, 0x00, CO_T_INTEGER16, RWS, x2001_offset, &lim_2001),
+    EL(0x2000, 0x00, CO_T_UNSIGNED16, RWS, x2000_cycle_ms, 0),
+    EL(0x2001, 0x00, CO_T_INTEGER16, RWS, x2001_offset, 1),
     E(0x2002, 0x00, CO_T_UNSIGNED8, RWS | CO_OD_KEEP, x2002_address),
     E(0x2003, 0x00, CO_T_UNSIGNED32, RW, x2003_volatile),
     E(0x2004, 0x00, CO_T_REAL32, RW | CO_OD_RPDO | CO_OD_TPDO, x2004_setpoint),
@@ -141,4 +143,5 @@ const co_od_t test_od = {
     (uint32_t)sizeof(test_od_values_t), 0x7E570D01UL,
     1U << CO_T_UNSIGNED8, /* dummy UNSIGNED8 entries in RPDOs (test_pdo) */
     NULL, 0U,             /* no object table: look-ups search the rows (the generated tables have one) */
+    limits,
 };

@@ -41,7 +41,7 @@ typedef struct mpdo_values {
     uint32_t x2101;
 } mpdo_values_t;
 
-#define M(i, s, t, f, m) {i, s, t, f, (uint16_t)sizeof(((mpdo_values_t *)0)->m), (uint32_t)offsetof(mpdo_values_t, m), NULL}
+#define M(i, s, t, f, m) CO_OD_ROW(i, s, t, f, sizeof(((mpdo_values_t *)0)->m), offsetof(mpdo_values_t, m))
 #define RO CO_OD_READ
 #define RW (CO_OD_READ | CO_OD_WRITE)
 static const co_od_entry_t entries[] = {
@@ -101,7 +101,7 @@ static const mpdo_values_t defaults = {
     .x2100_n = 1U,
 };
 static const co_od_t od = {"mpdo", entries, (uint16_t)(sizeof entries / sizeof entries[0]), &defaults,
-                           (uint32_t)sizeof(mpdo_values_t), 0x3DB0A11CUL, 0U, NULL, 0U};
+                           (uint32_t)sizeof(mpdo_values_t), 0x3DB0A11CUL, 0U, NULL, 0U, NULL};
 
 static fake_port_t port;
 static co_time_us_t now;

@@ -3,6 +3,11 @@
 
 #include "fixture.h"
 
+/* The compact layout (ctest unit-mcu) is what a firmware's flash is counted with: 10 bytes a row on every target. */
+#if CO_CONFIG_OD_COMPACT
+typedef char compact_row_is_10_bytes[sizeof(co_od_entry_t) == 10U ? 1 : -1];
+#endif
+
 void setUp(void) { fx_start(5U, 0U); }
 void tearDown(void) {}
 

@@ -41,49 +41,54 @@ typedef struct types_values {
     float r32_narrow;
 } types_values_t;
 
-#define V(m) (uint16_t)sizeof(((types_values_t *)0)->m), (uint32_t)offsetof(types_values_t, m)
+#define ROW(i, s, t, f, m) CO_OD_ROW(i, s, t, f, sizeof(((types_values_t *)0)->m), offsetof(types_values_t, m))
+#define ROW_L(i, s, t, f, m, n)                                                                                    \
+    CO_OD_ROW_LIMITED(i, s, t, f, sizeof(((types_values_t *)0)->m), offsetof(types_values_t, m), limits, n)
 #define RW (CO_OD_READ | CO_OD_WRITE)
-static const co_od_limits_t lim_i24 = {{.i = -1000}, {.i = 1000}};
-static const co_od_limits_t lim_r32 = {{.r = 0.0}, {.r = 10.0}};
-static const co_od_limits_t lim_r64 = {{.r = -1e30}, {.r = 1.5}};
-/* limits no float can hold: a REAL32 value is compared as the double it is */
-static const co_od_limits_t lim_r32_narrow = {{.r = -1e-40}, {.r = 0.1}};
-static const co_od_limits_t lim_u64 = {{.u = 0x10U}, {.u = 0x8000000000000000ULL}};
+enum { LIM_I24, LIM_R32, LIM_R64, LIM_R32_NARROW, LIM_U64 };
+static const co_od_limits_t limits[] = {
+    [LIM_I24] = {{.i = -1000}, {.i = 1000}},
+    [LIM_R32] = {{.r = 0.0}, {.r = 10.0}},
+    [LIM_R64] = {{.r = -1e30}, {.r = 1.5}},
+    /* limits no float can hold: a REAL32 value is compared as the double it is */
+    [LIM_R32_NARROW] = {{.r = -1e-40}, {.r = 0.1}},
+    [LIM_U64] = {{.u = 0x10U}, {.u = 0x8000000000000000ULL}},
+};
 #define TPDO_ROWS(k)                                                                                               \
-    {0x1800 + (k), 0, CO_T_UNSIGNED8, CO_OD_READ, V(tpdo[k].n), NULL},                                             \
-        {0x1800 + (k), 1, CO_T_UNSIGNED32, RW | CO_OD_NODEID, V(tpdo[k].cob), NULL},                               \
-        {0x1800 + (k), 2, CO_T_UNSIGNED8, RW, V(tpdo[k].type), NULL}
+    ROW(0x1800 + (k), 0, CO_T_UNSIGNED8, CO_OD_READ, tpdo[k].n),                                                   \
+        ROW(0x1800 + (k), 1, CO_T_UNSIGNED32, RW | CO_OD_NODEID, tpdo[k].cob),                                     \
+        ROW(0x1800 + (k), 2, CO_T_UNSIGNED8, RW, tpdo[k].type)
 #define TMAP_ROWS(k)                                                                                               \
-    {0x1A00 + (k), 0, CO_T_UNSIGNED8, RW, V(tmap_n[k]), NULL}, {0x1A00 + (k), 1, CO_T_UNSIGNED32, RW, V(tmap[k]), NULL}
+    ROW(0x1A00 + (k), 0, CO_T_UNSIGNED8, RW, tmap_n[k]), ROW(0x1A00 + (k), 1, CO_T_UNSIGNED32, RW, tmap[k])
 static const co_od_entry_t rows[] = {
-    {0x1000, 0, CO_T_UNSIGNED32, CO_OD_READ, V(device_type), NULL},
-    {0x1001, 0, CO_T_UNSIGNED8, CO_OD_READ, V(error_register), NULL},
-    {0x1005, 0, CO_T_UNSIGNED32, RW, V(sync_cob), NULL},
-    {0x1018, 0, CO_T_UNSIGNED8, CO_OD_READ, V(id_n), NULL},
-    {0x1018, 1, CO_T_UNSIGNED32, CO_OD_READ, V(vendor), NULL},
-    {0x1400, 0, CO_T_UNSIGNED8, CO_OD_READ, V(rpdo_n), NULL},
-    {0x1400, 1, CO_T_UNSIGNED32, RW | CO_OD_NODEID, V(rpdo_cob), NULL},
-    {0x1400, 2, CO_T_UNSIGNED8, RW, V(rpdo_type), NULL},
-    {0x1600, 0, CO_T_UNSIGNED8, RW, V(rmap_n), NULL},
-    {0x1600, 1, CO_T_UNSIGNED32, RW, V(rmap[0]), NULL},
-    {0x1600, 2, CO_T_UNSIGNED32, RW, V(rmap[1]), NULL},
+    ROW(0x1000, 0, CO_T_UNSIGNED32, CO_OD_READ, device_type),
+    ROW(0x1001, 0, CO_T_UNSIGNED8, CO_OD_READ, error_register),
+    ROW(0x1005, 0, CO_T_UNSIGNED32, RW, sync_cob),
+    ROW(0x1018, 0, CO_T_UNSIGNED8, CO_OD_READ, id_n),
+    ROW(0x1018, 1, CO_T_UNSIGNED32, CO_OD_READ, vendor),
+    ROW(0x1400, 0, CO_T_UNSIGNED8, CO_OD_READ, rpdo_n),
+    ROW(0x1400, 1, CO_T_UNSIGNED32, RW | CO_OD_NODEID, rpdo_cob),
+    ROW(0x1400, 2, CO_T_UNSIGNED8, RW, rpdo_type),
+    ROW(0x1600, 0, CO_T_UNSIGNED8, RW, rmap_n),
+    ROW(0x1600, 1, CO_T_UNSIGNED32, RW, rmap[0]),
+    ROW(0x1600, 2, CO_T_UNSIGNED32, RW, rmap[1]),
     TPDO_ROWS(0), TPDO_ROWS(1), TPDO_ROWS(2), TPDO_ROWS(3), TPDO_ROWS(4), TPDO_ROWS(5),
     TMAP_ROWS(0), TMAP_ROWS(1), TMAP_ROWS(2), TMAP_ROWS(3), TMAP_ROWS(4), TMAP_ROWS(5),
-    {0x2000, 0, CO_T_INTEGER24, RW | CO_OD_TPDO, V(i24), &lim_i24},
-    {0x2001, 0, CO_T_UNSIGNED48, RW, V(u48), NULL},
-    {0x2002, 0, CO_T_TIME_OF_DAY, RW, V(tod), NULL},
-    {0x2003, 0, CO_T_REAL32, RW, V(r32), &lim_r32},
-    {0x2004, 0, CO_T_REAL64, RW, V(r64), &lim_r64},
-    {0x2005, 0, CO_T_UNSIGNED64, RW, V(u64), &lim_u64},
-    {0x2006, 0, CO_T_UNICODE_STRING, CO_OD_READ, V(text), NULL},
-    {0x2007, 0, CO_T_UNSIGNED16, RW | CO_OD_TPDO | CO_OD_RPDO, V(word), NULL},
-    {0x2008, 0, CO_T_REAL32, RW, V(r32_narrow), &lim_r32_narrow},
+    ROW_L(0x2000, 0, CO_T_INTEGER24, RW | CO_OD_TPDO, i24, LIM_I24),
+    ROW(0x2001, 0, CO_T_UNSIGNED48, RW, u48),
+    ROW(0x2002, 0, CO_T_TIME_OF_DAY, RW, tod),
+    ROW_L(0x2003, 0, CO_T_REAL32, RW, r32, LIM_R32),
+    ROW_L(0x2004, 0, CO_T_REAL64, RW, r64, LIM_R64),
+    ROW_L(0x2005, 0, CO_T_UNSIGNED64, RW, u64, LIM_U64),
+    ROW(0x2006, 0, CO_T_UNICODE_STRING, CO_OD_READ, text),
+    ROW(0x2007, 0, CO_T_UNSIGNED16, RW | CO_OD_TPDO | CO_OD_RPDO, word),
+    ROW_L(0x2008, 0, CO_T_REAL32, RW, r32_narrow, LIM_R32_NARROW),
 };
 typedef char six_tpdos_in_rows[N_TPDO == 6U ? 1 : -1]; /* TPDO_ROWS above are written out for 6 */
 
 static types_values_t defaults;
 static co_od_t od = {"types", rows, (uint16_t)(sizeof rows / sizeof rows[0]), &defaults, (uint32_t)sizeof(types_values_t),
-                     0x7E5700D1UL, 1U << CO_T_UNSIGNED16, NULL, 0U};
+                     0x7E5700D1UL, 1U << CO_T_UNSIGNED16, NULL, 0U, limits};
 
 static fake_port_t port;
 static co_time_us_t now;
@@ -236,7 +241,7 @@ static void real_limits_agree_with_a_floating_point_comparison(void)
         const uint32_t bits = i < sizeof special / sizeof special[0] ? special[i] : next_random(&state);
         float f;
         memcpy(&f, &bits, sizeof f);
-        const uint32_t expected = real_limits_reference((double)f, &lim_r32_narrow);
+        const uint32_t expected = real_limits_reference((double)f, &limits[LIM_R32_NARROW]);
         const uint32_t got = co_od_write(&node, 0x2008, 0, &bits, 4U, CO_ORIGIN_SDO);
         if (got != expected) {
             char what[64];
@@ -256,7 +261,7 @@ static void real_limits_agree_with_a_floating_point_comparison(void)
                                   : ((uint64_t)next_random(&state) << 32) | next_random(&state);
         double d;
         memcpy(&d, &bits, sizeof d);
-        const uint32_t expected = real_limits_reference(d, &lim_r64);
+        const uint32_t expected = real_limits_reference(d, &limits[LIM_R64]);
         const uint32_t got = co_od_write(&node, 0x2004, 0, &bits, 8U, CO_ORIGIN_SDO);
         if (got != expected) {
             char what[64];
