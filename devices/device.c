@@ -78,7 +78,7 @@ static co_status_t boot(device_t *dev, co_time_us_t now)
 {
     dev->now = now;
     dev->touched = true;
-    memcpy(dev->values, dev->cls->od->defaults, dev->cls->od->values_size);
+    co_od_copy_defaults(dev->cls->od, 0U, dev->cls->od->values_size, dev->values);
     /* The model block is not cleared here: power_on re-initialises the running state and keeps the
      * environment (device.h). */
     if (dev->cls->power_on != NULL) {
@@ -597,7 +597,7 @@ uint32_t device_default_serial(const device_class_t *cls)
     const co_od_entry_t *e = co_od_find(cls->od, 0x1018, 4);
     uint32_t serial = 0U;
     if (e != NULL && e->size == sizeof serial) {
-        memcpy(&serial, (const uint8_t *)cls->od->defaults + e->offset, sizeof serial);
+        co_od_copy_defaults(cls->od, e->offset, sizeof serial, &serial);
     }
     return serial;
 }

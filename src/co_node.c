@@ -215,7 +215,7 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         node->route_cap < CO_RX_ROUTES_FIXED + node->n_rpdo + node->n_sdo_extra) {
         return CO_ERR_RANGE;
     }
-    memcpy(node->values, node->od->defaults, (size_t)node->od->values_size);
+    co_od_copy_defaults(node->od, 0U, (size_t)node->od->values_size, node->values);
     uint8_t node_id = cfg->node_id;
     uint8_t bit_timing = cfg->bit_timing;
     const co_nvm_status_t lss = co_store_lss_load(node, &node_id, &bit_timing);

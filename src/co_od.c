@@ -683,13 +683,23 @@ uint32_t co_od_set_u32(co_node_t *node, uint16_t index, uint8_t sub, uint32_t va
     return set_local(node, index, sub, value, 4U);
 }
 
+void co_od_copy_defaults(const co_od_t *od, uint32_t offset, size_t len, void *dst)
+{
+    const uint32_t have = od->defaults_size != 0U ? od->defaults_size : od->values_size;
+    size_t n = offset < have ? (size_t)(have - offset) : 0U;
+    n = n < len ? n : len;
+    if (n > 0U) {
+        memcpy(dst, (const uint8_t *)od->defaults + offset, n);
+    }
+    memset((uint8_t *)dst + n, 0, len - n);
+}
+
 void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     const co_od_t *od = node->od;
-    const uint8_t *defaults = (const uint8_t *)od->defaults;
     for (uint16_t i = lower_bound(od, first, 0U); i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *e = &od->entries[i];
-        memcpy(node->values + e->offset, defaults + e->offset, e->size);
+        co_od_copy_defaults(od, e->offset, e->size, node->values + e->offset);
         if ((e->flags & CO_OD_NODEID) != 0U && node->node_id != CO_NODE_ID_UNCONFIGURED) {
             co_od_entry_set_u32(node, e, co_od_entry_u32(node, e) + node->node_id);
         }

@@ -231,7 +231,7 @@ static bool at_relative_default(co_node_t *node, const co_od_entry_t *e)
         return false;
     }
     uint32_t def = 0U;
-    memcpy(&def, (const uint8_t *)node->od->defaults + e->offset, e->size < 4U ? e->size : 4U);
+    co_od_copy_defaults(node->od, e->offset, e->size < 4U ? e->size : 4U, &def);
     const uint32_t id = node->node_id != CO_NODE_ID_UNCONFIGURED ? node->node_id : 0U;
     return co_od_entry_u32(node, e) == def + id;
 }

@@ -265,6 +265,15 @@ def signature(od: Od, c_name: str) -> int:
     return zlib.crc32(canon.encode()) & 0xFFFFFFFF
 
 
+def zero_default(r: Row) -> bool:
+    """The row's default is all zero bytes (generate leaves it out of the defaults image)."""
+    if r.dtype == 0x09:
+        return not r.value.encode("ascii")
+    if r.dtype in (0x0A, 0x0B, 0x0F) or r.dtype in BYTE_INTEGERS:
+        return not r.value
+    return r.value in (0, 0.0)
+
+
 def flags(r: Row) -> str:
     readable, writable, const, tpdo_ok, rpdo_ok = ACCESS[r.access]
     f = []
@@ -302,11 +311,15 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
               f" * EDS or the profile and rebuild. */\n")
     h = [banner, f"#ifndef {upper}_OD_H\n#define {upper}_OD_H\n\n#include \"co/co_od.h\"\n\n"]
     h.append(f"/** Values of one {od.name} node (one block per node; the table below is shared). */\n")
-    h.append(f"typedef struct {c_name}_od_values {{\n")
-    for r in od.rows:
-        ctype = TYPES[r.dtype][1]
+    # The values whose default is not 0 first: the defaults image holds just them (co_od_t.defaults_size).
+    layout = [r for r in od.rows if not zero_default(r)] + [r for r in od.rows if zero_default(r)]
+    n_defaults = max(1, sum(1 for r in od.rows if not zero_default(r)))
+
+    def member(r: Row) -> str:
         arr = f"[{r.size}]" if r.dtype in STRING_TYPES + BYTE_INTEGERS else ""
-        h.append(f"    {ctype} {r.member}{arr}; /* 0x{r.index:04X}:{r.sub:02X} {c_string(r.name)} */\n")
+        return f"    {TYPES[r.dtype][1]} {r.member}{arr}; /* 0x{r.index:04X}:{r.sub:02X} {c_string(r.name)} */\n"
+    h.append(f"typedef struct {c_name}_od_values {{\n")
+    h.extend(member(r) for r in layout)
     h.append(f"}} {c_name}_od_values_t;\n\n")
     h.append(f"/** The object dictionary of {od.name}: {len(od.rows)} rows. */\n")
     h.append(f"extern const co_od_t {c_name}_od;\n")
@@ -347,8 +360,14 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     for k in range(0, len(firsts), 6):
         c.append("    " + " ".join(f"{{0x{od.rows[i].index:04X}, {i}U}}," for i in firsts[k:k + 6]) + "\n")
     c.append("};\n\n")
-    c.append(f"static const {c_name}_od_values_t defaults = {{\n")
-    for r in od.rows:
+    last = layout[n_defaults - 1].member
+    c.append(f"/* The first {n_defaults} members of {c_name}_od_values_t, laid out as there: the values whose default is not 0\n"
+             " * (the rest of a values block starts at 0). */\ntypedef struct {\n")
+    c.extend(member(r) for r in layout[:n_defaults])
+    c.append("} defaults_t;\n")
+    c.append(f"typedef char defaults_laid_out_as_values[offsetof(defaults_t, {last}) == offsetof(V, {last}) ? 1 : -1];\n\n")
+    c.append("static const defaults_t defaults = {\n")
+    for r in layout[:n_defaults]:
         if r.dtype == 0x09:
             data = r.value.encode("ascii")
             if data:
@@ -366,7 +385,8 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     c.append(f"const co_od_t {c_name}_od = {{\n    \"{od.name}\", rows, {len(od.rows)}U, &defaults,\n"
              f"    (uint32_t)sizeof({c_name}_od_values_t), 0x{signature(od, c_name):08X}UL,\n"
              f"    0x{od.device_info['dummy_usage']:02X}U, /* [DummyUsage] */\n"
-             f"    objects, {len(firsts)}U,\n    {'limits' if limit_pairs else 'NULL'},\n}};\n")
+             f"    objects, {len(firsts)}U,\n    {'limits' if limit_pairs else 'NULL'},\n"
+             f"    (uint32_t)(offsetof(V, {last}) + sizeof(((V *)0)->{last})),\n}};\n")
     # The names in an object file of their own: a firmware that links the table does not link them.
     n = [banner, f"#include \"{c_name}_od.h\"\n\n#include <stddef.h>\n\n"]
     n.append(f"const char *const {c_name}_od_names[{len(od.rows)}] = {{\n")

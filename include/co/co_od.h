@@ -114,7 +114,8 @@ typedef struct co_od {
     const char *name;              /**< Device name, for logs. */
     const co_od_entry_t *entries;  /**< Sorted by (index, sub), unique. */
     uint16_t count;                /**< Number of rows. */
-    const void *defaults;          /**< Default values image, values_size bytes, node-ID-relative rows without the ID. */
+    const void *defaults;          /**< Default values image, node-ID-relative rows without the ID: its first
+                                        defaults_size bytes (the rest of the values block defaults to 0). */
     uint32_t values_size;          /**< Size of the values block each node must provide. */
     uint32_t signature;            /**< Hash of the table's layout; stored blobs of another layout are not loaded. */
     uint8_t dummy_usage;           /**< Bit n (1..7): RPDOs may map dummy entries of data type n (EDS [DummyUsage]). */
@@ -125,6 +126,9 @@ typedef struct co_od {
     /** The limits pairs rows refer to by number (compact layout), or NULL when no row has limits. The default
      *  layout's rows point at their pair and need not set it. */
     const co_od_limits_t *limits;
+    /** Bytes of the defaults image; 0: all values_size. The generator puts the values whose default is 0 last and
+     *  leaves them out of the image. */
+    uint32_t defaults_size;
 } co_od_t;
 
 /** A row's limits, or NULL when it has none (either layout). */
@@ -148,6 +152,9 @@ typedef enum co_od_origin {
                               state (a valid PDO's COB-ID, mapping procedure); the write hook only checks it
                               (it must not act: the model sees the loaded values in on_reset). */
 } co_od_origin_t;
+
+/** Copies len bytes of the default values image from offset into dst (0 beyond defaults_size). */
+void co_od_copy_defaults(const co_od_t *od, uint32_t offset, size_t len, void *dst);
 
 /** Finds a row, or NULL. O(log objects), or O(log rows) without the object table. */
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub);

@@ -829,7 +829,8 @@ static void expected_value(const co_od_entry_t *e, const uint8_t *saved, uint8_t
     if ((e->flags & CO_OD_NODEID) == 0U || e->size > 4U) {
         return;
     }
-    const uint8_t *def = (const uint8_t *)g.cls->od->defaults + e->offset;
+    uint8_t def[4];
+    co_od_copy_defaults(g.cls->od, e->offset, e->size, def);
     uint32_t d = 0U;
     uint32_t v = 0U;
     for (unsigned i = 0U; i < e->size; i++) {

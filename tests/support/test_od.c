@@ -144,4 +144,5 @@ const co_od_t test_od = {
     1U << CO_T_UNSIGNED8, /* dummy UNSIGNED8 entries in RPDOs (test_pdo) */
     NULL, 0U,             /* no object table: look-ups search the rows (the generated tables have one) */
     limits,
+    0U, /* the whole defaults image */
 };

@@ -101,7 +101,7 @@ static const mpdo_values_t defaults = {
     .x2100_n = 1U,
 };
 static const co_od_t od = {"mpdo", entries, (uint16_t)(sizeof entries / sizeof entries[0]), &defaults,
-                           (uint32_t)sizeof(mpdo_values_t), 0x3DB0A11CUL, 0U, NULL, 0U, NULL};
+                           (uint32_t)sizeof(mpdo_values_t), 0x3DB0A11CUL, 0U, NULL, 0U, NULL, 0U};
 
 static fake_port_t port;
 static co_time_us_t now;

@@ -45,7 +45,7 @@ static const co_od_entry_t mini_entries[] = {
 };
 static const mini_values_t mini_defaults = {0x00000191UL, 0U, 50U, 1U, 0x39UL, 2U, 0x180UL, 255U, 1U, 0x60000008UL, 0U};
 static const co_od_t mini_od = {"mini", mini_entries, (uint16_t)(sizeof mini_entries / sizeof mini_entries[0]),
-                                &mini_defaults, (uint32_t)sizeof(mini_values_t), 0x12345678UL, 0U, NULL, 0U, NULL};
+                                &mini_defaults, (uint32_t)sizeof(mini_values_t), 0x12345678UL, 0U, NULL, 0U, NULL, 0U};
 
 /* One bus: every node's port records into the same fake port; frames are delivered to all nodes. */
 static fake_port_t bus;

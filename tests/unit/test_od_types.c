@@ -88,7 +88,7 @@ typedef char six_tpdos_in_rows[N_TPDO == 6U ? 1 : -1]; /* TPDO_ROWS above are wr
 
 static types_values_t defaults;
 static co_od_t od = {"types", rows, (uint16_t)(sizeof rows / sizeof rows[0]), &defaults, (uint32_t)sizeof(types_values_t),
-                     0x7E5700D1UL, 1U << CO_T_UNSIGNED16, NULL, 0U, limits};
+                     0x7E5700D1UL, 1U << CO_T_UNSIGNED16, NULL, 0U, limits, 0U};
 
 static fake_port_t port;
 static co_time_us_t now;
