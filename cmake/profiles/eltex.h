@@ -20,6 +20,8 @@
  *   errors active at once and logs when the list is full; keeping the default keeps its behaviour.
  * - 32-bit time (CO_CONFIG_TIME32): a Cortex-M or AVR firmware then has no 64-bit arithmetic in the core. The device
  *   models of the emulator assume 64-bit time: their tests with this profile (tools/profile-tests) set it to 0.
+ * - Compact dictionary rows (CO_CONFIG_OD_COMPACT): 10 bytes a row; both dictionaries are far below 64 KiB of
+ *   values and 255 distinct limit pairs.
  * - TX queue: 8 frames. The largest burst of these devices is boot-up + 3 TPDOs on entering
  *   Operational + an EMCY + an SDO response + a heartbeat (7 frames) against a port that is busy.
  *

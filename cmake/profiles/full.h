@@ -1,9 +1,10 @@
 /*
  * Configuration profile "full": every service compiled in, the default sizes of include/co/co_config.h
  * (4 RPDOs, 4 TPDOs, 127 heartbeat-consumer slots, 64-byte segmented SDO buffer, 16-frame TX queue,
- * 8 active errors, 8 queued EMCY frames). This is what the host build (canopen-emu, the host tests)
- * uses; it serves all three shipped devices, the Bürkert flow controller included (segmented and block SDO,
- * SYNC, node guarding, 0x1016 with 127 entries, 4+4 PDOs).
+ * 8 active errors, 8 queued EMCY frames), and compact dictionary rows as a firmware would build them. The host
+ * build (canopen-emu, the host tests) uses the defaults, which are this profile but for CO_CONFIG_OD_COMPACT (the
+ * emulator builds dictionaries from EDS files at run time). It serves all three shipped devices, the Bürkert flow
+ * controller included (segmented and block SDO, SYNC, node guarding, 0x1016 with 127 entries, 4+4 PDOs).
  * Use it with -DCO_PROFILE=full (CMake) or -DCO_CONFIG_HEADER='"path/to/full.h"'.
  */
 #ifndef CO_PROFILE_FULL_H
