@@ -323,6 +323,7 @@ size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_
     return copy_wire(node, e, buf, cap);
 }
 
+#if CO_CONFIG_OD_LIMITS_64
 /* Sign-extended or zero-extended value of wire bytes of a fixed-size integer row. */
 static int64_t wire_integer(const co_od_entry_t *e, const uint8_t *data)
 {
@@ -424,6 +425,26 @@ uint32_t co_od_check_limits(const co_od_t *od, const co_od_entry_t *e, const uin
     }
     return CO_ABORT_NONE;
 }
+#else
+/* 32-bit limit pairs: rows with limits are integers of 1, 2 or 4 bytes (the generated table's check). */
+uint32_t co_od_check_limits(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    const co_od_limits_t *l = co_od_entry_limits(od, e);
+    if (l == NULL || len < e->size || e->size > 4U) {
+        return CO_ABORT_NONE;
+    }
+    uint32_t u = 0U;
+    for (uint16_t i = e->size; i > 0U; i--) {
+        u = (u << 8) | data[i - 1U];
+    }
+    if (is_signed(e->type)) {
+        const uint32_t sign = (uint32_t)1U << (e->size * 8U - 1U);
+        const int32_t v = (int32_t)((u ^ sign) - sign); /* sign-extended */
+        return v > l->high.i ? CO_ABORT_VALUE_HIGH : (v < l->low.i ? CO_ABORT_VALUE_LOW : CO_ABORT_NONE);
+    }
+    return u > l->high.u ? CO_ABORT_VALUE_HIGH : (u < l->low.u ? CO_ABORT_VALUE_LOW : CO_ABORT_NONE);
+}
+#endif
 
 /* Protocol rules of the communication objects, by owner module. CO_HANDLED: an action, nothing to store.
  * stored: a value being loaded (co_priv.h). */

@@ -22,6 +22,7 @@
  *   models of the emulator assume 64-bit time: their tests with this profile (tools/profile-tests) set it to 0.
  * - Compact dictionary rows (CO_CONFIG_OD_COMPACT): 10 bytes a row; both dictionaries are far below 64 KiB of
  *   values and 255 distinct limit pairs.
+ * - 32-bit limit pairs (CO_CONFIG_OD_LIMITS_64 0): both dictionaries limit only 8- and 16-bit integers.
  * - TX queue: 8 frames. The largest burst of these devices is boot-up + 3 TPDOs on entering
  *   Operational + an EMCY + an SDO response + a heartbeat (7 frames) against a port that is busy.
  *
@@ -49,5 +50,6 @@
 #endif
 
 #define CO_CONFIG_OD_COMPACT 1
+#define CO_CONFIG_OD_LIMITS_64 0
 
 #endif /* CO_PROFILE_ELTEX_H */

@@ -66,52 +66,6 @@ static void set_value(device_t *dev, uint16_t index, uint8_t sub, uint32_t v)
     }
 }
 
-/* E6: the EDS limits also for local writes (the core checks them for SDO and RPDO only). */
-static uint32_t local_limits(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data, size_t len)
-{
-    const co_od_limits_t *limits = co_od_entry_limits(od, e);
-    bool is_signed;
-    switch (e->type) {
-    case CO_T_INTEGER8:
-    case CO_T_INTEGER16:
-    case CO_T_INTEGER32:
-    case CO_T_INTEGER64:
-        is_signed = true;
-        break;
-    case CO_T_BOOLEAN:
-    case CO_T_UNSIGNED8:
-    case CO_T_UNSIGNED16:
-    case CO_T_UNSIGNED32:
-    case CO_T_UNSIGNED64:
-        is_signed = false;
-        break;
-    default:
-        return 0U;
-    }
-    if (limits == NULL || len == 0U || len > 8U) {
-        return 0U;
-    }
-    uint64_t u = 0U;
-    for (size_t i = len; i > 0U; i--) {
-        u = (u << 8) | data[i - 1U];
-    }
-    int64_t v;
-    if (is_signed) {
-        const unsigned bits = (unsigned)len * 8U;
-        if (bits < 64U && (u >> (bits - 1U)) != 0U) {
-            u |= ~((UINT64_C(1) << bits) - 1U);
-        }
-        v = (int64_t)u;
-    } else if (u > (uint64_t)INT64_MAX) {
-        return CO_ABORT_VALUE_HIGH;
-    } else {
-        v = (int64_t)u;
-    }
-    if (v > limits->high.i) {
-        return CO_ABORT_VALUE_HIGH;
-    }
-    return v < limits->low.i ? CO_ABORT_VALUE_LOW : 0U;
-}
 
 /* ---- Persistent data (E13) -------------------------------------------------------------------------------------
  * CO_NVM_DEVICE blob, 20 bytes, little-endian: magic (4, per device) | version 2 | flags | 0 0 |
@@ -449,7 +403,8 @@ uint32_t eltex_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t *da
 {
     eltex_t *x = eltex_of(dev);
     if (origin == CO_ORIGIN_LOCAL) {
-        const uint32_t r = local_limits(dev->node.od, e, data, len);
+        /* E6: the EDS limits also for local writes (the core checks them for SDO and RPDO only). */
+        const uint32_t r = co_od_check_limits(dev->node.od, e, data, len);
         if (r != 0U) {
             return r;
         }

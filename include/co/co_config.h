@@ -28,6 +28,13 @@
 #define CO_CONFIG_OD_COMPACT 0
 #endif
 
+/** 1: value limits of any numeric row, as 64-bit pairs (16 bytes each). 0: 32-bit pairs (8 bytes) and 32-bit
+ *  compares; then only integer rows of at most 4 bytes may have limits (a generated table with a REAL or wider
+ *  limited row fails to compile; <c_name>_od_config.h sets 0 where the dictionary allows it). */
+#ifndef CO_CONFIG_OD_LIMITS_64
+#define CO_CONFIG_OD_LIMITS_64 1
+#endif
+
 /** Most receive PDOs one node can have (the OD may declare fewer). */
 #ifndef CO_RPDO_MAX
 #define CO_RPDO_MAX 4U

@@ -60,9 +60,14 @@ enum co_od_flag {
 
 /** One limit, in the member of the row's type: r for REAL32/REAL64, u for UNSIGNED64, i for every other integer. */
 typedef union co_od_limit {
+#if CO_CONFIG_OD_LIMITS_64
     int64_t i;
     uint64_t u;
     double r;
+#else
+    int32_t i; /**< Signed integer rows (CO_CONFIG_OD_LIMITS_64 0: integers of at most 4 bytes only). */
+    uint32_t u; /**< Unsigned integer rows. */
+#endif
 } co_od_limit_t;
 
 /** Optional value limits of a numeric row (inclusive): a write outside is answered 0x06090031/0x06090032. */
@@ -152,6 +157,10 @@ typedef enum co_od_origin {
                               state (a valid PDO's COB-ID, mapping procedure); the write hook only checks it
                               (it must not act: the model sees the loaded values in on_reset). */
 } co_od_origin_t;
+
+/** A row's limits against a value in wire bytes (little-endian, at least the row's size): 0 within them or without
+ *  limits, else CO_ABORT_VALUE_HIGH / CO_ABORT_VALUE_LOW (CO_ABORT_INVALID_VALUE for a REAL NaN). */
+uint32_t co_od_check_limits(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data, size_t len);
 
 /** Copies len bytes of the default values image from offset into dst (0 beyond defaults_size). */
 void co_od_copy_defaults(const co_od_t *od, uint32_t offset, size_t len, void *dst);

@@ -152,8 +152,6 @@ uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *
 void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 /* Reads a row for a PDO or SDO after the device's read hook (no access check). Returns bytes copied. */
 size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap);
-/* Checks a value against the row's limits; 0 or VALUE_HIGH/VALUE_LOW. */
-uint32_t co_od_check_limits(const co_od_t *od, const co_od_entry_t *e, const uint8_t *data, size_t len);
 /* The checks a stored value of e passes before it is loaded (CO_ORIGIN_NVM): limits, the owner module's value
  * rules, the write hook. 0 or the abort code an SDO write of it would get. */
 uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);

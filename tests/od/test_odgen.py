@@ -205,10 +205,12 @@ def fitted(tmp_path, eds_text, profile_text=BASE_PROFILE):
 
 @pytest.mark.parametrize("device, off, caps", [
     ("pro-ionizer", {"CO_CONFIG_SYNC", "CO_CONFIG_NODE_GUARDING", "CO_CONFIG_HB_CONSUMER", "CO_CONFIG_MPDO",
-                     "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING"}, {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 3}),
+                     "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64"},
+     {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 3}),
     ("sds", {"CO_CONFIG_SYNC", "CO_CONFIG_NODE_GUARDING", "CO_CONFIG_HB_CONSUMER", "CO_CONFIG_MPDO",
-             "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING"}, {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 2}),
-    ("buerkert-flow-controller", {"CO_CONFIG_MPDO", "CO_CONFIG_SDO_SERVERS"},
+             "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64"},
+     {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 2}),
+    ("buerkert-flow-controller", {"CO_CONFIG_MPDO", "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_OD_LIMITS_64"},
      {"CO_RPDO_MAX": 4, "CO_TPDO_MAX": 4, "CO_HB_CONSUMER_MAX": 127}),
 ])
 def test_fitted_configuration_of_the_shipped_devices(tmp_path, device, off, caps):
@@ -229,3 +231,7 @@ def test_fitted_configuration_follows_the_objects(tmp_path):
     off, caps = fitted(tmp_path, eds)
     assert "CO_CONFIG_SYNC" not in off and "CO_CONFIG_MPDO" not in off and "CO_CONFIG_PDO_DYNAMIC_MAPPING" not in off
     assert "CO_CONFIG_NODE_GUARDING" in off and caps == {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 2}
+    # A REAL32 row with limits needs 64-bit pairs.
+    eds = set_key(set_key(eds, "2000sub2", "DataType", "0x0008"), "2000sub2", "HighLimit", "365.5")
+    off, _ = fitted(tmp_path, eds)
+    assert "CO_CONFIG_OD_LIMITS_64" not in off

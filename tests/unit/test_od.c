@@ -93,6 +93,27 @@ static void write_path_order(void)
     TEST_ASSERT_EQUAL_UINT16(10000U, fx.values.x2000_cycle_ms);
 }
 
+/* Inclusive limits of an unsigned and a signed row, at and just past each bound (also with 32-bit pairs: unit-mcu). */
+static void limits_at_their_bounds(void)
+{
+    const co_od_entry_t *u16 = co_od_find(&test_od, 0x2000, 0); /* 100..60000 */
+    const co_od_entry_t *i16 = co_od_find(&test_od, 0x2001, 0); /* -100..100 */
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, co_od_check_limits(&test_od, u16, (const uint8_t *)"\x63\x00", 2U));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, u16, (const uint8_t *)"\x64\x00", 2U));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, u16, (const uint8_t *)"\x60\xEA", 2U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_check_limits(&test_od, u16, (const uint8_t *)"\x61\xEA", 2U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_check_limits(&test_od, u16, (const uint8_t *)"\xFF\xFF", 2U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, co_od_check_limits(&test_od, i16, (const uint8_t *)"\x9B\xFF", 2U));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, i16, (const uint8_t *)"\x9C\xFF", 2U));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, i16, (const uint8_t *)"\xFF\xFF", 2U)); /* -1 */
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, i16, (const uint8_t *)"\x64\x00", 2U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_check_limits(&test_od, i16, (const uint8_t *)"\x65\x00", 2U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, co_od_check_limits(&test_od, i16, (const uint8_t *)"\x00\x80", 2U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_check_limits(&test_od, i16, (const uint8_t *)"\xFF\x7F", 2U));
+    /* a row without limits */
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, co_od_find(&test_od, 0x1017, 0), (const uint8_t *)"\xFF\xFF", 2U));
+}
+
 static void strings_shorter_than_capacity_are_zero_padded(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x2005, 0, "abcdefghijkl", 12U, CO_ORIGIN_LOCAL));
@@ -141,6 +162,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(lookup);
     RUN_TEST(type_sizes);
+    RUN_TEST(limits_at_their_bounds);
     RUN_TEST(local_access_bypasses_access_rights_not_sizes);
     RUN_TEST(read_path);
     RUN_TEST(write_path_order);
