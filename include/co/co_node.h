@@ -181,9 +181,9 @@ typedef struct co_txq_frame {
 } co_txq_frame_t;
 
 typedef struct co_txq {
-    co_txq_frame_t frame[CO_TX_QUEUE_LEN];
     uint8_t head;
     uint8_t count;
+    co_txq_frame_t frame[CO_TX_QUEUE_LEN];
 } co_txq_t;
 
 typedef struct co_hb_producer {
@@ -211,11 +211,11 @@ typedef struct co_hb_consumer_slot {
 } co_hb_consumer_slot_t;
 
 typedef struct co_hb_consumer {
-    co_hb_consumer_slot_t slot[CO_HB_CONSUMER_MAX];
     uint8_t count;              /**< Slots in use = sub-indices of 0x1016 (capped at CO_HB_CONSUMER_MAX). */
     uint8_t used;               /**< 1 + the last slot that monitors a node (0: none): the loops stop there. */
     uint8_t monitored[16];      /**< Bit n: node-ID n is monitored by some slot (a heartbeat of another node
                                      is rejected without a loop). */
+    co_hb_consumer_slot_t slot[CO_HB_CONSUMER_MAX];
 } co_hb_consumer_t;
 
 typedef struct co_emcy_error {
@@ -225,15 +225,15 @@ typedef struct co_emcy_error {
 } co_emcy_error_t;
 
 typedef struct co_emcy {
-    co_emcy_error_t active[CO_EMCY_ACTIVE_MAX];
     uint8_t n_active;
-    uint8_t queue[CO_EMCY_QUEUE_LEN][8]; /**< The 8 bytes of each EMCY waiting (its COB-ID is taken at sending). */
     uint8_t q_head;
     uint8_t q_count;
+    uint16_t inhibit_100us;     /**< 0x1015, kept here by the write path. */
     co_time_us_t next_allowed;  /**< Inhibit time 0x1015: earliest time of the next EMCY. */
     uint32_t lost;              /**< EMCY frames dropped because the queue was full. */
     uint32_t cob_id;            /**< 0x1014 (or 0x80 + node-ID without it), kept here by the write path. */
-    uint16_t inhibit_100us;     /**< 0x1015, kept here by the write path. */
+    co_emcy_error_t active[CO_EMCY_ACTIVE_MAX];
+    uint8_t queue[CO_EMCY_QUEUE_LEN][8]; /**< The 8 bytes of each EMCY waiting (its COB-ID is taken at sending). */
 } co_emcy_t;
 
 /** A CAN-ID field that holds no CAN-ID (an object the OD lacks, a COB-ID not valid). */
@@ -278,10 +278,6 @@ typedef struct co_pdo_map {
 } co_pdo_map_t;
 
 typedef struct co_rpdo {
-    uint32_t cob_id;            /**< 0x1400+n sub 1 as configured. */
-    co_pdo_map_t map[8];
-    co_time_us_t deadline;      /**< Event-timer deadline monitoring, CO_NEVER when off. */
-    uint16_t event_ms;          /**< Its event timer (sub 5): reception deadline monitoring, 0 = off. */
     uint8_t n_map;
     uint8_t map_len;            /**< Mapped bytes. */
     uint8_t type;
@@ -290,21 +286,21 @@ typedef struct co_rpdo {
     bool timeout_error;
 #if CO_CONFIG_SYNC
     bool sync_pending;          /**< Synchronous RPDO received, applied at the next SYNC. */
-    uint8_t sync_data[8];       /**< Its map_len bytes. */
 #endif
 #if CO_CONFIG_MPDO
     uint8_t mpdo;               /**< 0, or the MPDO kind of its mapping: 0xFE SAM (dispatching list), 0xFF DAM. */
     bool mpdo_error;            /**< A DAM-MPDO's object could not be written (EMCY 0x8230 active). */
 #endif
+    uint16_t event_ms;          /**< Its event timer (sub 5): reception deadline monitoring, 0 = off. */
+    uint32_t cob_id;            /**< 0x1400+n sub 1 as configured. */
+    co_time_us_t deadline;      /**< Event-timer deadline monitoring, CO_NEVER when off. */
+    co_pdo_map_t map[8];
+#if CO_CONFIG_SYNC
+    uint8_t sync_data[8];       /**< Its map_len bytes. */
+#endif
 } co_rpdo_t;
 
 typedef struct co_tpdo {
-    uint32_t cob_id;
-    co_pdo_map_t map[8];
-    co_time_us_t next_allowed;  /**< End of the inhibit time. */
-    co_time_us_t event_due;     /**< Event timer, CO_NEVER when off. */
-    uint32_t inhibit_us;
-    uint32_t event_us;
     uint8_t n_map;
     uint8_t map_len;
     uint8_t type;
@@ -320,6 +316,12 @@ typedef struct co_tpdo {
     uint8_t mpdo;               /**< 0, or 0xFE: a SAM-MPDO producer of the object scanner list. */
     uint16_t scan_next;         /**< SAM-MPDO: position in the scanner list of the next object to send. */
 #endif
+    uint32_t cob_id;
+    co_time_us_t next_allowed;  /**< End of the inhibit time. */
+    co_time_us_t event_due;     /**< Event timer, CO_NEVER when off. */
+    uint32_t inhibit_us;
+    uint32_t event_us;
+    co_pdo_map_t map[8];
     uint8_t last[8];
 } co_tpdo_t;
 
@@ -332,11 +334,11 @@ typedef struct co_lss_slave {
     uint8_t ident_step;         /**< Identify remote slave: next expected cs 0x46..0x4B. */
     bool ident_match;
     uint8_t fastscan_pos;       /**< LSSSub the slave expects next. */
-    uint32_t select[4];
-    uint32_t ident_low;
     bool switch_pending;        /**< Activate bit timing in progress. */
+    uint32_t ident_low;
     co_time_us_t switch_at;
     co_time_us_t silent_until;  /**< No frame is sent before this time (activate bit timing). */
+    uint32_t select[4];
 } co_lss_slave_t;
 
 /** Kinds of received frames (co_rx_route_t.target >> 12). */
@@ -366,6 +368,30 @@ typedef struct co_node_stats {
 } co_node_stats_t;
 
 struct co_node {
+    /* Ordered for small targets: the fields most code touches first, so that Thumb-1 and AVR reach them with a short
+     * immediate offset (bytes below 32, halfwords below 64, words below 128 on Cortex-M0+); large arrays last. */
+    uint8_t node_id;            /**< Active node-ID, 0xFF while unconfigured. */
+    uint8_t wake;               /**< Services whose state changed since they last ran (a frame taken, an API call;
+                                     bits in src/priv/co_priv.h): the next co_node_process() runs them, and every
+                                     service once next_due has come. 0: it returns next_due at once. */
+    bool cos_pending;           /**< A TPDO-mappable value was written: event-driven TPDOs compare what they
+                                     would send with what they sent last at the next pass. */
+    uint8_t n_sdo_extra;        /**< Additional servers the OD declares. */
+    uint8_t default_node_id;
+    uint8_t default_bit_timing;
+    uint16_t n_rpdo;            /**< PDOs the OD declares (1 + the highest 0x1400+n / 0x1800+n present). */
+    uint16_t n_tpdo;
+    uint16_t rpdo_cap;          /**< Entries of rpdo[] / tpdo[]: co_node_cfg_t's arrays, or the node's own. */
+    uint16_t tpdo_cap;
+    uint16_t n_route;           /**< Entries of route[] in use. */
+    uint16_t route_cap;
+    uint16_t rx_ids_version;    /**< Changes whenever co_node_rx_ids() may answer differently (with each
+                                     CO_EV_RX_FILTER): a port that polls it needs no event hook. */
+    co_nmt_state_t nmt_state;
+    co_nvm_status_t nvm_status;
+    co_time_us_t now;           /**< Time of the call in progress (co_node_rx / co_node_process / API). */
+    co_time_us_t next_due;      /**< The earliest deadline of any service (a little early at worst), as the
+                                     last co_node_process() returned it. */
     const co_od_t *od;
     uint8_t *values;
     const co_port_t *port;
@@ -374,51 +400,29 @@ struct co_node {
     void *hooks_ctx;
     const uint16_t *bit_rates_kbit;
     uint32_t options;
-    co_time_us_t now;           /**< Time of the call in progress (co_node_rx / co_node_process / API). */
-    uint8_t node_id;            /**< Active node-ID, 0xFF while unconfigured. */
-    uint8_t default_node_id;
-    uint8_t default_bit_timing;
-    co_nmt_state_t nmt_state;
-    co_nvm_status_t nvm_status;
-    co_node_stats_t stats;
-    co_txq_t txq;
+    co_rpdo_t *rpdo;            /**< co_node_cfg_t.rpdo, or rpdo_own. */
+    co_tpdo_t *tpdo;
+    co_sdo_server_t *sdo_extra; /**< co_node_cfg_t.sdo_servers: the servers of 0x1201.. present in the OD. */
+    co_rx_route_t *route;       /**< co_node_cfg_t.routes, or route_own. */
     co_hb_producer_t hb;
 #if CO_CONFIG_NODE_GUARDING
     co_guard_t guard;
 #endif
-#if CO_CONFIG_HB_CONSUMER
-    co_hb_consumer_t hbc;
-#endif
-    co_emcy_t emcy;
-    co_sdo_server_t sdo;        /**< The default SDO server (0x1200: 0x600/0x580 + node-ID). */
-    co_sdo_server_t *sdo_extra; /**< co_node_cfg_t.sdo_servers: the servers of 0x1201.. present in the OD. */
-    uint8_t n_sdo_extra;        /**< Additional servers the OD declares. */
 #if CO_CONFIG_SYNC
     co_sync_t sync;
 #endif
-    uint16_t n_rpdo;            /**< PDOs the OD declares (1 + the highest 0x1400+n / 0x1800+n present). */
-    uint16_t n_tpdo;
-    uint16_t rpdo_cap;          /**< Entries of rpdo[] / tpdo[]: co_node_cfg_t's arrays, or the node's own. */
-    uint16_t tpdo_cap;
-    co_rpdo_t *rpdo;            /**< co_node_cfg_t.rpdo, or rpdo_own. */
-    co_tpdo_t *tpdo;
-    co_rpdo_t rpdo_own[CO_RPDO_MAX];
-    co_tpdo_t tpdo_own[CO_TPDO_MAX];
     co_lss_slave_t lss;
-    co_time_us_t next_due;      /**< The earliest deadline of any service (a little early at worst), as the
-                                     last co_node_process() returned it. */
-    uint8_t wake;               /**< Services whose state changed since they last ran (a frame taken, an API call;
-                                     bits in src/priv/co_priv.h): the next co_node_process() runs them, and every
-                                     service once next_due has come. 0: it returns next_due at once. */
-    bool cos_pending;           /**< A TPDO-mappable value was written: event-driven TPDOs compare what they
-                                     would send with what they sent last at the next pass. */
-    uint16_t rx_ids_version;    /**< Changes whenever co_node_rx_ids() may answer differently (with each
-                                     CO_EV_RX_FILTER): a port that polls it needs no event hook. */
-    uint16_t n_route;           /**< Entries of route[] in use. */
-    uint16_t route_cap;
     uint8_t route_hash[16];     /**< Per CO_ROUTE_HASH(id): 0 no route has it, 1 + the entry of the only one, 0xFF
                                      several (then the table is searched): most frames for others end here. */
-    co_rx_route_t *route;       /**< co_node_cfg_t.routes, or route_own. */
+    co_node_stats_t stats;
+    co_emcy_t emcy;
+    co_txq_t txq;
+    co_sdo_server_t sdo;        /**< The default SDO server (0x1200: 0x600/0x580 + node-ID). */
+#if CO_CONFIG_HB_CONSUMER
+    co_hb_consumer_t hbc;
+#endif
+    co_rpdo_t rpdo_own[CO_RPDO_MAX];
+    co_tpdo_t tpdo_own[CO_TPDO_MAX];
     co_rx_route_t route_own[CO_RX_ROUTES_FIXED + CO_RPDO_MAX];
 };
 
