@@ -7,6 +7,25 @@
 /* CiA 305 bit-timing table (index -> kbit/s); index 9 (auto-detection) is not supported by an emulator. */
 static const uint16_t cia305_bit_rates[CO_LSS_BIT_TIMING_COUNT] = {1000U, 800U, 500U, 250U, 125U, 0U, 50U, 20U, 10U, 0U};
 
+uint32_t co_div_u32(uint32_t a, uint32_t b, uint32_t *rem)
+{
+    uint32_t q = 0U;
+    uint32_t r = 0U;
+    for (unsigned bit = 32U; bit > 0U; bit--) {
+        const uint32_t carry = r >> 31; /* r < b, so 2r + 1 - b fits even when 2r does not */
+        r = (r << 1) | ((a >> (bit - 1U)) & 1U);
+        q <<= 1;
+        if (carry != 0U || r >= b) {
+            r -= b;
+            q |= 1U;
+        }
+    }
+    if (rem != NULL) {
+        *rem = r;
+    }
+    return q;
+}
+
 bool co_cob_id_restricted(uint32_t can_id)
 {
     return can_id <= 0x07FU || (can_id >= 0x101U && can_id <= 0x180U) || (can_id >= 0x581U && can_id <= 0x5FFU) ||

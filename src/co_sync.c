@@ -21,7 +21,8 @@ static co_time_us_t timeout_after(co_node_t *node)
     if (period <= CO_TIME_STEP_MS / 3U * 2000U) {
         return co_time_after(node->now, period + period / 2U);
     }
-    return co_long_timer_start(node->now, period / 1000U + period / 2000U, &node->sync.rest_ms);
+    const uint32_t ms = co_div_u32(period, 1000U, NULL);
+    return co_long_timer_start(node->now, ms + ms / 2U, &node->sync.rest_ms);
 }
 
 /* The parameters the consumer uses at every SYNC, from the OD (at a reset and when one is written). The

@@ -106,6 +106,16 @@ static inline bool co_long_timer_expired(co_time_us_t now, co_time_us_t *deadlin
 
 /* The first deadline after now on the grid due + k * period (k >= 1, due <= now, period > 0): a late call does not
  * shift the grid. More than 2^32 µs late (71 minutes without a call), a new grid starts at now. */
+/* a / b and a % b by binary long division (b > 0), for the rare paths that divide (a late periodic timer, a long
+ * timer's start): a core without a divide instruction (Cortex-M0+, AVR) links no ~270-byte library division. */
+uint32_t co_div_u32(uint32_t a, uint32_t b, uint32_t *rem);
+static inline uint32_t co_rem_u32(uint32_t a, uint32_t b)
+{
+    uint32_t r;
+    (void)co_div_u32(a, b, &r);
+    return r;
+}
+
 static inline co_time_us_t co_next_on_grid(co_time_us_t due, uint32_t period, co_time_us_t now)
 {
     const co_time_us_t late = now - due;
@@ -113,9 +123,9 @@ static inline co_time_us_t co_next_on_grid(co_time_us_t due, uint32_t period, co
         return co_time_after(due, period);
     }
 #if CO_CONFIG_TIME32
-    return co_time_after(now, period - late % period);
+    return co_time_after(now, period - co_rem_u32(late, period));
 #else
-    return co_time_after(now, period - (late <= UINT32_MAX ? (uint32_t)late % period : 0U));
+    return co_time_after(now, period - (late <= UINT32_MAX ? co_rem_u32((uint32_t)late, period) : 0U));
 #endif
 }
 

@@ -3,6 +3,7 @@
  * minutes). The node starts 2.5 s before 2^32 µs: with 64-bit time nothing wraps there and the same timings hold.
  * Times are compared relative to the start, in co_time_us_t arithmetic (which wraps as the clock does). */
 #include "fixture.h"
+#include "priv/co_priv.h"
 
 #define MS ((co_time_us_t)1000U)
 #define MINUTE ((co_time_us_t)60000000UL) /* (a 16-bit int would wrap 40U * 60000U) */
@@ -168,6 +169,30 @@ static void sync_timeout_across_the_wrap_and_after_25_minutes(void)
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x085U));
 }
 
+/* Division and remainder without a divide instruction (co_priv.h): a late timer's re-alignment, a long timer's start. */
+static void remainder_without_division(void)
+{
+    static const uint32_t edge[] = {0U, 1U, 2U, 3U, 999U, 1000U, 65535000UL, 0x7FFFFFFFUL, 0x80000000UL, 0x80000001UL,
+                                    0xFFFFFFFEUL, 0xFFFFFFFFUL};
+    const unsigned n = (unsigned)(sizeof edge / sizeof edge[0]);
+    for (unsigned i = 0U; i < n; i++) {
+        for (unsigned j = 1U; j < n; j++) {
+            uint32_t rem = 0U;
+            TEST_ASSERT_EQUAL_UINT32(edge[i] / edge[j], co_div_u32(edge[i], edge[j], &rem));
+            TEST_ASSERT_EQUAL_UINT32(edge[i] % edge[j], rem);
+        }
+    }
+    uint32_t x = 1U;
+    for (unsigned k = 0U; k < 2000U; k++) {
+        x = (uint32_t)(x * 1664525UL + 1013904223UL);
+        const uint32_t a = x;
+        x = (uint32_t)(x * 1664525UL + 1013904223UL);
+        const uint32_t b = (x >> (x & 31U)) | 1U;
+        TEST_ASSERT_EQUAL_UINT32(a % b, co_rem_u32(a, b));
+        TEST_ASSERT_EQUAL_UINT32(a / b, co_div_u32(a, b, NULL));
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -179,5 +204,6 @@ int main(void)
     RUN_TEST(life_guarding_across_the_wrap_and_for_40_minutes);
     RUN_TEST(a_late_call_takes_the_missed_steps_of_a_long_timer);
     RUN_TEST(sync_timeout_across_the_wrap_and_after_25_minutes);
+    RUN_TEST(remainder_without_division);
     return UNITY_END();
 }
