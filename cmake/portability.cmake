@@ -26,7 +26,7 @@ target_link_libraries(co_footprint_probe PRIVATE od_pro_ionizer od_sds od_buerke
 target_compile_options(co_footprint_probe PRIVATE ${CO_WARNINGS})
 if(CMAKE_CROSSCOMPILING)
   # -ffreestanding for the check's own C library functions only: the core is compiled as for any firmware.
-  set_source_files_properties(${PROJECT_SOURCE_DIR}/cmake/freestanding_check.c PROPERTIES COMPILE_OPTIONS -ffreestanding)
+  set_source_files_properties(${PROJECT_SOURCE_DIR}/cmake/freestanding_check.c PROPERTIES COMPILE_OPTIONS "-ffreestanding;-fno-lto")
   foreach(dev pro_ionizer sds buerkert_fc)
     add_executable(co_freestanding_${dev} ${PROJECT_SOURCE_DIR}/cmake/freestanding_check.c)
     set_target_properties(co_freestanding_${dev} PROPERTIES SUFFIX .elf)
