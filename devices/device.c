@@ -18,7 +18,9 @@ static uint32_t tramp_write(void *ctx, co_node_t *node, const co_od_entry_t *e, 
 {
     device_t *dev = dev_of(ctx);
     (void)node;
-    dev->touched = true;
+    if (e->index >= 0x2000U) {
+        dev->touched = true; /* a communication object is the core's: no step for it (an SDO client's 0x1017) */
+    }
     return dev->cls->on_write != NULL ? dev->cls->on_write(dev, e, data, len, origin) : 0U;
 }
 

@@ -73,8 +73,10 @@ typedef struct device_class {
     void (*on_nmt_change)(device_t *dev, co_nmt_state_t from, co_nmt_state_t to);
     void (*on_reset)(device_t *dev, co_reset_t what);
     /** Advances the model to now (values move, timers run). Returns its next deadline or CO_NEVER. Called at that
-     *  deadline and after anything that may change the model: a hook or a core event of the node, a command, a
-     *  power-on; not for every frame (a frame that reaches no hook cannot change the model). */
+     *  deadline and after anything that may change the model: a write of an object from 0x2000 on, another hook or
+     *  a core event of the node, a command, a power-on; not for every frame (a frame that reaches no hook cannot
+     *  change the model) nor for a write of a communication object (0x1000-0x1FFF: the core's, which on_write
+     *  sees and may refuse; a step that reads one sees it at its next deadline). */
     co_time_us_t (*step)(device_t *dev, co_time_us_t now);
     /** A control command (argv[0] is the command word). */
     device_cmd_result_t (*command)(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
@@ -120,7 +122,8 @@ struct device {
     uint8_t variant;               /**< Index into cls->variants. */
     co_time_us_t now;              /**< Time of the call in progress. */
     co_time_us_t step_due;         /**< What cls->step returned last. */
-    bool touched;                  /**< A hook, a core event or a command ran since: step at the next process. */
+    bool touched;                  /**< Something that may change the model ran since (see step): step at the next
+                                        process. */
 };
 
 /**
