@@ -104,8 +104,6 @@ static inline bool co_long_timer_expired(co_time_us_t now, co_time_us_t *deadlin
     return false;
 }
 
-/* The first deadline after now on the grid due + k * period (k >= 1, due <= now, period > 0): a late call does not
- * shift the grid. More than 2^32 µs late (71 minutes without a call), a new grid starts at now. */
 /* a / b and a % b by binary long division (b > 0), for the rare paths that divide (a late periodic timer, a long
  * timer's start): a core without a divide instruction (Cortex-M0+, AVR) links no ~270-byte library division. */
 uint32_t co_div_u32(uint32_t a, uint32_t b, uint32_t *rem);
@@ -116,6 +114,8 @@ static inline uint32_t co_rem_u32(uint32_t a, uint32_t b)
     return r;
 }
 
+/* The first deadline after now on the grid due + k * period (k >= 1, due <= now, period > 0): a late call does not
+ * shift the grid. More than 2^32 µs late (71 minutes without a call), a new grid starts at now. */
 static inline co_time_us_t co_next_on_grid(co_time_us_t due, uint32_t period, co_time_us_t now)
 {
     const co_time_us_t late = now - due;
