@@ -58,7 +58,8 @@ enum co_od_flag {
     CO_OD_KEEP = 0x0080U       /**< Survives 0x1011 restore-defaults (e.g. a node-ID or bit-timing parameter). */
 };
 
-/** One limit, in the member of the row's type: r for REAL32/REAL64, u for UNSIGNED64, i for every other integer. */
+/** One limit, in the member of the row's type: r for REAL32/REAL64, u for unsigned and i for signed integers (with
+ *  64-bit pairs the core compares every integer but UNSIGNED64 through i, which holds the same value). */
 typedef union co_od_limit {
 #if CO_CONFIG_OD_LIMITS_64
     int64_t i;
@@ -95,11 +96,11 @@ typedef struct co_od_entry {
 #endif
 } co_od_entry_t;
 
-/** A row without limits, in either layout: size and offset as sizeof/offsetof of its member of the values struct
- *  (not cast: a value that does not fit the layout's field fails the build). */
+/* Row initialisers in either layout. CO_OD_ROW: a row without limits; CO_OD_ROW_LIMITED: a row with limits[n] of the
+ * table's limits array (which co_od_t.limits must name). size and offset: sizeof/offsetof of the row's member of the
+ * values struct, not cast, so that a value the layout's field cannot hold fails the build. */
 #if CO_CONFIG_OD_COMPACT
 #define CO_OD_ROW(index, sub, type, flags, size, offset) {(index), (sub), (type), (flags), 0U, (size), (offset)}
-/** A row with limits: limits[n] of the table's limits array (which co_od_t.limits must name). */
 #define CO_OD_ROW_LIMITED(index, sub, type, flags, size, offset, limits, n)                                        \
     {(index), (sub), (type), (flags), (n) + 1U, (size), (offset)}
 #else
