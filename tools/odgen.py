@@ -5,9 +5,9 @@
     tools/odgen.py --reader build/canopen-eds --check od/pro-ionizer.eds          (validate only)
 
 Output: <c_name>_od.h (the values struct, the co_od_t), <c_name>_od.c (the sorted const row table,
-the defaults image, the limits), <c_name>_od_names.c (the rows' names and units) and <c_name>_od_config.h (the
-core's switches for services the dictionary has no objects for, off). All say they are generated. The output depends only on the inputs
-(no dates, no paths), so a rebuild gives the same bytes.
+the defaults image, the limits), <c_name>_od_names.c (the rows' names and units) and <c_name>_od_config.h
+(the core's switches for services the dictionary has no objects for, off). All say they are generated. The
+output depends only on the inputs (no dates, no paths), so a rebuild gives the same bytes.
 
 The EDS is read by the project's one EDS/DCF reader (src/eds/, docs/eds.md), through `canopen-eds json
 --strict`: the emulator reads files with the same code, so a generated table and an emulated device never
@@ -377,6 +377,8 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     c.append("} defaults_t;\n")
     c.append(f"typedef char defaults_laid_out_as_values[offsetof(defaults_t, {last}) == offsetof(V, {last}) ? 1 : -1];\n\n")
     c.append("static const defaults_t defaults = {\n")
+    if all(zero_default(r) for r in layout[:n_defaults]):
+        c.append("    0, /* every default is 0 */\n")  # C has no empty initialiser
     for r in layout[:n_defaults]:
         if r.dtype == 0x09:
             data = r.value.encode("ascii")
