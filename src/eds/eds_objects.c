@@ -490,12 +490,18 @@ static void read_compact(builder_t *b, const ini_section_t *s, eds_object_t *o, 
     const ini_section_t *names = ini_find(b->ini, INI_NAME, o->index, 0U);
     const ini_section_t *values = ini_find(b->ini, INI_VALUE, o->index, 0U);
     for (unsigned sub = 1U; sub <= n; sub++) {
-        char key[8], formed[300];
+        char key[8];
         snprintf(key, sizeof key, "%u", sub);
         const char *name = text_of(b, names, key);
         if (name == NULL) {
-            snprintf(formed, sizeof formed, "%s%u", o->name, sub);
-            name = eds_strndup(f, formed, strlen(formed));
+            /* Sized to the name, not cut: a cut could split a UTF-8 sequence (the written DCF would not be UTF-8). */
+            const size_t cap = strlen(o->name) + sizeof key;
+            char *formed = eds_alloc(f, cap);
+            if (formed == NULL) {
+                return;
+            }
+            snprintf(formed, cap, "%s%u", o->name, sub);
+            name = formed;
         }
         eds_entry_t tmp;
         if (!read_entry(b, s, o->index, (uint8_t)sub, name, ini_get(b->ini, values, key), 0U, &tmp)) {

@@ -128,6 +128,22 @@ def test_compact_sub_objects():
         for s, n in ((1, "Gain left"), (2, "Channel gain2"), (3, "Gain right"), (4, "Channel gain4"))]
 
 
+def test_a_long_compact_name_is_formed_whole(tmp_path):
+    """The name of an unnamed compact sub-object is the object's name and the sub-index, however long: a name cut
+    to a buffer split a two-byte UTF-8 sequence, and the DCF written from it was not UTF-8 (a fuzz finding)."""
+    long_name = " ".join(["Kanalverstärkung"] * 20)  # 359 bytes of UTF-8
+    path = tmp_path / "long.eds"
+    path.write_text((FILES / "compact.eds").read_text().replace("ParameterName=Channel gain",
+                                                                "ParameterName=" + long_name))
+    assert entry(model(path), 0x2100, 2)["name"] == long_name + "2"
+    out = tmp_path / "out.dcf"
+    assert run("convert", "--dcf", "--node-id", "7", path, out).returncode == 0
+    out.read_bytes().decode("utf-8")  # raises if the writer split a sequence
+    again = model(out)
+    assert again["warnings"] == 0 and again["errors"] == 0, again["diagnostics"]
+    assert entry(again, 0x2100, 4)["name"] == long_name + "4"
+
+
 def test_dcf_values_and_commissioning():
     m = model(FILES / "device.dcf")
     assert m["device"]["is_dcf"] is True
