@@ -62,12 +62,22 @@ static void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_time_us
         while (bits != 0U) {
             const size_t i = w * 64U + (size_t)__builtin_ctzll(bits);
             bits &= bits - 1U;
-            if (i != sender && i < b->n_nodes && faults_rx(b->nodes[i], f, now) &&
+            if (i != sender && i < b->n_nodes && (faults_none(&b->nodes[i]->faults) || faults_rx(b->nodes[i], f, now)) &&
                 device_rx(&b->nodes[i]->dev, f, now)) {
                 b->nodes[i]->dirty = true;
             }
         }
     }
+}
+
+/* Out of line: -v only; its buffer would otherwise cost every frame sent a larger stack frame. */
+static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_frame_t *f)
+{
+    char hex[24] = "";
+    for (uint8_t i = 0U; i < f->len; i++) {
+        (void)snprintf(hex + 2U * i, sizeof hex - 2U * i, "%02X", f->data[i]);
+    }
+    logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&from->dev.node), (unsigned)f->id, hex);
 }
 
 co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
@@ -87,11 +97,7 @@ co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
         }
     }
     if (st == CO_OK && b->log_level >= LOG_VERBOSE) {
-        char hex[24] = "";
-        for (uint8_t i = 0U; i < f->len; i++) {
-            (void)snprintf(hex + 2U * i, sizeof hex - 2U * i, "%02X", f->data[i]);
-        }
-        logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&from->dev.node), (unsigned)f->id, hex);
+        log_sent(from, f);
     }
     return st;
 }
@@ -115,7 +121,8 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
             if (n->dirty || now >= n->deadline) {
                 n->dirty = false;
                 co_time_us_t d = device_process(&n->dev, now);
-                const co_time_us_t held = faults_run(n, now); /* frames held back (this pass's too), a bus-off's end */
+                /* frames held back (this pass's too), a bus-off's end */
+                const co_time_us_t held = faults_none(&n->faults) ? CO_NEVER : faults_run(n, now);
                 if (n->dirty) {
                     n->dirty = false;
                     d = device_process(&n->dev, now); /* the faults changed the node: a recovery EMCY goes out now */

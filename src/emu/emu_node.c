@@ -14,6 +14,9 @@ static co_status_t port_send(void *ctx, const co_frame_t *f)
 {
     emu_node_t *n = (emu_node_t *)ctx;
     /* A store is durable before the core answers it: the port's last commit of the store does it (nvm_file.h). */
+    if (faults_none(&n->faults)) {
+        return bus_send(n->bus, n, f);
+    }
     co_frame_t frame = *f;
     switch (faults_tx(n, &frame, n->dev.now)) {
     case FAULT_TX_DROP:

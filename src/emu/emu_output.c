@@ -117,15 +117,24 @@ static unsigned long newlines(const char *text, size_t n)
 
 /* A stream that has drained to half takes lines again; the report of its gap goes to the log once the log has room
  * for it (the log may be the stream that is still full), until then the counts wait and add up. */
+static void report_gap(output_stream_t *s);
+
 static void resume_once_drained(output_stream_t *s)
 {
     if (s->dropping && s->len <= OUTPUT_BUFFER_SIZE / 2U) {
         s->dropping = false;
     }
-    output_stream_t *log = &streams[STREAM_LOG];
+    const output_stream_t *log = &streams[STREAM_LOG];
     if (s->dropped_lines == 0U || s->dropping || log->dropping || log->how == WRITE_NOWHERE) {
         return;
     }
+    report_gap(s);
+}
+
+/* Out of line: the common case (nothing dropped) must not pay for the line buffer's stack frame. */
+static __attribute__((noinline)) void report_gap(output_stream_t *s)
+{
+    output_stream_t *log = &streams[STREAM_LOG];
     char line[LINE_BYTES];
     const co_time_us_t t = socketcan_now_us() - output_start;
     const int n = s->how == WRITE_NOWHERE
@@ -271,6 +280,13 @@ static bool write_some(output_stream_t *s)
 
 void output_flush(void)
 {
+    bool idle = true;
+    for (int i = 0; i < N_STREAMS; i++) {
+        idle = idle && streams[i].len == 0U && !streams[i].dropping && streams[i].dropped_lines == 0U;
+    }
+    if (idle) {
+        return; /* the common pass: nothing written, nothing held back */
+    }
     for (int i = 0; i < N_STREAMS; i++) {
         output_stream_t *s = &streams[i];
         while (s->len > 0U && s->how != WRITE_NOWHERE && write_some(s)) {

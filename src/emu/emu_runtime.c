@@ -88,11 +88,12 @@ int runtime_loop(emu_t *emu)
 {
     /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients */
     struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS];
+    co_time_us_t now = socketcan_now_us();
     while (!emu->quit && stop_signal == 0) {
-        co_time_us_t now = socketcan_now_us();
         char line[COMMAND_LINE_MAX + 1];
         /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
-        while (!emu->quit && script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
+        while (!emu->quit && script_next_at(&emu->script) <= now - emu->start &&
+               script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
             run_command(emu, line);
         }
         co_time_us_t next = CO_NEVER;
@@ -133,6 +134,7 @@ int runtime_loop(emu_t *emu)
             timeout = &ts;
         }
         const int ready = ppoll(pfd, nfds, timeout, NULL);
+        now = socketcan_now_us(); /* also the next pass's time when only frames came: reading them is quick */
         if (ready < 0) {
             if (errno == EINTR) {
                 continue;
@@ -140,7 +142,6 @@ int runtime_loop(emu_t *emu)
             output_error("poll: %s", strerror(errno));
             return 1;
         }
-        now = socketcan_now_us();
         for (size_t i = 0U; i < emu->n_buses; i++) {
             if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
                 bus_receive(emu->buses[i], now, next);
@@ -149,10 +150,18 @@ int runtime_loop(emu_t *emu)
                 bus_tx_ready(emu->buses[i]); /* room in the socket's buffer: nodes with queued frames retry now */
             }
         }
+        bool commands = false;
         if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
             control_read(emu);
+            commands = true;
+        }
+        for (nfds_t i = sockets_index; i < nfds && !commands; i++) {
+            commands = pfd[i].revents != 0;
         }
         sockets_service(emu, &emu->sockets, &pfd[sockets_index], nfds - sockets_index);
+        if (commands) {
+            now = socketcan_now_us(); /* a command may take its time (a store, a load): the next pass starts later */
+        }
     }
     return 0;
 }

@@ -144,11 +144,6 @@ bool script_read(emu_script_t *s, int fd, const char *name, FILE *err)
     return !loader.failed;
 }
 
-co_time_us_t script_next_at(const emu_script_t *s)
-{
-    return s->pos < s->len ? s->lines[s->pos].at : CO_NEVER;
-}
-
 bool script_take_due(emu_script_t *s, co_time_us_t elapsed, char *line, size_t size)
 {
     if (s->pos >= s->len || elapsed < s->lines[s->pos].at) {

@@ -34,8 +34,11 @@ bool script_load(emu_script_t *s, const char *path);
  *  messages and the messages on err: the seam of the fuzz target tests/fuzz/target_script.c. */
 bool script_read(emu_script_t *s, int fd, const char *name, FILE *err);
 
-/** When the next line is due (µs since the start), or CO_NEVER when none is left. */
-co_time_us_t script_next_at(const emu_script_t *s);
+/** When the next line is due (µs since the start), or CO_NEVER when none is left (inline: asked at every pass). */
+static inline co_time_us_t script_next_at(const emu_script_t *s)
+{
+    return s->pos < s->len ? s->lines[s->pos].at : CO_NEVER;
+}
 
 /** The next line, if it is due at `elapsed` (µs since the start), copied to line (it is split there in place);
  *  false when none is due. */

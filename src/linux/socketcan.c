@@ -242,7 +242,7 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
         cf.can_id |= CAN_RTR_FLAG;
     }
     cf.can_dlc = frame->len;
-    memcpy(cf.data, frame->data, frame->len);
+    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
     if (c->tx_full_hold) {
         /* The queue was full earlier in this pass of the main loop: with many nodes on one socket, each
          * retrying its frame every CO_TX_RETRY_US, asking again would cost one failing system call per node. */
@@ -287,6 +287,36 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
     return CO_ERR_IO;
 }
 
+/* Out of line: an error frame is rare, and its text buffer would otherwise cost every read a larger stack frame. */
+static __attribute__((noinline)) void error_frame(socketcan_t *c, const struct can_frame *cf)
+{
+    char detail[64];
+    c->error_frames++;
+    (void)snprintf(detail, sizeof detail, "class 0x%03X, data %02X %02X %02X %02X",
+                   (unsigned)(cf->can_id & CAN_ERR_MASK), cf->data[1], cf->data[2], cf->data[3], cf->data[4]);
+    if (c->error_lines_left > 0U) {
+        c->error_lines_left--;
+        logf_(c, "%s: CAN error frame (%s)", detail);
+    } else {
+        c->error_frames_unlogged++; /* summed up by socketcan_service at the end of the second */
+        (void)memcpy(c->error_last, detail, sizeof detail);
+    }
+}
+
+/* Out of line: what a failed read means (nothing waiting is the common case, and cheap). */
+static __attribute__((noinline)) int read_failed(socketcan_t *c, int e)
+{
+    if (e == EAGAIN || e == EINTR) {
+        return 0;
+    }
+    if (e == ENETDOWN) {
+        set_down(c, "");
+        return 0;
+    }
+    went_away(c, e);
+    return -1;
+}
+
 int socketcan_read(socketcan_t *c, co_frame_t *frame)
 {
     for (;;) {
@@ -296,16 +326,7 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
         struct can_frame cf;
         const ssize_t n = read(c->fd, &cf, sizeof cf);
         if (n < 0) {
-            const int e = errno;
-            if (e == EAGAIN || e == EINTR) {
-                return 0;
-            }
-            if (e == ENETDOWN) {
-                set_down(c, "");
-                return 0;
-            }
-            went_away(c, e);
-            return -1;
+            return read_failed(c, errno);
         }
         if (n != (ssize_t)sizeof cf) {
             continue; /* not a classic CAN frame */
@@ -316,25 +337,14 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
         }
         c->rx_since_query = true;
         if ((cf.can_id & CAN_ERR_FLAG) != 0U) {
-            char detail[64];
-            c->error_frames++;
-            (void)snprintf(detail, sizeof detail, "class 0x%03X, data %02X %02X %02X %02X",
-                           (unsigned)(cf.can_id & CAN_ERR_MASK), cf.data[1], cf.data[2], cf.data[3], cf.data[4]);
-            if (c->error_lines_left > 0U) {
-                c->error_lines_left--;
-                logf_(c, "%s: CAN error frame (%s)", detail);
-            } else {
-                c->error_frames_unlogged++; /* summed up by socketcan_service at the end of the second */
-                (void)memcpy(c->error_last, detail, sizeof detail);
-            }
+            error_frame(c, &cf);
             continue;
         }
-        memset(frame, 0, sizeof *frame);
         frame->flags = (uint8_t)(((cf.can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
                                  ((cf.can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
         frame->id = (cf.can_id & CAN_EFF_FLAG) != 0U ? (cf.can_id & CAN_EFF_MASK) : (cf.can_id & CAN_SFF_MASK);
         frame->len = cf.can_dlc > 8U ? 8U : cf.can_dlc;
-        memcpy(frame->data, cf.data, frame->len);
+        memcpy(frame->data, cf.data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
         return 1;
     }
 }
