@@ -34,6 +34,20 @@ co_status_t co_pdo_count(co_node_t *node)
     if (nr > node->rpdo_cap || nt > node->tpdo_cap) {
         return CO_ERR_RANGE;
     }
+#if !CO_CONFIG_PDO_TIMERS
+    /* Timers compiled out: a dictionary that has them would take values that change nothing. */
+    for (uint16_t n = 0U; n < nr; n++) {
+        if (co_od_find(node->od, (uint16_t)(RPDO_COMM + n), 5U) != NULL) {
+            return CO_ERR_RANGE;
+        }
+    }
+    for (uint16_t n = 0U; n < nt; n++) {
+        if (co_od_find(node->od, (uint16_t)(TPDO_COMM + n), 3U) != NULL ||
+            co_od_find(node->od, (uint16_t)(TPDO_COMM + n), 5U) != NULL) {
+            return CO_ERR_RANGE;
+        }
+    }
+#endif
     node->n_rpdo = nr;
     node->n_tpdo = nt;
     return CO_OK;
@@ -125,11 +139,13 @@ static void configure_rpdo(co_node_t *node, uint16_t n)
 #endif
     p->map_len = len > 0 ? (uint8_t)len : 0U;
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
+#if CO_CONFIG_PDO_TIMERS
     p->event_ms = (uint16_t)co_od_u32_or(node, comm, 5U, 0U);
+    p->deadline = CO_NEVER;
+#endif
 #if CO_CONFIG_SYNC
     p->sync_pending = false;
 #endif
-    p->deadline = CO_NEVER;
 }
 
 static void configure_tpdo(co_node_t *node, uint16_t n)
@@ -138,8 +154,12 @@ static void configure_tpdo(co_node_t *node, uint16_t n)
     const uint16_t comm = (uint16_t)(TPDO_COMM + n);
     p->cob_id = co_od_u32_or(node, comm, 1U, CO_COBID_INVALID);
     p->type = (uint8_t)co_od_u32_or(node, comm, 2U, 255U);
+#if CO_CONFIG_PDO_TIMERS
     p->inhibit_us = co_od_u32_or(node, comm, 3U, 0U) * 100U;
     p->event_us = co_od_u32_or(node, comm, 5U, 0U) * 1000U;
+    p->next_allowed = CO_NEVER;
+    p->event_due = CO_NEVER;
+#endif
     const int len = resolve_all(node, (uint16_t)(TPDO_MAP + n), false, p->map, &p->n_map);
 #if CO_CONFIG_MPDO
     const uint32_t entries = co_od_u32_or(node, (uint16_t)(TPDO_MAP + n), 0U, 0U);
@@ -150,8 +170,6 @@ static void configure_tpdo(co_node_t *node, uint16_t n)
     p->valid = (p->cob_id & CO_COBID_INVALID) == 0U && len > 0;
     p->sent_once = false;
     p->event = false;
-    p->next_allowed = CO_NEVER;
-    p->event_due = CO_NEVER;
 #if CO_CONFIG_SYNC
     p->sync_start = (uint8_t)co_od_u32_or(node, comm, 6U, 0U);
     p->sync_count = 0U;
@@ -163,7 +181,9 @@ void co_pdo_reset(co_node_t *node)
 {
     for (uint16_t n = 0U; n < node->n_rpdo; n++) {
         node->rpdo[n].length_error = false;
+#if CO_CONFIG_PDO_TIMERS
         node->rpdo[n].timeout_error = false;
+#endif
         configure_rpdo(node, n);
     }
     for (uint16_t n = 0U; n < node->n_tpdo; n++) {
@@ -231,12 +251,14 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
     } else {
         rpdo_apply(node, p, f->data);
     }
+#if CO_CONFIG_PDO_TIMERS
     p->deadline = p->event_ms != 0U ? co_time_after(node->now, (uint32_t)p->event_ms * 1000U) : CO_NEVER;
     co_node_due(node, p->deadline);
     if (p->timeout_error) {
         p->timeout_error = false;
         (void)co_emcy_clear(node, 0x8250U, rpdo_msef);
     }
+#endif
 }
 
 static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
@@ -258,14 +280,31 @@ static void tpdo_send(co_node_t *node, co_tpdo_t *p, const uint8_t buf[8])
     memcpy(p->last, buf, 8U);
     p->sent_once = true;
     p->event = false;
+#if CO_CONFIG_PDO_TIMERS
     p->next_allowed = p->inhibit_us != 0U ? co_time_after(node->now, p->inhibit_us) : CO_NEVER;
+#endif
 }
+
+/* The TPDO timers, or what they are without them (CO_CONFIG_PDO_TIMERS 0): never due, never waiting. */
+#if CO_CONFIG_PDO_TIMERS
+static bool tpdo_timer_due(const co_node_t *node, const co_tpdo_t *p) { return co_time_reached(node->now, p->event_due); }
+static co_time_us_t tpdo_inhibit_end(const co_tpdo_t *p)
+{
+    (void)p; /* with 64-bit time CO_TIME32_RETIRE drops it */
+    return CO_TIME32_RETIRE(p->next_allowed);
+}
+static co_time_us_t tpdo_timers_next(const co_tpdo_t *p) { return co_min_time(p->event_due, tpdo_inhibit_end(p)); }
+#else
+static bool tpdo_timer_due(const co_node_t *node, const co_tpdo_t *p) { (void)node, (void)p; return false; }
+static co_time_us_t tpdo_inhibit_end(const co_tpdo_t *p) { (void)p; return CO_NEVER; }
+static co_time_us_t tpdo_timers_next(const co_tpdo_t *p) { (void)p; return CO_NEVER; }
+#endif
 
 static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
 {
     uint8_t buf[8];
     bool cos = false;
-    const bool timer = co_time_reached(node->now, p->event_due);
+    const bool timer = tpdo_timer_due(node, p);
     /* Mapped values change only where a write says so (node->cos_pending, co_node_values_changed): sampled then,
      * and when something is to be sent anyway. */
     if (!IS_MPDO(p) && (node->cos_pending || !p->sent_once || p->event || timer)) {
@@ -274,10 +313,12 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
     }
     const bool changed = !p->sent_once || p->event || cos;
     if (changed || timer) {
+#if CO_CONFIG_PDO_TIMERS
         if (co_time_pending(node->now, p->next_allowed)) {
             p->event = true; /* waits for the inhibit time; the timer (if it fired) is served with it */
             return p->next_allowed;
         }
+#endif
 #if CO_CONFIG_MPDO
         if (p->mpdo != 0U && !co_mpdo_sam_next(node, p, buf)) {
             p->sent_once = true; /* an empty scanner list: nothing to send at this event */
@@ -287,6 +328,7 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
         {
             tpdo_send(node, p, buf);
         }
+#if CO_CONFIG_PDO_TIMERS
         if (p->event_us == 0U) {
             p->event_due = CO_NEVER;
         } else if (timer && !changed) {
@@ -295,8 +337,9 @@ static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
         } else {
             p->event_due = co_time_after(node->now, p->event_us); /* the event timer restarts at every transmission */
         }
+#endif
     }
-    return co_min_time(p->event_due, CO_TIME32_RETIRE(p->next_allowed));
+    return tpdo_timers_next(p);
 }
 
 co_time_us_t co_pdo_process(co_node_t *node)
@@ -306,6 +349,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
         node->cos_pending = false; /* entering Operational sends every event-driven TPDO anyway */
         return next;
     }
+#if CO_CONFIG_PDO_TIMERS
     for (uint16_t n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (!p->valid || p->deadline == CO_NEVER) {
@@ -319,17 +363,20 @@ co_time_us_t co_pdo_process(co_node_t *node)
             next = co_min_time(next, p->deadline);
         }
     }
+#endif
     const bool cos = node->cos_pending;
     for (uint16_t n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
+#if CO_CONFIG_PDO_TIMERS
         co_time_retire(node->now, &p->next_allowed);
+#endif
         if (!p->valid || p->type < 254U) {
-            next = co_min_time(next, CO_TIME32_RETIRE(p->next_allowed));
+            next = co_min_time(next, tpdo_inhibit_end(p));
             continue;
         }
-        if (!cos && p->sent_once && !p->event && !co_time_reached(node->now, p->event_due)) {
+        if (!cos && p->sent_once && !p->event && !tpdo_timer_due(node, p)) {
             /* nothing to compare, nothing asked for, the timer not due */
-            next = co_min_time(next, co_min_time(p->event_due, CO_TIME32_RETIRE(p->next_allowed)));
+            next = co_min_time(next, tpdo_timers_next(p));
             continue;
         }
         next = co_min_time(next, tpdo_event_driven(node, p));
@@ -393,8 +440,10 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
         co_tpdo_t *p = &node->tpdo[n];
         p->sent_once = false;
         p->event = false;
+#if CO_CONFIG_PDO_TIMERS
         p->next_allowed = CO_NEVER;
         p->event_due = CO_NEVER;
+#endif
 #if CO_CONFIG_SYNC
         p->sync_count = 0U;
         p->sync_started = p->sync_start == 0U;
@@ -404,7 +453,9 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
 #if CO_CONFIG_SYNC
         node->rpdo[n].sync_pending = false;
 #endif
+#if CO_CONFIG_PDO_TIMERS
         node->rpdo[n].deadline = CO_NEVER;
+#endif
     }
 }
 

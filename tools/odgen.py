@@ -438,6 +438,11 @@ def fitted_config(od: Od, c_name: str, eds_name: str) -> str:
         off.append(("CO_CONFIG_SDO_SERVERS", "no additional SDO server 0x1201-0x127F"))
     if not writable_maps:
         off.append(("CO_CONFIG_PDO_DYNAMIC_MAPPING", "no writable PDO mapping"))
+    timers = any((0x1400 <= r.index <= 0x15FF and r.sub == 5) or (0x1800 <= r.index <= 0x19FF and r.sub in (3, 5))
+                 for r in od.rows)
+    if not timers:
+        off.append(("CO_CONFIG_PDO_TIMERS", "no RPDO event timer 0x1400..:05, no TPDO inhibit time or event timer "
+                                            "0x1800..:03/05"))
     if not any(wide_limits(r) for r in od.rows):
         off.append(("CO_CONFIG_OD_LIMITS_64", "limits on integers of at most 4 bytes only: 32-bit pairs"))
     upper = c_name.upper()

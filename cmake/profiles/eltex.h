@@ -12,6 +12,8 @@
  *   (0x1400:02, 0x1800:02, 0x1801:02, 0x1802:02) are read-only and event-driven (254/255).
  * - No node guarding: neither dictionary has 0x100C/0x100D (heartbeat only).
  * - No dynamic PDO mapping: 0x1600/0x1A00.. are read-only in both.
+ * - No PDO timers: neither dictionary has an RPDO event timer (0x1400:05) or a TPDO inhibit time or event timer
+ *   (0x1800..:03/05); their TPDOs go at each change (the manuals name no timer).
  * - LSS fastscan kept: both manuals claim CiA 305 LSS, and the emulator relies on fastscan to
  *   tell several nodes of one type apart (distinct serial numbers).
  * - PDO counts: 1 RPDO (both), 3 TPDOs (PRO IONIZER; the SDS has 2).
@@ -40,6 +42,7 @@
 #define CO_CONFIG_SYNC 0
 #define CO_CONFIG_NODE_GUARDING 0
 #define CO_CONFIG_PDO_DYNAMIC_MAPPING 0
+#define CO_CONFIG_PDO_TIMERS 0
 #define CO_CONFIG_LSS_FASTSCAN 1
 #define CO_RPDO_MAX 1U
 #define CO_TPDO_MAX 3U

@@ -130,4 +130,12 @@
 #define CO_CONFIG_PDO_DYNAMIC_MAPPING 1
 #endif
 
+/** 1: the PDO timers are compiled in: an RPDO's event timer (0x1400+n sub 5, reception deadline monitoring with
+ *  EMCY 0x8250), a TPDO's inhibit time (0x1800+n sub 3) and event timer (0x1800+n sub 5). 0: event-driven TPDOs
+ *  go at each change or co_tpdo_trigger() at once, RPDOs are not monitored; co_node_init() refuses a dictionary
+ *  that has any of these sub-indices (CO_ERR_RANGE), as their values would be ignored. */
+#ifndef CO_CONFIG_PDO_TIMERS
+#define CO_CONFIG_PDO_TIMERS 1
+#endif
+
 #endif /* CO_CONFIG_H */

@@ -283,7 +283,9 @@ typedef struct co_rpdo {
     uint8_t type;
     bool valid;                 /**< COB-ID valid and mapping non-empty. */
     bool length_error;
-    bool timeout_error;
+#if CO_CONFIG_PDO_TIMERS
+    bool timeout_error;         /**< EMCY 0x8250 active: no RPDO within its event time. */
+#endif
 #if CO_CONFIG_SYNC
     bool sync_pending;          /**< Synchronous RPDO received, applied at the next SYNC. */
 #endif
@@ -291,9 +293,13 @@ typedef struct co_rpdo {
     uint8_t mpdo;               /**< 0, or the MPDO kind of its mapping: 0xFE SAM (dispatching list), 0xFF DAM. */
     bool mpdo_error;            /**< A DAM-MPDO's object could not be written (EMCY 0x8230 active). */
 #endif
+#if CO_CONFIG_PDO_TIMERS
     uint16_t event_ms;          /**< Its event timer (sub 5): reception deadline monitoring, 0 = off. */
+#endif
     uint32_t cob_id;            /**< 0x1400+n sub 1 as configured. */
+#if CO_CONFIG_PDO_TIMERS
     co_time_us_t deadline;      /**< Event-timer deadline monitoring, CO_NEVER when off. */
+#endif
     co_pdo_map_t map[8];
 #if CO_CONFIG_SYNC
     uint8_t sync_data[8];       /**< Its map_len bytes. */
@@ -317,10 +323,12 @@ typedef struct co_tpdo {
     uint16_t scan_next;         /**< SAM-MPDO: position in the scanner list of the next object to send. */
 #endif
     uint32_t cob_id;
+#if CO_CONFIG_PDO_TIMERS
     co_time_us_t next_allowed;  /**< End of the inhibit time. */
     co_time_us_t event_due;     /**< Event timer, CO_NEVER when off. */
     uint32_t inhibit_us;
     uint32_t event_us;
+#endif
     co_pdo_map_t map[8];
     uint8_t last[8];
 } co_tpdo_t;
@@ -432,8 +440,8 @@ struct co_node {
  * An unconfigured node (0xFF) runs only the LSS slave until a master gives it a node-ID.
  * @return CO_OK, CO_ERR_ARG (NULL pointers, node-ID 0 or 128..254, no send function), CO_ERR_RANGE (the
  *         OD declares more PDOs than the PDO arrays hold (co_node_cfg_t.rpdo/tpdo, else CO_RPDO_MAX/CO_TPDO_MAX),
- *         more additional SDO servers than co_node_cfg_t.sdo_servers holds, or more heartbeat-consumer entries
- *         than co_config.h allows).
+ *         more additional SDO servers than co_node_cfg_t.sdo_servers holds, more heartbeat-consumer entries
+ *         than co_config.h allows, or PDO timer sub-indices with CO_CONFIG_PDO_TIMERS 0).
  */
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now);
 

@@ -671,6 +671,7 @@ static void end_call(fz_t *h, bool legit)
  * runs returns the expired timer as the next deadline. Returns the deadline the TPDO should have given. */
 static co_time_us_t known_tpdo_deadline(const fz_t *h, co_time_us_t next)
 {
+#if CO_CONFIG_PDO_TIMERS
     const co_node_t *n = h->node;
     if (!fz_known("tpdo-inhibit-deadline")) {
         return 0U;
@@ -681,6 +682,10 @@ static co_time_us_t known_tpdo_deadline(const fz_t *h, co_time_us_t next)
             return p->next_allowed;
         }
     }
+#else
+    (void)h;
+    (void)next;
+#endif
     return 0U;
 }
 

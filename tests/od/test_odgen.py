@@ -205,10 +205,11 @@ def fitted(tmp_path, eds_text, profile_text=BASE_PROFILE):
 
 @pytest.mark.parametrize("device, off, caps", [
     ("pro-ionizer", {"CO_CONFIG_SYNC", "CO_CONFIG_NODE_GUARDING", "CO_CONFIG_HB_CONSUMER", "CO_CONFIG_MPDO",
-                     "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64"},
+                     "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64",
+                     "CO_CONFIG_PDO_TIMERS"},
      {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 3}),
     ("sds", {"CO_CONFIG_SYNC", "CO_CONFIG_NODE_GUARDING", "CO_CONFIG_HB_CONSUMER", "CO_CONFIG_MPDO",
-             "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64"},
+             "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64", "CO_CONFIG_PDO_TIMERS"},
      {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 2}),
     ("buerkert-flow-controller", {"CO_CONFIG_MPDO", "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_OD_LIMITS_64"},
      {"CO_RPDO_MAX": 4, "CO_TPDO_MAX": 4, "CO_HB_CONSUMER_MAX": 127}),
@@ -231,6 +232,12 @@ def test_fitted_configuration_follows_the_objects(tmp_path):
     off, caps = fitted(tmp_path, eds)
     assert "CO_CONFIG_SYNC" not in off and "CO_CONFIG_MPDO" not in off and "CO_CONFIG_PDO_DYNAMIC_MAPPING" not in off
     assert "CO_CONFIG_NODE_GUARDING" in off and caps == {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 2}
+    # A TPDO inhibit time keeps the PDO timers.
+    assert "CO_CONFIG_PDO_TIMERS" in off
+    inhibit = "[1800sub3]\nParameterName=Inhibit time\nObjectType=0x7\nDataType=0x0006\nAccessType=rw\nDefaultValue=0\n\n"
+    with_inhibit = set_key(set_key(eds, "1800", "SubNumber", "4"), "1800sub0", "DefaultValue", "3")
+    off, _ = fitted(tmp_path, with_inhibit.replace("[1A00]\n", inhibit + "[1A00]\n", 1))
+    assert "CO_CONFIG_PDO_TIMERS" not in off
     # A REAL32 row with limits needs 64-bit pairs.
     eds = set_key(set_key(eds, "2000sub2", "DataType", "0x0008"), "2000sub2", "HighLimit", "365.5")
     off, _ = fitted(tmp_path, eds)
