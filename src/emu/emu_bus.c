@@ -137,10 +137,11 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
     return r < next ? r : next;
 }
 
-void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
+unsigned bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
 {
     co_frame_t f;
-    for (int k = 0; k < 1024 && socketcan_read(&b->can, &f) == 1; k++) {
+    unsigned k = 0U;
+    for (; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
         if (b->log_level >= LOG_VERBOSE) {
             logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
         }
@@ -149,13 +150,14 @@ void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
         /* Clients that send a request as soon as an answer is out keep the socket from running dry: without this a
          * flood could hold every heartbeat back until 1024 frames were read (a 350 ms gap failed test_bus_faults'
          * flood test in a loaded run). */
-        if ((k & 7) == 7) {
+        if ((k & 7U) == 7U) {
             now = socketcan_now_us();
             if (now >= due) {
-                break;
+                return k + 1U;
             }
         }
     }
+    return k;
 }
 
 void bus_tx_ready(emu_bus_t *b)

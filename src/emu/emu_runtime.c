@@ -142,9 +142,10 @@ int runtime_loop(emu_t *emu)
             output_error("poll: %s", strerror(errno));
             return 1;
         }
+        bool long_pass = false; /* the next pass takes the time again after more than a few frames */
         for (size_t i = 0U; i < emu->n_buses; i++) {
             if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
-                bus_receive(emu->buses[i], now, next);
+                long_pass = bus_receive(emu->buses[i], now, next) > 8U || long_pass;
             }
             if ((pfd[i].revents & POLLOUT) != 0) {
                 bus_tx_ready(emu->buses[i]); /* room in the socket's buffer: nodes with queued frames retry now */
@@ -159,8 +160,8 @@ int runtime_loop(emu_t *emu)
             commands = pfd[i].revents != 0;
         }
         sockets_service(emu, &emu->sockets, &pfd[sockets_index], nfds - sockets_index);
-        if (commands) {
-            now = socketcan_now_us(); /* a command may take its time (a store, a load): the next pass starts later */
+        if (commands || long_pass) {
+            now = socketcan_now_us(); /* a command (a store, a load) or a burst of frames took its time */
         }
     }
     return 0;
