@@ -181,12 +181,6 @@ void device_clear_running_state(device_t *dev, size_t env_offset, size_t env_siz
     memset(m + env_offset + env_size, 0, size - env_offset - env_size);
 }
 
-bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now)
-{
-    dev->now = now;
-    return co_node_rx(&dev->node, frame, now);
-}
-
 co_time_us_t device_process(device_t *dev, co_time_us_t now)
 {
     dev->now = now;

@@ -139,7 +139,11 @@ co_status_t device_power_cycle(device_t *dev, co_time_us_t now);
 
 /** Feeds a received frame to the node. Returns co_node_rx's answer: true when the frame concerned this node
  *  (call device_process before sleeping), false when it was ignored (the node's deadline is unchanged). */
-bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now);
+static inline bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now)
+{
+    dev->now = now; /* inline: every received frame comes this way */
+    return co_node_rx(&dev->node, frame, now);
+}
 
 /** Runs the model (when due or touched) and the core; returns the earliest deadline of both. */
 co_time_us_t device_process(device_t *dev, co_time_us_t now);
