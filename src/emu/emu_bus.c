@@ -137,11 +137,10 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
     return r < next ? r : next;
 }
 
-unsigned bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
+void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
 {
     co_frame_t f;
-    unsigned k = 0U;
-    for (; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
+    for (unsigned k = 0U; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
         if (b->log_level >= LOG_VERBOSE) {
             logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
         }
@@ -153,11 +152,10 @@ unsigned bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
         if ((k & 7U) == 7U) {
             now = socketcan_now_us();
             if (now >= due) {
-                return k + 1U;
+                break;
             }
         }
     }
-    return k;
 }
 
 void bus_tx_ready(emu_bus_t *b)

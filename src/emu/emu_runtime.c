@@ -88,8 +88,10 @@ int runtime_loop(emu_t *emu)
 {
     /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients */
     struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS];
-    co_time_us_t now = socketcan_now_us();
     while (!emu->quit && stop_signal == 0) {
+        /* Read afresh: the time of the last wake-up would be late by this pass's reading and commands, and a deadline
+         * that fell in between would cost another whole pass (with 127 nodes, more than the clock read saves). */
+        co_time_us_t now = socketcan_now_us();
         char line[COMMAND_LINE_MAX + 1];
         /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
         while (!emu->quit && script_next_at(&emu->script) <= now - emu->start &&
@@ -134,7 +136,6 @@ int runtime_loop(emu_t *emu)
             timeout = &ts;
         }
         const int ready = ppoll(pfd, nfds, timeout, NULL);
-        now = socketcan_now_us(); /* also the next pass's time when only frames came: reading them is quick */
         if (ready < 0) {
             if (errno == EINTR) {
                 continue;
@@ -142,27 +143,19 @@ int runtime_loop(emu_t *emu)
             output_error("poll: %s", strerror(errno));
             return 1;
         }
-        bool long_pass = false; /* the next pass takes the time again after more than a few frames */
+        now = socketcan_now_us();
         for (size_t i = 0U; i < emu->n_buses; i++) {
             if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
-                long_pass = bus_receive(emu->buses[i], now, next) > 8U || long_pass;
+                bus_receive(emu->buses[i], now, next);
             }
             if ((pfd[i].revents & POLLOUT) != 0) {
                 bus_tx_ready(emu->buses[i]); /* room in the socket's buffer: nodes with queued frames retry now */
             }
         }
-        bool commands = false;
         if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
             control_read(emu);
-            commands = true;
-        }
-        for (nfds_t i = sockets_index; i < nfds && !commands; i++) {
-            commands = pfd[i].revents != 0;
         }
         sockets_service(emu, &emu->sockets, &pfd[sockets_index], nfds - sockets_index);
-        if (commands || long_pass) {
-            now = socketcan_now_us(); /* a command (a store, a load) or a burst of frames took its time */
-        }
     }
     return 0;
 }
