@@ -25,6 +25,19 @@ function(co_cross_unit_tests)
   target_link_libraries(co_test_support PUBLIC co_core unity)
   target_compile_options(co_test_support PRIVATE ${CO_WARNINGS})
 
+  # test_pdo_no_timers checks the core compiled without PDO timers, as on the host (tests/CMakeLists.txt): its own
+  # copy of the core and of the support it uses.
+  add_library(co_core_no_pdo_timers STATIC ${co_core_sources})
+  target_include_directories(co_core_no_pdo_timers PUBLIC ${CO_ROOT}/include PRIVATE ${CO_ROOT}/src)
+  target_compile_definitions(co_core_no_pdo_timers PUBLIC ${arg_CORE_DEFS} CO_CONFIG_PDO_TIMERS=0)
+  target_compile_options(co_core_no_pdo_timers PRIVATE ${CO_WARNINGS})
+  add_library(co_test_support_no_pdo_timers STATIC ${CO_ROOT}/tests/support/fake_port.c
+              ${CO_ROOT}/tests/support/test_od.c)
+  target_include_directories(co_test_support_no_pdo_timers PUBLIC ${CO_ROOT}/tests/support ${CO_ROOT}/src)
+  target_compile_definitions(co_test_support_no_pdo_timers PUBLIC ${arg_FIXTURE_DEFS})
+  target_link_libraries(co_test_support_no_pdo_timers PUBLIC co_core_no_pdo_timers unity)
+  target_compile_options(co_test_support_no_pdo_timers PRIVATE ${CO_WARNINGS})
+
   # Same list as the host build: every tests/unit/test_*.c.
   file(GLOB co_unit_test_sources CONFIGURE_DEPENDS ${CO_ROOT}/tests/unit/test_*.c)
   file(WRITE ${CMAKE_BINARY_DIR}/tests.txt "${arg_FIRST_LINE}\n")
@@ -32,7 +45,11 @@ function(co_cross_unit_tests)
     get_filename_component(t ${src} NAME_WE)
     add_executable(${t} ${src})
     set_target_properties(${t} PROPERTIES SUFFIX .elf)
-    target_link_libraries(${t} PRIVATE co_test_support)
+    if(t STREQUAL "test_pdo_no_timers")
+      target_link_libraries(${t} PRIVATE co_test_support_no_pdo_timers)
+    else()
+      target_link_libraries(${t} PRIVATE co_test_support)
+    endif()
     target_compile_options(${t} PRIVATE ${CO_WARNINGS})
     file(APPEND ${CMAKE_BINARY_DIR}/tests.txt "${t}\n")
   endforeach()
