@@ -109,6 +109,9 @@ static int open_socket(socketcan_t *c, char *err, size_t errlen)
         return e;
     }
     c->fd = fd;
+    c->rx_next = 0U; /* nothing read ahead from a socket before this one is returned */
+    c->rx_count = 0U;
+    c->rx_drained = false;
     return 0;
 }
 
@@ -317,18 +320,43 @@ static __attribute__((noinline)) int read_failed(socketcan_t *c, int e)
     return -1;
 }
 
+/* Points each message of the read-ahead at its frame; again whenever the struct moved since. */
+static void rx_setup(socketcan_t *c)
+{
+    for (unsigned i = 0U; i < SOCKETCAN_RX_BATCH; i++) {
+        c->rx_iov[i].iov_base = &c->rx_frames[i];
+        c->rx_iov[i].iov_len = sizeof c->rx_frames[i];
+        memset(&c->rx_msgs[i], 0, sizeof c->rx_msgs[i]);
+        c->rx_msgs[i].msg_hdr.msg_iov = &c->rx_iov[i];
+        c->rx_msgs[i].msg_hdr.msg_iovlen = 1U;
+    }
+}
+
 int socketcan_read(socketcan_t *c, co_frame_t *frame)
 {
     for (;;) {
-        if (c->fd < 0) {
-            return 0;
+        if (c->rx_next == c->rx_count) {
+            if (c->fd < 0) {
+                return 0;
+            }
+            if (c->rx_msgs[0].msg_hdr.msg_iov != &c->rx_iov[0]) {
+                rx_setup(c);
+            }
+            /* Fewer than asked for: the queue ran empty (or an error came after the first frames, which the next
+             * call returns). */
+            const int n = recvmmsg(c->fd, c->rx_msgs, SOCKETCAN_RX_BATCH, MSG_DONTWAIT, NULL);
+            if (n < 0) {
+                return read_failed(c, errno);
+            }
+            c->rx_next = 0U;
+            c->rx_count = (unsigned)n;
+            c->rx_drained = (unsigned)n < SOCKETCAN_RX_BATCH;
+            continue;
         }
-        struct can_frame cf;
-        const ssize_t n = read(c->fd, &cf, sizeof cf);
-        if (n < 0) {
-            return read_failed(c, errno);
-        }
-        if (n != (ssize_t)sizeof cf) {
+        const struct can_frame *cf = &c->rx_frames[c->rx_next];
+        const unsigned len = c->rx_msgs[c->rx_next].msg_len;
+        c->rx_next++;
+        if (len != sizeof *cf) {
             continue; /* not a classic CAN frame */
         }
         if (c->down && iface_up(c)) {
@@ -336,15 +364,15 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             set_up(c);
         }
         c->rx_since_query = true;
-        if ((cf.can_id & CAN_ERR_FLAG) != 0U) {
-            error_frame(c, &cf);
+        if ((cf->can_id & CAN_ERR_FLAG) != 0U) {
+            error_frame(c, cf);
             continue;
         }
-        frame->flags = (uint8_t)(((cf.can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
-                                 ((cf.can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
-        frame->id = (cf.can_id & CAN_EFF_FLAG) != 0U ? (cf.can_id & CAN_EFF_MASK) : (cf.can_id & CAN_SFF_MASK);
-        frame->len = cf.can_dlc > 8U ? 8U : cf.can_dlc;
-        memcpy(frame->data, cf.data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
+        frame->flags = (uint8_t)(((cf->can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
+                                 ((cf->can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
+        frame->id = (cf->can_id & CAN_EFF_FLAG) != 0U ? (cf->can_id & CAN_EFF_MASK) : (cf->can_id & CAN_SFF_MASK);
+        frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
+        memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
         return 1;
     }
 }

@@ -18,8 +18,10 @@
 #ifndef SOCKETCAN_H
 #define SOCKETCAN_H
 
+#include <linux/can.h>
 #include <net/if.h>
 #include <stdbool.h>
+#include <sys/socket.h> /* struct mmsghdr: the includer defines _GNU_SOURCE, as every file of the Linux program */
 
 #include "co/co.h"
 
@@ -27,6 +29,10 @@ typedef void (*socketcan_log_fn)(void *ctx, const char *line);
 
 /** Error frames logged one line each per second; the rest of that second's go into one summary line. */
 #define SOCKETCAN_ERROR_LINES 10U
+
+/** Frames one system call reads ahead (recvmmsg): a wake-up for one frame costs one call instead of two (the second
+ *  read only to learn that the queue is empty), a flood one call per this many frames. */
+#define SOCKETCAN_RX_BATCH 8U
 
 typedef struct socketcan {
     char ifname[IF_NAMESIZE];
@@ -50,6 +56,15 @@ typedef struct socketcan {
     co_time_us_t rx_next_query;
     socketcan_log_fn log;
     void *log_ctx;
+    /* Read ahead by socketcan_read(): rx_frames[rx_next..rx_count) not returned yet. rx_drained: the call that read
+     * them got fewer than SOCKETCAN_RX_BATCH, so the kernel's queue was empty then. rx_msgs point into this struct:
+     * set up again when it is found moved. */
+    struct can_frame rx_frames[SOCKETCAN_RX_BATCH];
+    struct iovec rx_iov[SOCKETCAN_RX_BATCH];
+    struct mmsghdr rx_msgs[SOCKETCAN_RX_BATCH];
+    unsigned rx_next;
+    unsigned rx_count;
+    bool rx_drained;
 } socketcan_t;
 
 /** Opens the channel. Returns 0, or an errno value with a message for the user in err. */
@@ -64,9 +79,19 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame);
 short socketcan_poll_events(const socketcan_t *c, bool tx_pending);
 
 /** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later).
- * Frames the kernel dropped because the receive buffer was full are counted (rx_dropped) and logged, at most
- * once a second (see socketcan_service). */
+ * Frames come from a read-ahead of up to SOCKETCAN_RX_BATCH, which only a call with nothing read ahead refills
+ * (one system call). A reader may stop before 0 only where socketcan_read_ahead_empty() holds: frames read ahead
+ * wake no poll. Frames the kernel dropped because the receive buffer was full are counted (rx_dropped) and
+ * logged, at most once a second (see socketcan_service). */
 int socketcan_read(socketcan_t *c, co_frame_t *frame);
+
+/** True when every frame read ahead is returned: the next socketcan_read() asks the kernel. */
+static inline bool socketcan_read_ahead_empty(const socketcan_t *c) { return c->rx_next == c->rx_count; }
+
+/** With socketcan_read_ahead_empty(): the kernel's queue was empty when the last frames were read, so the next
+ *  socketcan_read() would most likely return 0: a reader that stops here spares that system call (what arrived
+ *  since wakes the next poll). */
+static inline bool socketcan_read_drained(const socketcan_t *c) { return c->rx_drained; }
 
 /** Asks the kernel for the drop count and logs received frames lost and not reported yet (call before exit). */
 void socketcan_flush_log(socketcan_t *c);

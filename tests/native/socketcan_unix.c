@@ -90,6 +90,7 @@ short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
     return (short)(POLLIN | (tx_pending ? POLLOUT : 0));
 }
 
+/* No read-ahead here (socketcan_read_ahead_empty() always true, socketcan_read_drained() never): one recv a frame. */
 int socketcan_read(socketcan_t *c, co_frame_t *frame)
 {
     struct can_frame f;
