@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from canopen_emu import __version__ as PACKAGE_VERSION
-from canopen_emu import (ActiveError, ConnectionClosed, ControlError, ControlTimeout, Entry, NodeInfo, ProtocolError,
-                         connect)
+from canopen_emu import (ActiveError, ConnectionClosed, ControlError, ControlTimeout, Entry, NodeInfo, ObjectInfo,
+                         ProtocolError, connect)
 
 pytestmark = pytest.mark.canopen_emu_nodes("sds:16", "buerkert:17", "pro-ionizer:0x20")
 
@@ -32,6 +32,25 @@ def test_get_returns_typed_values(canopen_emu):
     assert (voltage.type, voltage.unit) == ("UNSIGNED16", "V"), voltage
     serial = c.get_entry(0x20, "0x1018:04")
     assert (serial.index, serial.sub, serial.value) == (0x1018, 4, 0x00ABCDEF + 0x20)  # EDS serial + node-ID
+
+
+def test_objects_lists_a_nodes_dictionary(canopen_emu):
+    c = canopen_emu.client
+    rows = {o.object: o for o in c.objects(17, values=True)}
+    assert len(rows) == 307  # od/buerkert-flow-controller.eds
+    assert rows["0x1017:00"] == ObjectInfo(object="0x1017:00", name="Producer Heartbeat Time", type="UNSIGNED16",
+                                           access="rw", tpdo=False, rpdo=False, stored=True, value=500)
+    setpoint = rows["0x2540:01"]
+    assert (setpoint.index, setpoint.sub, setpoint.unit, setpoint.rpdo) == (0x2540, 1, "l/min", True)
+    assert type(setpoint.value) is float
+    supply = rows["0x2004:03"]
+    assert supply.value == c.get(17, (0x2004, 3)) and supply.type == "REAL32"
+    address = rows["0x2001:02"]  # the node-ID as the device keeps it: limits from the EDS
+    assert (address.low, address.high, address.value) == (1, 127, 17)
+    plain = c.objects(16)
+    assert plain and all(o.value is None and o.error is None for o in plain)
+    with pytest.raises(ControlError, match="objects needs one node, not all"):
+        c.objects("all")
 
 
 def test_set_returns_the_value_read_back(canopen_emu):

@@ -1,10 +1,9 @@
 /* The JSON framing of the control protocol: see emu_json.h and docs/control-protocol.md. */
 #define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
 #include "emu_json.h"
+#include "emu_json_request.h"
 
 #include <jansson.h>
-#include <limits.h>
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,7 +18,7 @@
 
 /* A JSON string of text; bytes that are not UTF-8 (a device name never has them, but a reply may echo input)
  * become '?', so that nothing is lost silently by a NULL from json_string(). */
-static json_t *jstr(const char *text)
+json_t *jstr(const char *text)
 {
     json_t *j = json_string(text);
     if (j != NULL) {
@@ -34,7 +33,7 @@ static json_t *jstr(const char *text)
     return json_string(clean);
 }
 
-static void send_response(emu_session_t *s, json_t *obj)
+void send_response(emu_session_t *s, json_t *obj)
 {
     char *text = json_dumps(obj, JSON_COMPACT);
     json_decref(obj);
@@ -49,7 +48,7 @@ static void send_response(emu_session_t *s, json_t *obj)
     free(text);
 }
 
-static json_t *response(json_t *id, bool ok)
+json_t *response(json_t *id, bool ok)
 {
     json_t *r = json_object();
     (void)json_object_set(r, "id", id != NULL ? id : json_null());
@@ -67,8 +66,7 @@ static void vfail(emu_session_t *s, json_t *id, const char *fmt, va_list ap)
     send_response(s, r);
 }
 
-static void fail(emu_session_t *s, json_t *id, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static void fail(emu_session_t *s, json_t *id, const char *fmt, ...)
+void fail(emu_session_t *s, json_t *id, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -86,12 +84,7 @@ void json_error(emu_session_t *s, const char *fmt, ...)
 
 /* ---- Reply lines of the command language, captured ---------------------------------------------------------- */
 
-typedef struct capture {
-    json_t *lines;
-    char error[1024]; /* the first error line, without "node N: " and "error: " */
-} capture_t;
-
-static void capture_sink(void *ctx, const char *text, size_t len)
+void capture_sink(void *ctx, const char *text, size_t len)
 {
     capture_t *c = (capture_t *)ctx;
     char line[4096];
@@ -140,16 +133,8 @@ static int select_captured(emu_t *emu, char *word, emu_node_t **out, size_t max,
 
 /* ---- Request fields ------------------------------------------------------------------------------------------ */
 
-typedef struct request {
-    emu_t *emu;
-    emu_session_t *s;
-    json_t *req;
-    json_t *id;
-    const char *cmd;
-} request_t;
-
 /* Every field of the request must be one the command takes: a typo ("nod") is an error, not a default. */
-static bool only_fields(const request_t *q, const char *const *allowed)
+bool only_fields(const request_t *q, const char *const *allowed)
 {
     const char *key;
     json_t *value;
@@ -192,7 +177,7 @@ static bool node_word(const request_t *q, char *word, size_t size, bool required
 }
 
 /* Exactly one node for get and set. */
-static emu_node_t *one_node(const request_t *q)
+emu_node_t *one_node(const request_t *q)
 {
     char word[64];
     if (!node_word(q, word, sizeof word, true)) {
@@ -217,7 +202,7 @@ static emu_node_t *one_node(const request_t *q)
 }
 
 /* "object": "0x6401:01" (hex, as the command language), or an index number with an optional "sub". */
-static bool object_address(const request_t *q, uint16_t *index, uint8_t *sub, char *text, size_t size)
+bool object_address(const request_t *q, uint16_t *index, uint8_t *sub, char *text, size_t size)
 {
     json_t *o = json_object_get(q->req, "object");
     json_t *js = json_object_get(q->req, "sub");
@@ -235,124 +220,6 @@ static bool object_address(const request_t *q, uint16_t *index, uint8_t *sub, ch
     fail(q->s, q->id, "%s: \"object\" must be \"INDEX[:SUB]\" in hex (\"0x6401:01\") or an index number with an "
                       "optional \"sub\"", q->cmd);
     return false;
-}
-
-/* ---- Typed values ------------------------------------------------------------------------------------------ */
-
-static json_t *hex_string(const uint8_t *b, size_t len)
-{
-    char text[2U * 256U + 1U];
-    for (size_t i = 0U; i < len && i < 256U; i++) {
-        (void)snprintf(text + 2U * i, 3U, "%02X", b[i]);
-    }
-    text[2U * (len < 256U ? len : 256U)] = '\0';
-    return json_string(text);
-}
-
-/* The value as JSON: integers as numbers (an UNSIGNED64 above 2^63-1 as a decimal string), BOOLEAN as true/false,
- * REAL32 as a number (NaN and infinities, which JSON lacks, as "nan", "inf", "-inf"), VISIBLE_STRING as a string,
- * OCTET_STRING, UNICODE_STRING and DOMAIN as hex. */
-static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len)
-{
-    uint64_t u = 0U;
-    for (size_t i = len < 8U ? len : 8U; i > 0U; i--) {
-        u = (u << 8) | buf[i - 1U];
-    }
-    switch (e->type) {
-    case CO_T_BOOLEAN:
-        return json_boolean(u != 0U);
-    case CO_T_REAL32:
-    case CO_T_REAL64: {
-        double d;
-        if (e->type == CO_T_REAL32) {
-            float f;
-            const uint32_t u32 = (uint32_t)u;
-            memcpy(&f, &u32, sizeof f);
-            d = (double)f;
-        } else {
-            memcpy(&d, &u, sizeof d);
-        }
-        if (isnan(d)) {
-            return json_string("nan");
-        }
-        if (isinf(d)) {
-            return json_string(d > 0.0 ? "inf" : "-inf");
-        }
-        return json_real(d);
-    }
-    case CO_T_VISIBLE_STRING: {
-        char text[257];
-        const size_t n = len < 256U ? len : 256U;
-        memcpy(text, buf, n);
-        text[n] = '\0';
-        return jstr(text);
-    }
-    case CO_T_OCTET_STRING:
-    case CO_T_UNICODE_STRING:
-    case CO_T_DOMAIN:
-        return hex_string(buf, len);
-    default:
-        if (device_type_is_signed(e->type)) {
-            const unsigned bits = (unsigned)len * 8U;
-            if (bits > 0U && bits < 64U && (u >> (bits - 1U)) != 0U) {
-                u |= ~((UINT64_C(1) << bits) - 1U);
-            }
-            return json_integer((json_int_t)(int64_t)u);
-        }
-        if (u > (uint64_t)LLONG_MAX) {
-            char text[24];
-            (void)snprintf(text, sizeof text, "%llu", (unsigned long long)u);
-            return json_string(text);
-        }
-        return json_integer((json_int_t)u);
-    }
-}
-
-/* {"node", "object", "value", "type", "name"} of one object of n, or false after a failure response. */
-static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, uint8_t sub, json_t *r)
-{
-    const co_od_entry_t *e = co_od_find(n->dev.cls->od, index, sub);
-    if (e == NULL) {
-        fail(q->s, q->id, "node %u has no object 0x%04X:%02X", co_node_id(&n->dev.node), index, sub);
-        return false;
-    }
-    uint8_t buf[256];
-    size_t len = 0U;
-    n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
-    q->emu->in_command = true;
-    const uint32_t abort_code = co_od_read(&n->dev.node, index, sub, buf, sizeof buf, &len, CO_ORIGIN_LOCAL);
-    q->emu->in_command = false;
-    n->dirty = true;
-    if (abort_code != 0U) {
-        fail(q->s, q->id, "0x%04X:%02X: %s (0x%08lX)", index, sub, co_abort_text(abort_code), (unsigned long)abort_code);
-        return false;
-    }
-    char object[16];
-    (void)snprintf(object, sizeof object, "0x%04X:%02X", index, sub);
-    (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
-    (void)json_object_set_new(r, "object", json_string(object));
-    (void)json_object_set_new(r, "value", value_json(e, buf, len));
-    (void)json_object_set_new(r, "type", json_string(device_type_name(e->type)));
-    const char *name = device_object_name(n->dev.cls, e);
-    if (name != NULL) {
-        (void)json_object_set_new(r, "name", jstr(name));
-    }
-    const char *unit = device_object_unit(n->dev.cls, e);
-    if (unit != NULL) {
-        (void)json_object_set_new(r, "unit", jstr(unit));
-    }
-    return true;
-}
-
-/* The response of get and set: the object's value as it is now. */
-static void answer_value(const request_t *q, emu_node_t *n, uint16_t index, uint8_t sub)
-{
-    json_t *r = response(q->id, true);
-    if (!describe_value(q, n, index, sub, r)) {
-        json_decref(r);
-        return;
-    }
-    send_response(q->s, r);
 }
 
 /* ---- Commands ---------------------------------------------------------------------------------------------- */
@@ -446,69 +313,6 @@ static void cmd_show(const request_t *q)
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "nodes", nodes);
     send_response(q->s, r);
-}
-
-static void cmd_get(const request_t *q)
-{
-    static const char *const fields[] = {"node", "object", "sub", NULL};
-    uint16_t index;
-    uint8_t sub;
-    char object[16];
-    emu_node_t *n;
-    if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object)) {
-        return;
-    }
-    answer_value(q, n, index, sub);
-}
-
-/* The value as a word of `set`: numbers in decimal, true/false as 1/0, strings as they are. */
-static bool value_word(const request_t *q, char *word, size_t size)
-{
-    json_t *v = json_object_get(q->req, "value");
-    if (json_is_integer(v)) {
-        (void)snprintf(word, size, "%" JSON_INTEGER_FORMAT, json_integer_value(v));
-    } else if (json_is_real(v)) {
-        (void)snprintf(word, size, "%.9g", json_real_value(v));
-    } else if (json_is_boolean(v)) {
-        (void)snprintf(word, size, "%d", json_is_true(v) ? 1 : 0);
-    } else if (json_is_string(v) && json_string_length(v) < size && strlen(json_string_value(v)) == json_string_length(v)) {
-        (void)snprintf(word, size, "%s", json_string_value(v));
-    } else {
-        fail(q->s, q->id, "set: \"value\" must be a number, true/false or a string (without NUL, under %zu bytes)", size);
-        return false;
-    }
-    return true;
-}
-
-static void cmd_set(const request_t *q)
-{
-    static const char *const fields[] = {"node", "object", "sub", "value", NULL};
-    uint16_t index;
-    uint8_t sub;
-    char object[16], value[512];
-    emu_node_t *n;
-    if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object) ||
-        !value_word(q, value, sizeof value)) {
-        return;
-    }
-    /* Written as the device's `set` writes it (its checks and messages), on the one node. */
-    char *argv[3] = {(char *)"set", object, value};
-    capture_t c;
-    c.lines = json_array();
-    c.error[0] = '\0';
-    output_set_reply_sink(capture_sink, &c);
-    n->dev.now = socketcan_now_us();
-    q->emu->in_command = true;
-    const device_cmd_result_t dr = device_command(&n->dev, 3, (const char *const *)argv, n->dev.now);
-    q->emu->in_command = false;
-    n->dirty = true;
-    output_set_reply_sink(NULL, NULL);
-    json_decref(c.lines);
-    if (dr != DEVICE_CMD_OK) {
-        fail(q->s, q->id, "%s", c.error[0] != '\0' ? c.error : "refused");
-        return;
-    }
-    answer_value(q, n, index, sub);
 }
 
 /* Any other command of the language: "args" are its words after NODE; the reply lines come back as "lines". */
@@ -731,7 +535,7 @@ void json_run(emu_t *emu, emu_session_t *s, const char *line)
             const char *name;
             void (*run)(const request_t *q);
         } table[] = {{"hello", cmd_hello}, {"list", cmd_list},           {"show", cmd_show},
-                     {"get", cmd_get},     {"set", cmd_set},             {"subscribe", cmd_subscribe},
+                     {"get", cmd_get},     {"set", cmd_set},             {"objects", cmd_objects},             {"subscribe", cmd_subscribe},
                      {"unsubscribe", cmd_unsubscribe}, {"quit", cmd_quit}, {"exit", cmd_quit}};
         size_t i = 0U;
         while (i < sizeof table / sizeof table[0] && strcmp(table[i].name, q.cmd) != 0) {

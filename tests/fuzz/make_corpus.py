@@ -887,6 +887,9 @@ def control_seeds():
         ("json-errors", '{bad\n[1,2]\n{"id":1.5,"cmd":"list"}\n{"cmd":3}\n{"cmd":"get","node":16}\n'
                         '{"cmd":"get","node":16,"object":"0x1017","nod":1}\n{"cmd":"list","cmd":"quit"}\n'
                         '{"cmd":"set","node":"all","object":"0x1017","value":1}\n{"cmd":"quit","node":16}\nlist\n'),
+        ("json-objects", '{"id":1,"cmd":"objects","node":16}\n{"id":2,"cmd":"objects","node":"17","values":true}\n'
+                         '{"id":3,"cmd":"objects","node":20,"values":false}\n{"id":4,"cmd":"objects","node":"all"}\n'
+                         '{"id":5,"cmd":"objects","node":16,"values":1}\n{"id":6,"cmd":"objects"}\n'),
         ("json-quit", '{"id":"q","cmd":"quit"}\nlist\n'),
         ("protocol-faults", "fault 16 sdo-ignore 2\nfault 17 sdo-ignore 30% 7\nfault 18 sdo-delay 100\n"
                             "fault 20 sdo-abort 0x1017 0x08000020\nfault 21 heartbeat-stop\nfault 22 heartbeat-jitter 50\n"

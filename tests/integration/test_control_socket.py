@@ -16,7 +16,7 @@ import pytest
 from conftest import EMU, IFACE, SRC, Deadline
 
 SCHEMA = json.loads((SRC / "docs/control-protocol.schema.json").read_text())
-KNOWN = ("hello", "list", "show", "get", "set", "subscribe", "unsubscribe", "quit")
+KNOWN = ("hello", "list", "show", "get", "set", "objects", "subscribe", "unsubscribe", "quit")
 
 
 def validator(pointer):
@@ -133,6 +133,54 @@ def test_text_and_json_on_one_connection(emulator, tmp_path):
     assert show["errors"] == [{"code": 0x3210, "register": 5, "info": "0000000000"}] and show["error_register"] == 5, show
     # the text framing answers on this connection only, never on stdout
     assert not any("0x1017" in line for line in emu.out_lines), emu.out_lines
+    c.close()
+
+
+def test_objects_lists_the_dictionary_a_node_has(emulator, tmp_path):
+    """objects: every sub-index of the node in (index, sub) order with its EDS name, type, access, PDO mapping,
+    storage, unit and limits; with values each value as get reads it; a variant's hidden rows are not listed."""
+    emu, path = start(emulator, tmp_path, "pro-ionizer:16", "pro-ionizer/basic:20", "buerkert:17")
+    c = Client(path)
+    assert c.request(id=1, cmd="set", node=16, object="0x1017", value=700)["ok"]
+    full = c.request(id=2, cmd="objects", node=16, values=True)
+    assert full["node"] == 16
+    rows = {r["object"]: r for r in full["objects"]}
+    assert len(rows) == len(full["objects"]) == 167  # od/pro-ionizer.eds: 167 sub-indices
+    addresses = [tuple(int(x, 16) for x in r["object"].split(":")) for r in full["objects"]]
+    assert addresses == sorted(addresses)
+    # [1017]: UNSIGNED16 rw, LowLimit 0, HighLimit 60000, saved by 0x1010
+    assert rows["0x1017:00"] == {"object": "0x1017:00", "name": "Producer heartbeat time", "type": "UNSIGNED16",
+                                 "access": "rw", "tpdo": False, "rpdo": False, "stored": True, "low": 0,
+                                 "high": 60000, "value": 700}
+    assert rows["0x1008:00"]["access"] == "const" and rows["0x1008:00"]["value"] == "ES61"
+    assert (rows["0x2002:29"]["low"], rows["0x2002:29"]["high"]) == (29, 90)  # [2002sub29] LowLimit / HighLimit
+    assert (rows["0x2002:35"]["type"], rows["0x2002:35"]["low"]) == ("INTEGER16", -1000)  # a signed limit
+    assert rows["0x6401:02"]["unit"] == "µA" and rows["0x6401:02"]["tpdo"], rows["0x6401:02"]
+    # an object that cannot be read says why, as an SDO upload would be answered
+    assert rows["0x1003:01"]["error"] == "no data available (0x08000024)" and "value" not in rows["0x1003:01"]
+    for obj in ("0x1018:01", "0x2002:08", "0x6401:02"):
+        assert c.request(id=3, cmd="get", node=16, object=obj)["value"] == rows[obj]["value"], obj
+    # without values: the same rows, no value
+    plain = c.request(id=4, cmd="objects", node=16)["objects"]
+    assert [r["object"] for r in plain] == list(rows) and not any("value" in r or "error" in r for r in plain)
+    # the basic variant hides what it does not have (connection monitoring 0x2002:11-2E ...): not listed, and get
+    # refuses it as an SDO upload is refused
+    basic = {r["object"] for r in c.request(id=5, cmd="objects", node=20)["objects"]}
+    assert basic < set(rows) and "0x2002:11" not in basic and "0x1017:00" in basic
+    hidden = c.request(id=6, cmd="get", node=20, object="0x2002:11")
+    assert not hidden["ok"] and "0x06090011" in hidden["error"], hidden
+    # a REAL32 set-point of the Bürkert device, RPDO-mappable, with its unit
+    bk = {r["object"]: r for r in c.request(id=7, cmd="objects", node=17, values=True)["objects"]}
+    assert len(bk) == 307 and bk["0x2540:01"] == {
+        "object": "0x2540:01", "name": "Value", "type": "REAL32", "access": "rw", "tpdo": False, "rpdo": True,
+        "stored": False, "unit": "l/min", "value": 0.0}
+    for line, error in (('{"id":8,"cmd":"objects","node":16,"values":1}', 'objects: "values" must be true or false'),
+                        ('{"id":9,"cmd":"objects","node":"all"}', "objects needs one node, not all"),
+                        ('{"id":10,"cmd":"objects"}', 'objects: needs "node"')):
+        c.send(line)
+        answer = json.loads(c.line())
+        check_schema(answer, "objects")
+        assert answer == {"id": json.loads(line)["id"], "ok": False, "error": error}, answer
     c.close()
 
 

@@ -102,6 +102,35 @@ class Entry:
         return int(self.object[7:9], 16)
 
 
+@dataclass(frozen=True)
+class ObjectInfo:
+    """One sub-index of a node's dictionary (``objects``): the object (``"0x1017:00"``), its EDS ParameterName
+    (``None`` when the EDS has none), data type, access (``"ro"``, ``"wo"``, ``"rw"``, ``"const"``), whether it may
+    be mapped into a TPDO / an RPDO, whether 0x1010 saves it, its unit and limits where there are, and with
+    ``values=True`` its value (decoded as get's) or ``error``, why it cannot be read (``"no data available
+    (0x08000024)"``)."""
+    object: str
+    name: Optional[str]
+    type: str
+    access: str
+    tpdo: bool
+    rpdo: bool
+    stored: bool
+    unit: Optional[str] = None
+    low: Optional[Value] = None
+    high: Optional[Value] = None
+    value: Optional[Value] = None
+    error: Optional[str] = None
+
+    @property
+    def index(self) -> int:
+        return int(self.object[2:6], 16)
+
+    @property
+    def sub(self) -> int:
+        return int(self.object[7:9], 16)
+
+
 def decode_value(value: Any, type_name: str) -> Value:
     """A value of a get/set answer as a Python value: REAL32/REAL64 as float (``"nan"``, ``"inf"``, ``"-inf"``
     included), an UNSIGNED64 above 2^63-1 (a decimal string on the wire) as int, OCTET_STRING and DOMAIN (hex on
@@ -337,6 +366,14 @@ class Client:
         """set() with the whole answer."""
         return _entry(self.request("set", timeout=timeout, node=node, **object_fields(obj, sub),
                                    value=encode_value(value)))
+
+    def objects(self, node: NodeRef, *, values: bool = False, timeout: Optional[float] = None) -> List[ObjectInfo]:
+        """The node's dictionary (``objects``): every sub-index it has, in (index, sub) order, with name, type,
+        access, PDO mapping, storage, unit and limits; with ``values=True`` each value as get() reads it."""
+        fields: Dict[str, Any] = {"node": node}
+        if values:
+            fields["values"] = True
+        return [_object_info(o) for o in self.request("objects", timeout=timeout, **fields)["objects"]]
 
     def command(self, node: Optional[NodeRef], cmd: str, *args: Union[int, float, str],
                 timeout: Optional[float] = None) -> List[str]:
@@ -633,3 +670,10 @@ def _entry(answer: Mapping[str, Any]) -> Entry:
     return Entry(node=answer["node"], object=answer["object"], value=decode_value(answer["value"], answer["type"]),
                  type=answer["type"], name=answer.get("name", ""), unit=answer.get("unit"))
 
+
+def _object_info(o: Mapping[str, Any]) -> ObjectInfo:
+    def typed(key: str) -> Optional[Value]:
+        return decode_value(o[key], o["type"]) if key in o else None
+    return ObjectInfo(object=o["object"], name=o["name"], type=o["type"], access=o["access"], tpdo=o["tpdo"],
+                      rpdo=o["rpdo"], stored=o["stored"], unit=o.get("unit"), low=typed("low"), high=typed("high"),
+                      value=typed("value"), error=o.get("error"))
