@@ -46,7 +46,8 @@ typedef enum co_reset {
 typedef enum co_event_kind {
     CO_EV_NMT_STATE = 1,      /**< value = new state, code = previous state. */
     CO_EV_SDO_ABORT,          /**< index/sub of the request, code = abort code sent. */
-    CO_EV_EMCY,               /**< value = error code, code = error register; sent (or queued while Stopped). */
+    CO_EV_EMCY,               /**< value = error code, code = error register; sent (or queued while Stopped); its 8 bytes
+                                   are then the newest entry of node->emcy.queue. */
     CO_EV_STORE,              /**< 0x1010 sub or LSS store; code = 0 or abort code. */
     CO_EV_RESTORE,            /**< 0x1011 sub; code = 0 or abort code. */
     CO_EV_NVM_LOADED,         /**< value = co_nvm_status_t; index 0x1010: the parameter area, after every

@@ -4,6 +4,7 @@ import os
 import signal
 import socket
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -126,6 +127,29 @@ def test_hello_nodes_and_show(canopen_emu):
     assert (shown[0].node, shown[0].error_register, shown[0].errors, shown[0].tx_dropped) == (17, 0, (), 0)
     assert shown[0].tx_frames >= 1  # its boot-up at least
     assert [s.node for s in c.show()] == [16, 17, 0x20]
+    sds = c.show(16)[0]
+    # od/sds.eds: device type 0x191 (CiA 401), heartbeat 5000 ms; its boot-up counts as its last heartbeat
+    assert (sds.device_type, sds.heartbeat_ms, sds.faults, sds.last_emcy) == (0x191, 5000, (), None)
+    assert sds.last_heartbeat_us is not None
+
+
+def test_show_tells_the_faults_in_force_and_when_the_last_heartbeat_went(canopen_emu):
+    c = canopen_emu.client
+    c.set(17, "0x1017", 100)
+    first = c.show(17)[0].last_heartbeat_us
+    later = first
+    deadline = time.monotonic() + 2.0
+    while later == first and time.monotonic() < deadline:
+        time.sleep(0.05)
+        later = c.show(17)[0].last_heartbeat_us
+    assert later is not None and first is not None and later > first  # heartbeats every 100 ms move it on
+    c.inject_fault(17, "heartbeat-stop")
+    stopped = c.show(17)[0]
+    assert stopped.faults == ("heartbeat-stop",)
+    time.sleep(0.35)
+    assert c.show(17)[0].last_heartbeat_us == stopped.last_heartbeat_us  # no heartbeat went out since
+    c.clear_fault(17)
+    assert c.show(17)[0].faults == ()
 
 
 def test_emcy_show_and_emcy_clear(canopen_emu):
@@ -135,6 +159,8 @@ def test_emcy_show_and_emcy_clear(canopen_emu):
     assert status.errors == (ActiveError(code=0x3210, register=0x05, info=bytes([1, 2, 3, 4, 5])),)
     assert status.error_register == 0x05
     assert c.get(17, "0x1001") == 0x05
+    last = status.last_emcy
+    assert (last.code, last.register, last.info) == (0x3210, 0x05, bytes([1, 2, 3, 4, 5])), last
     # an error is its code and its five bytes: clearing needs both
     with pytest.raises(ControlError) as e:
         c.emcy_clear(17, 0x3210)
@@ -142,6 +168,8 @@ def test_emcy_show_and_emcy_clear(canopen_emu):
     assert c.emcy_clear(17, 0x3210, [1, 2, 3, 4, 5]) == ["node 17: emcy-clear 0x3210: done"]
     assert c.show(17)[0].errors == ()
     assert c.get(17, "0x1001") == 0
+    reset = c.show(17)[0].last_emcy  # the error-reset EMCY: code 0, the bytes of the error it ends
+    assert (reset.code, reset.register, reset.info) == (0, 0, bytes([1, 2, 3, 4, 5])) and reset.time_us >= last.time_us
     with pytest.raises(ValueError):
         c.emcy(17, 0x3210, info=[1, 2, 3, 4, 5])  # the bytes need the register before them
 

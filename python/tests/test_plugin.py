@@ -68,7 +68,7 @@ def test_a_failed_tests_report_has_the_log_and_the_last_events(pytester):
         "[[]*] node 16 (sds): NMT INITIALISING -> PRE-OPERATIONAL",
         "[[]*] node 16 (sds): EMCY 0x3210, error register 0x05",
         "*- canopen-emu #1 of 1: last 1 event(s) its clients received -*",
-        '*{"event":"emcy","time_us":*,"node":16,"device":"sds","code":12816,"register":5,'
+        '*{"event":"emcy","time_us":*,"node":16,"device":"sds","code":12816,"register":5,"info":"0000000000",'
         '"text":"EMCY 0x3210, error register 0x05"}',
     ])
     # the test that passed has no section: node 17's log is nowhere

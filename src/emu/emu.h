@@ -57,6 +57,13 @@ typedef struct emu_node {
     node_faults_t faults;   /* protocol faults injected (emu_faults.h) */
     co_time_us_t deadline;  /* what device_process last returned, or earlier when a fault must run */
     bool dirty;             /* a frame concerned the node or a command ran on it: process before sleeping */
+    co_time_us_t last_heartbeat; /* when it last sent its heartbeat or boot-up (emulator clock), 0: never */
+    struct {
+        co_time_us_t at;    /* 0: no EMCY yet */
+        uint16_t code;
+        uint8_t reg;
+        uint8_t info[5];
+    } last_emcy;            /* the last EMCY it sent or queued (show) */
 } emu_node_t;
 
 /* Frames sent by local nodes, waiting to be offered to the other local nodes of the same bus. */

@@ -80,11 +80,15 @@ static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_
     logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&from->dev.node), (unsigned)f->id, hex);
 }
 
-co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
+co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
 {
     const co_status_t st = socketcan_send(&b->can, f);
     if (st == CO_OK) {
-        events_frame(b, from, f, from->dev.now != 0U ? from->dev.now : socketcan_now_us());
+        const co_time_us_t at = from->dev.now != 0U ? from->dev.now : socketcan_now_us();
+        events_frame(b, from, f, at);
+        if (f->id == 0x700U + (uint32_t)from->dev.node.node_id) {
+            from->last_heartbeat = at; /* its age in show: what a master's heartbeat consumer would see */
+        }
     }
     if (st == CO_OK && b->n_nodes > 1U) {
         if (b->local_count == LOCAL_QUEUE_LEN) {

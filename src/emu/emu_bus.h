@@ -25,7 +25,7 @@ void bus_routes_update(emu_bus_t *b, const emu_node_t *n);
 void bus_routes_remove(emu_bus_t *b, const emu_node_t *n);
 
 /** A node's frame: onto the interface, and, once sent, queued for the bus's other nodes. */
-co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f);
+co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f);
 
 /** Offers the queued frames of local nodes to the others, then processes every node that is due or was concerned
  *  by a frame or a command, until no local frame waits. Returns the earliest deadline of its nodes and of the

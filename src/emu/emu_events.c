@@ -208,10 +208,24 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
                ev->index, ev->sub, co_abort_text(ev->code));
         break;
     }
-    case CO_EV_EMCY:
-        report(n, EVENT_EMCY, LOG_NORMAL, pack_state("code", ev->value, "register", ev->code),
-               "EMCY 0x%04lX, error register 0x%02lX", (unsigned long)ev->value, (unsigned long)ev->code);
+    case CO_EV_EMCY: {
+        /* Its 8 bytes are the newest of the node's EMCY queue (co_node.h, CO_EV_EMCY). */
+        const co_emcy_t *em = &n->dev.node.emcy;
+        const uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count + CO_EMCY_QUEUE_LEN - 1U) % CO_EMCY_QUEUE_LEN];
+        n->last_emcy.at = n->dev.now != 0U ? n->dev.now : socketcan_now_us();
+        n->last_emcy.code = (uint16_t)ev->value;
+        n->last_emcy.reg = (uint8_t)ev->code;
+        memcpy(n->last_emcy.info, &data[3], sizeof n->last_emcy.info);
+        char info[11];
+        for (size_t i = 0U; i < sizeof n->last_emcy.info; i++) {
+            (void)snprintf(info + 2U * i, 3U, "%02X", n->last_emcy.info[i]);
+        }
+        json_t *f = pack_state("code", ev->value, "register", ev->code);
+        (void)json_object_set_new(f, "info", json_string(info));
+        report(n, EVENT_EMCY, LOG_NORMAL, f, "EMCY 0x%04lX, error register 0x%02lX", (unsigned long)ev->value,
+               (unsigned long)ev->code);
         break;
+    }
     case CO_EV_STORE:
     case CO_EV_RESTORE:
         store_report(n, ev);

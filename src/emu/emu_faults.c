@@ -15,6 +15,8 @@ static const char *const kind_names[FAULT_KIND_COUNT] = {
     "sdo-ignore", "sdo-delay", "sdo-abort", "heartbeat-stop", "heartbeat-jitter", "heartbeat-state", "tpdo-freeze",
     "tpdo-drop", "tpdo-length", "emcy-burst", "reboot", "bus-off", "lss-silent"};
 
+const char *fault_kind_name(fault_kind_t kind) { return kind < FAULT_KIND_COUNT ? kind_names[kind] : "?"; }
+
 static uint32_t bit(fault_kind_t k) { return (uint32_t)1U << (unsigned)k; }
 
 void faults_init(node_faults_t *f)

@@ -47,6 +47,9 @@ typedef enum fault_kind {
     FAULT_KIND_COUNT
 } fault_kind_t;
 
+/** The name of a fault kind, as the command language and the events give it ("sdo-ignore"). */
+const char *fault_kind_name(fault_kind_t kind);
+
 /** Frames a fault holds back (SDO answers, heartbeats) per node; more are sent without the delay. */
 #define FAULT_DELAYED_MAX 32U
 

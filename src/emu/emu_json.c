@@ -276,6 +276,35 @@ static void cmd_list(const request_t *q)
     send_response(q->s, r);
 }
 
+/* What a view of the network shows of a node beside its state: device type, heartbeat period and the time of its
+ * last heartbeat, the protocol faults in force, the last EMCY (times on the events' clock). */
+static void show_overview(const emu_t *emu, emu_node_t *n, json_t *o)
+{
+    co_node_t *node = &n->dev.node;
+    (void)json_object_set_new(o, "device_type", json_integer(co_od_get_u32(node, 0x1000U, 0U)));
+    (void)json_object_set_new(o, "heartbeat_ms", json_integer(co_od_get_u16(node, 0x1017U, 0U)));
+    (void)json_object_set_new(o, "last_heartbeat_us", n->last_heartbeat > emu->start
+                                                          ? json_integer((json_int_t)(n->last_heartbeat - emu->start))
+                                                          : json_null());
+    json_t *faults = json_array();
+    for (unsigned k = 0U; k < (unsigned)FAULT_KIND_COUNT; k++) {
+        if ((n->faults.active & (1UL << k)) != 0U) {
+            (void)json_array_append_new(faults, json_string(fault_kind_name((fault_kind_t)k)));
+        }
+    }
+    (void)json_object_set_new(o, "faults", faults);
+    json_t *emcy = json_null();
+    if (n->last_emcy.at != 0U) {
+        emcy = json_object();
+        (void)json_object_set_new(emcy, "code", json_integer(n->last_emcy.code));
+        (void)json_object_set_new(emcy, "register", json_integer(n->last_emcy.reg));
+        (void)json_object_set_new(emcy, "info", hex_string(n->last_emcy.info, sizeof n->last_emcy.info));
+        (void)json_object_set_new(emcy, "time_us", json_integer((json_int_t)(n->last_emcy.at > emu->start
+                                                                                ? n->last_emcy.at - emu->start : 0U)));
+    }
+    (void)json_object_set_new(o, "last_emcy", emcy);
+}
+
 static void cmd_show(const request_t *q)
 {
     static const char *const fields[] = {"node", NULL};
@@ -305,6 +334,7 @@ static void cmd_show(const request_t *q)
             (void)json_array_append_new(errors, e);
         }
         (void)json_object_set_new(o, "errors", errors);
+        show_overview(q->emu, sel[i], o);
         (void)json_object_set_new(o, "tx_frames", json_integer((json_int_t)node->stats.tx_frames));
         (void)json_object_set_new(o, "rx_frames", json_integer((json_int_t)node->stats.rx_frames));
         (void)json_object_set_new(o, "tx_dropped", json_integer((json_int_t)node->stats.tx_dropped));

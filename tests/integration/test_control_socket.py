@@ -131,6 +131,9 @@ def test_text_and_json_on_one_connection(emulator, tmp_path):
     assert shown["ok"] and shown["lines"] == ["node 17: emcy 0x3210: done"], shown
     show = c.request(id=7, cmd="show", node=17)["nodes"][0]
     assert show["errors"] == [{"code": 0x3210, "register": 5, "info": "0000000000"}] and show["error_register"] == 5, show
+    # od/buerkert-flow-controller.eds: device type 0, heartbeat 500 ms; no fault injected
+    assert (show["device_type"], show["heartbeat_ms"], show["faults"]) == (0, 500, []), show
+    assert show["last_emcy"]["code"] == 0x3210 and show["last_heartbeat_us"] > 0, show
     # the text framing answers on this connection only, never on stdout
     assert not any("0x1017" in line for line in emu.out_lines), emu.out_lines
     c.close()
@@ -227,8 +230,11 @@ def test_events_carry_the_emulators_time(emulator, tmp_path):
         bus.send(can.Message(arbitration_id=0x610, data=[0x40, 0x55, 0x55, 0, 0, 0, 0, 0], is_extended_id=False))
         ev = c.event("sdo-abort", node=16)
         assert ev["abort_code"] == 0x06020000 and ev["index"] == 0x5555, ev
-        c.request(id=2, cmd="emcy", node=16, args=["0x5000"])
-        assert c.event("emcy", node=16)["code"] == 0x5000
+        c.request(id=2, cmd="emcy", node=16, args=["0x5000", 1, 0xA1, 0xB2, 0xC3, 0xD4, 0xE5])
+        emcy = c.event("emcy", node=16)
+        assert (emcy["code"], emcy["register"], emcy["info"]) == (0x5000, 1, "A1B2C3D4E5"), emcy
+        last = c.request(id=21, cmd="show", node=16)["nodes"][0]["last_emcy"]  # the same EMCY, on the same clock
+        assert last == {"code": 0x5000, "register": 1, "info": "A1B2C3D4E5", "time_us": emcy["time_us"]}, last
         c.request(id=3, cmd="power-cycle", node=16)
         boot = c.event("boot-up", node=16)
         assert boot["time_us"] >= ev["time_us"]

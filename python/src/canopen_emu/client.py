@@ -72,13 +72,30 @@ class ActiveError:
 
 
 @dataclass(frozen=True)
+class LastEmcy:
+    """The last EMCY a node sent or queued (``show``): error code, error register, the five manufacturer-specific
+    bytes, and when (µs since the emulator started, the events' clock)."""
+    code: int
+    register: int
+    info: bytes
+    time_us: int
+
+
+@dataclass(frozen=True)
 class NodeStatus(NodeInfo):
-    """One node of ``show``: ``list``'s fields, its error register and active errors, and its frame counters."""
+    """One node of ``show``: ``list``'s fields, its error register and active errors, its frame counters, its
+    device type (0x1000) and heartbeat period (0x1017, ms), when it last sent its heartbeat or boot-up (µs on the
+    events' clock, None: never), the protocol faults in force and its last EMCY (None: none yet)."""
     error_register: int = 0
     errors: Tuple[ActiveError, ...] = ()
     tx_frames: int = 0
     rx_frames: int = 0
     tx_dropped: int = 0
+    device_type: int = 0
+    heartbeat_ms: int = 0
+    last_heartbeat_us: Optional[int] = None
+    faults: Tuple[str, ...] = ()
+    last_emcy: Optional[LastEmcy] = None
 
 
 @dataclass(frozen=True)
@@ -663,7 +680,12 @@ def _node_status(n: Mapping[str, Any]) -> NodeStatus:
                       state=n["state"], bus=n["bus"], error_register=n["error_register"],
                       errors=tuple(ActiveError(e["code"], e["register"], bytes.fromhex(e["info"]))
                                    for e in n["errors"]),
-                      tx_frames=n["tx_frames"], rx_frames=n["rx_frames"], tx_dropped=n["tx_dropped"])
+                      tx_frames=n["tx_frames"], rx_frames=n["rx_frames"], tx_dropped=n["tx_dropped"],
+                      device_type=n["device_type"], heartbeat_ms=n["heartbeat_ms"],
+                      last_heartbeat_us=n["last_heartbeat_us"], faults=tuple(n["faults"]),
+                      last_emcy=None if n["last_emcy"] is None else LastEmcy(
+                          n["last_emcy"]["code"], n["last_emcy"]["register"], bytes.fromhex(n["last_emcy"]["info"]),
+                          n["last_emcy"]["time_us"]))
 
 
 def _entry(answer: Mapping[str, Any]) -> Entry:
