@@ -98,17 +98,9 @@ class NodeStatus(NodeInfo):
     last_emcy: Optional[LastEmcy] = None
 
 
-@dataclass(frozen=True)
-class Entry:
-    """A typed answer of ``get`` or ``set``: the value (decoded, see Client.get), its CANopen data type
-    (``"UNSIGNED16"``...), the EDS ParameterName, the object normalised (``"0x1017:00"``) and the value's unit
-    where the device's manual gives one (``"V"``, ``"l/min"``; ``None`` otherwise)."""
-    node: int
+class _Addressed:
+    """``index`` and ``sub`` of an answer's ``object`` (``"0x1017:00"``)."""
     object: str
-    value: Value
-    type: str
-    name: str
-    unit: Optional[str] = None
 
     @property
     def index(self) -> int:
@@ -120,7 +112,20 @@ class Entry:
 
 
 @dataclass(frozen=True)
-class ObjectInfo:
+class Entry(_Addressed):
+    """A typed answer of ``get`` or ``set``: the value (decoded, see Client.get), its CANopen data type
+    (``"UNSIGNED16"``...), the EDS ParameterName, the object normalised (``"0x1017:00"``) and the value's unit
+    where the device's manual gives one (``"V"``, ``"l/min"``; ``None`` otherwise)."""
+    node: int
+    object: str
+    value: Value
+    type: str
+    name: str
+    unit: Optional[str] = None
+
+
+@dataclass(frozen=True)
+class ObjectInfo(_Addressed):
     """One sub-index of a node's dictionary (``objects``): the object (``"0x1017:00"``), its EDS ParameterName
     (``None`` when the EDS has none), data type, access (``"ro"``, ``"wo"``, ``"rw"``, ``"const"``), whether it may
     be mapped into a TPDO / an RPDO, whether 0x1010 saves it, its unit and limits where there are, and with
@@ -138,14 +143,6 @@ class ObjectInfo:
     high: Optional[Value] = None
     value: Optional[Value] = None
     error: Optional[str] = None
-
-    @property
-    def index(self) -> int:
-        return int(self.object[2:6], 16)
-
-    @property
-    def sub(self) -> int:
-        return int(self.object[7:9], 16)
 
 
 def decode_value(value: Any, type_name: str) -> Value:
