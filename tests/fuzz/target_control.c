@@ -306,7 +306,7 @@ void logline(int level, const char *fmt, ...)
 }
 
 /* The bus of the program (emu_bus.c) is not linked: frames the faults send go to the node's fake port. */
-co_status_t bus_send(emu_bus_t *b, const emu_node_t *from, const co_frame_t *f)
+co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
 {
     (void)b;
     return from->port.send(from->dev.cfg.port_ctx, f);
