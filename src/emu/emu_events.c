@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "emu_bus.h"
+#include "emu_json_request.h" /* hex_string: the events write bytes as the answers do */
 #include "emu_output.h"
 
 void events_add_session(emu_t *emu, emu_session_t *s)
@@ -216,12 +217,8 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         n->last_emcy.code = (uint16_t)ev->value;
         n->last_emcy.reg = (uint8_t)ev->code;
         memcpy(n->last_emcy.info, &data[3], sizeof n->last_emcy.info);
-        char info[11];
-        for (size_t i = 0U; i < sizeof n->last_emcy.info; i++) {
-            (void)snprintf(info + 2U * i, 3U, "%02X", n->last_emcy.info[i]);
-        }
         json_t *f = pack_state("code", ev->value, "register", ev->code);
-        (void)json_object_set_new(f, "info", json_string(info));
+        (void)json_object_set_new(f, "info", hex_string(n->last_emcy.info, sizeof n->last_emcy.info));
         report(n, EVENT_EMCY, LOG_NORMAL, f, "EMCY 0x%04lX, error register 0x%02lX", (unsigned long)ev->value,
                (unsigned long)ev->code);
         break;

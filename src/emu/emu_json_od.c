@@ -22,6 +22,29 @@ json_t *hex_string(const uint8_t *b, size_t len)
     return json_string(text);
 }
 
+/* A REAL32/REAL64 as JSON: a number, or "nan", "inf", "-inf", which JSON lacks. */
+static json_t *real_json(double d)
+{
+    if (isnan(d)) {
+        return json_string("nan");
+    }
+    if (isinf(d)) {
+        return json_string(d > 0.0 ? "inf" : "-inf");
+    }
+    return json_real(d);
+}
+
+/* An unsigned integer as JSON: a number, above 2^63-1 a decimal string. */
+static json_t *unsigned_json(uint64_t u)
+{
+    if (u > (uint64_t)LLONG_MAX) {
+        char text[24];
+        (void)snprintf(text, sizeof text, "%llu", (unsigned long long)u);
+        return json_string(text);
+    }
+    return json_integer((json_int_t)u);
+}
+
 /* The value as JSON: integers as numbers (an UNSIGNED64 above 2^63-1 as a decimal string), BOOLEAN as true/false,
  * REAL32 as a number (NaN and infinities, which JSON lacks, as "nan", "inf", "-inf"), VISIBLE_STRING as a string,
  * OCTET_STRING, UNICODE_STRING and DOMAIN as hex. */
@@ -45,13 +68,7 @@ static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len
         } else {
             memcpy(&d, &u, sizeof d);
         }
-        if (isnan(d)) {
-            return json_string("nan");
-        }
-        if (isinf(d)) {
-            return json_string(d > 0.0 ? "inf" : "-inf");
-        }
-        return json_real(d);
+        return real_json(d);
     }
     case CO_T_VISIBLE_STRING: {
         char text[257];
@@ -72,12 +89,7 @@ static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len
             }
             return json_integer((json_int_t)(int64_t)u);
         }
-        if (u > (uint64_t)LLONG_MAX) {
-            char text[24];
-            (void)snprintf(text, sizeof text, "%llu", (unsigned long long)u);
-            return json_string(text);
-        }
-        return json_integer((json_int_t)u);
+        return unsigned_json(u);
     }
 }
 
@@ -210,15 +222,10 @@ static json_t *limit_json(uint8_t type, const co_od_limit_t *l)
 {
 #if CO_CONFIG_OD_LIMITS_64
     if (type == CO_T_REAL32 || type == CO_T_REAL64) {
-        return isfinite(l->r) ? json_real(l->r) : json_string(isnan(l->r) ? "nan" : l->r > 0.0 ? "inf" : "-inf");
+        return real_json(l->r);
     }
     if (type == CO_T_UNSIGNED64) {
-        if (l->u > (uint64_t)LLONG_MAX) {
-            char text[24];
-            (void)snprintf(text, sizeof text, "%llu", (unsigned long long)l->u);
-            return json_string(text);
-        }
-        return json_integer((json_int_t)l->u);
+        return unsigned_json(l->u);
     }
     return json_integer((json_int_t)l->i); /* every other integer type's limits are held in i */
 #else

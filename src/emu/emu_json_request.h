@@ -1,7 +1,7 @@
 /*
  * Shared by the modules of the control protocol's JSON framing (emu_json.c: reading requests, the session and node
  * commands; emu_json_od.c: the object dictionary commands): one request being answered, and how an answer is
- * written. Private to those modules; the protocol itself is docs/control-protocol.md.
+ * written. Private to those modules (and emu_events.c, for hex_string); the protocol is docs/control-protocol.md.
  */
 #ifndef EMU_JSON_REQUEST_H
 #define EMU_JSON_REQUEST_H
