@@ -309,7 +309,8 @@ bool device_parse_address(const char *text, uint16_t *index, uint8_t *sub)
 
 static void print_value(device_t *dev, uint16_t index, uint8_t sub)
 {
-    const co_od_entry_t *e = co_od_find(dev->cls->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(dev->cls->od, index, sub, &one);
     uint8_t buf[256];
     size_t len = 0U;
     const uint32_t r = co_od_read(&dev->node, index, sub, buf, sizeof buf - 1U, &len, CO_ORIGIN_LOCAL);
@@ -421,8 +422,9 @@ static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *
 {
     uint16_t index;
     uint8_t sub;
+    co_od_entry_t one;
     const co_od_entry_t *e;
-    if (!device_parse_address(addr, &index, &sub) || (e = co_od_find(dev->cls->od, index, sub)) == NULL) {
+    if (!device_parse_address(addr, &index, &sub) || (e = co_od_find(dev->cls->od, index, sub, &one)) == NULL) {
         device_printf(dev, "error: no object %s", addr);
         return DEVICE_CMD_ERROR;
     }
@@ -565,12 +567,21 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
     return DEVICE_CMD_UNKNOWN;
 }
 
+/* The text of sub-index e in a table with one per sub-index of the dictionary, in order (a run of the table's rows
+ * has one text per sub-index). */
 static const char *row_text(const device_class_t *cls, const char *const *table, const co_od_entry_t *e)
 {
-    if (table == NULL || e < cls->od->entries || e >= cls->od->entries + cls->od->count) {
-        return NULL;
+    const co_od_t *od = cls->od;
+    size_t ordinal = 0U;
+    for (uint16_t i = 0U; table != NULL && i < od->count; i++) {
+        const co_od_entry_t *row = &od->entries[i];
+        const unsigned k = (unsigned)(e->sub - row->sub);
+        if (row->index == e->index && e->sub >= row->sub && k < co_od_entry_subs(row)) {
+            return table[ordinal + k];
+        }
+        ordinal += co_od_entry_subs(row);
     }
-    return table[e - cls->od->entries];
+    return NULL;
 }
 
 const char *device_object_name(const device_class_t *cls, const co_od_entry_t *e)
@@ -590,7 +601,8 @@ co_time_us_t device_save_phase_us(const device_t *dev)
 
 uint32_t device_default_serial(const device_class_t *cls)
 {
-    const co_od_entry_t *e = co_od_find(cls->od, 0x1018, 4);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(cls->od, 0x1018, 4, &one);
     uint32_t serial = 0U;
     if (e != NULL && e->size == sizeof serial) {
         co_od_copy_defaults(cls->od, e->offset, sizeof serial, &serial);

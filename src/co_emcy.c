@@ -25,7 +25,8 @@ static uint8_t error_register(const co_node_t *node)
 
 static void update_register(co_node_t *node)
 {
-    const co_od_entry_t *e = co_od_find(node->od, 0x1001U, 0U);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, 0x1001U, 0U, &one);
     if (e != NULL) {
         co_od_entry_set_u32(node, e, error_register(node));
     }
@@ -35,7 +36,10 @@ static void update_register(co_node_t *node)
 static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
 {
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
-    const co_od_entry_t *count_e = co_od_find(node->od, 0x1003U, 0U);
+    co_od_entry_t count_one;
+    co_od_entry_t one;
+    co_od_entry_t other;
+    const co_od_entry_t *count_e = co_od_find(node->od, 0x1003U, 0U, &count_one);
     if (size == 0U || count_e == NULL) {
         return;
     }
@@ -44,13 +48,16 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
         count = size;
     }
     for (uint8_t i = (count < size) ? count : (uint8_t)(size - 1U); i >= 1U; i--) {
-        const co_od_entry_t *from = co_od_find(node->od, 0x1003U, i);
-        const co_od_entry_t *to = co_od_find(node->od, 0x1003U, (uint8_t)(i + 1U));
-        if (from != NULL && to != NULL) {
-            co_od_entry_set_u32(node, to, co_od_entry_u32(node, from));
+        const co_od_entry_t *from = co_od_find(node->od, 0x1003U, i, &one);
+        if (from != NULL) {
+            const uint32_t v = co_od_entry_u32(node, from);
+            const co_od_entry_t *to = co_od_find(node->od, 0x1003U, (uint8_t)(i + 1U), &other);
+            if (to != NULL) {
+                co_od_entry_set_u32(node, to, v);
+            }
         }
     }
-    const co_od_entry_t *first = co_od_find(node->od, 0x1003U, 1U);
+    const co_od_entry_t *first = co_od_find(node->od, 0x1003U, 1U, &other);
     if (first != NULL) {
         co_od_entry_set_u32(node, first, (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24));
     }
@@ -207,7 +214,8 @@ bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t
     }
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
     for (uint8_t i = 1U; i <= size; i++) {
-        const co_od_entry_t *s = co_od_find(node->od, 0x1003U, i);
+        co_od_entry_t one;
+        const co_od_entry_t *s = co_od_find(node->od, 0x1003U, i, &one);
         if (s != NULL) {
             co_od_entry_set_u32(node, s, 0U);
         }

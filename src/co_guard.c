@@ -14,7 +14,7 @@ static uint32_t life_time_ms(const co_node_t *node) { return (uint32_t)node->gua
 
 void co_guard_written(co_node_t *node)
 {
-    node->guard.present = co_od_find(node->od, 0x100CU, 0U) != NULL && co_od_find(node->od, 0x100DU, 0U) != NULL;
+    node->guard.present = co_od_exists(node->od, 0x100CU, 0U) && co_od_exists(node->od, 0x100DU, 0U);
     node->guard.guard_ms = (uint16_t)co_od_u32_or(node, 0x100CU, 0U, 0U);
     node->guard.life_factor = (uint8_t)co_od_u32_or(node, 0x100DU, 0U, 0U);
 }

@@ -20,9 +20,10 @@
 #define DISPATCH_LAST 0x1FFFU
 
 /* An object an MPDO can carry: mapped into PDOs in that direction, with a value of at most 4 bytes. */
-static const co_od_entry_t *mpdo_object(const co_node_t *node, uint16_t index, uint8_t sub, uint16_t pdo_flag)
+static const co_od_entry_t *mpdo_object(const co_node_t *node, uint16_t index, uint8_t sub, uint16_t pdo_flag,
+                                        co_od_entry_t *one)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, one);
     return (e != NULL && (e->flags & pdo_flag) != 0U && e->size <= 4U) ? e : NULL;
 }
 
@@ -41,6 +42,8 @@ bool co_mpdo_sam_next(co_node_t *node, co_tpdo_t *p, uint8_t frame[8])
     uint32_t first_ordinal = 0U;
     const co_od_entry_t *first = NULL; /* the first object that can go out, for the wrap */
     const co_od_entry_t *found = NULL;
+    co_od_entry_t first_one;
+    co_od_entry_t one;
     for (uint16_t list = SCANNER_FIRST; list <= SCANNER_LAST && found == NULL; list++) {
         const uint32_t entries = co_od_u32_or(node, list, 0U, 0U);
         for (uint32_t k = 1U; k <= entries && k <= 0xFEU && found == NULL; k++) {
@@ -49,12 +52,13 @@ bool co_mpdo_sam_next(co_node_t *node, co_tpdo_t *p, uint8_t frame[8])
             const uint8_t first_sub = (uint8_t)v;
             const uint32_t n = v == 0U ? 0U : block_length(v >> 24, first_sub);
             for (uint32_t i = 0U; i < n; i++, ordinal++) {
-                const co_od_entry_t *e = mpdo_object(node, index, (uint8_t)(first_sub + i), CO_OD_TPDO);
+                const co_od_entry_t *e = mpdo_object(node, index, (uint8_t)(first_sub + i), CO_OD_TPDO, &one);
                 if (e == NULL || (e->flags & CO_OD_READ) == 0U) {
                     continue;
                 }
                 if (first == NULL) {
-                    first = e;
+                    first_one = *e;
+                    first = &first_one;
                     first_ordinal = ordinal;
                 }
                 if (ordinal >= p->scan_next) {
@@ -87,7 +91,8 @@ static bool dispatch(co_node_t *node, uint8_t producer, uint16_t *index, uint8_t
     for (uint16_t list = DISPATCH_FIRST; list <= DISPATCH_LAST; list++) {
         const uint32_t entries = co_od_u32_or(node, list, 0U, 0U);
         for (uint32_t k = 1U; k <= entries && k <= 0xFEU; k++) {
-            const co_od_entry_t *e = co_od_find(node->od, list, (uint8_t)k);
+            co_od_entry_t one;
+            const co_od_entry_t *e = co_od_find(node->od, list, (uint8_t)k, &one);
             if (e == NULL || e->size != 8U) {
                 continue;
             }
@@ -123,7 +128,8 @@ int co_mpdo_receive(co_node_t *node, const co_rpdo_t *p, const uint8_t frame[8])
     } else if (!dispatch(node, address, &index, &sub)) {
         return 0; /* an object of a producer this node does not listen to */
     }
-    const co_od_entry_t *e = mpdo_object(node, index, sub, CO_OD_RPDO);
+    co_od_entry_t one;
+    const co_od_entry_t *e = mpdo_object(node, index, sub, CO_OD_RPDO, &one);
     if (e != NULL && co_od_write(node, index, sub, &frame[4], e->size, CO_ORIGIN_RPDO) == CO_ABORT_NONE) {
         return 1;
     }

@@ -10,13 +10,12 @@
 
 static uint32_t entry_key(uint16_t index, uint8_t sub) { return ((uint32_t)index << 8) | sub; }
 
-/* Index of the first row with key >= (index, sub). */
-static uint16_t lower_bound(const co_od_t *od, uint16_t index, uint8_t sub)
+/* Index of the first row with a key >= key. */
+static uint16_t lower_bound_key(const co_od_t *od, uint32_t key)
 {
     const co_od_entry_t *rows = od->entries;
     unsigned lo = 0U;
     unsigned hi = od->count;
-    const uint32_t key = entry_key(index, sub);
     while (lo < hi) {
         const unsigned mid = (lo + hi) >> 1;
         if (entry_key(rows[mid].index, rows[mid].sub) < key) {
@@ -26,6 +25,12 @@ static uint16_t lower_bound(const co_od_t *od, uint16_t index, uint8_t sub)
         }
     }
     return (uint16_t)lo;
+}
+
+/* Index of the first row with key >= (index, sub). */
+static uint16_t lower_bound(const co_od_t *od, uint16_t index, uint8_t sub)
+{
+    return lower_bound_key(od, entry_key(index, sub));
 }
 
 /* The object table's entry of index, or NULL (od->objects != NULL). */
@@ -45,34 +50,82 @@ static const co_od_object_t *find_object(const co_od_t *od, uint16_t index)
     return (lo < od->n_objects && objects[lo].index == index) ? &objects[lo] : NULL;
 }
 
-const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub)
+const co_od_entry_t *co_od_entry_at(const co_od_entry_t *row, uint8_t k, co_od_entry_t *one)
+{
+    if (k == 0U) {
+        return row;
+    }
+    *one = *row;
+    one->sub = (uint8_t)(row->sub + k);
+    one->offset = (co_od_offset_t)(row->offset + (co_od_offset_t)k * row->size);
+    one->count = 1U;
+    return one;
+}
+
+/* The row that holds (index, sub), or NULL. Called from co_od_find() alone, which has it inline where the compiler
+ * optimises for speed: every SDO request and RPDO passes there. */
+static const co_od_entry_t *find_row(const co_od_t *od, uint16_t index, uint8_t sub)
 {
     const co_od_entry_t *rows = od->entries;
+    unsigned first;
+    unsigned end;
     if (od->objects != NULL) {
         const co_od_object_t *o = find_object(od, index);
         if (o == NULL) {
             return NULL;
         }
-        unsigned lo = o->first;
-        unsigned hi = o + 1 < od->objects + od->n_objects ? o[1].first : od->count;
-        if (lo + sub < hi && rows[lo + sub].sub == sub) {
-            return &rows[lo + sub]; /* sub-indices 0..n without gaps: the usual case */
-        }
-        while (lo < hi) {
-            const unsigned mid = (lo + hi) >> 1;
-            if (rows[mid].sub < sub) {
-                lo = mid + 1U;
-            } else {
-                hi = mid;
-            }
-        }
-        return (lo < od->count && rows[lo].index == index && rows[lo].sub == sub) ? &rows[lo] : NULL;
+        first = o->first;
+        end = o + 1 < od->objects + od->n_objects ? o[1].first : od->count;
+    } else {
+        first = lower_bound(od, index, 0U);
+        end = lower_bound_key(od, entry_key(index, 0U) + 0x100U);
     }
-    const uint16_t i = lower_bound(od, index, sub);
-    if (i < od->count && rows[i].index == index && rows[i].sub == sub) {
-        return &rows[i];
+    if (first + sub < end && rows[first + sub].sub == sub) {
+        return &rows[first + sub]; /* sub-indices 0..n without gaps or runs: the usual case */
     }
-    return NULL;
+    unsigned lo = first;
+    unsigned hi = end;
+    while (lo < hi) { /* the first row of the object past sub */
+        const unsigned mid = (lo + hi) >> 1;
+        if (rows[mid].sub <= sub) {
+            lo = mid + 1U;
+        } else {
+            hi = mid;
+        }
+    }
+    if (lo == first) {
+        return NULL;
+    }
+    const co_od_entry_t *r = &rows[lo - 1U];
+    return (unsigned)(sub - r->sub) < co_od_entry_subs(r) ? r : NULL;
+}
+
+const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one)
+{
+    const co_od_entry_t *r = find_row(od, index, sub);
+    return (r == NULL || r->sub == sub) ? r : co_od_entry_at(r, (uint8_t)(sub - r->sub), one);
+}
+
+/* Off the per-frame paths (PDO configuration, segmented SDO checks): a second walk of the object finds the row of a
+ * sub-index inside a run rather than a second copy of the search. */
+const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub)
+{
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(od, index, sub, &one);
+    if (e != &one) {
+        return e;
+    }
+    const co_od_entry_t *r = &od->entries[co_od_first_row(od, index)];
+    while ((unsigned)(sub - r->sub) >= co_od_entry_subs(r)) {
+        r++; /* the object has a row that holds sub: co_od_find narrowed one */
+    }
+    return r;
+}
+
+bool co_od_exists(const co_od_t *od, uint16_t index, uint8_t sub)
+{
+    co_od_entry_t one;
+    return co_od_find(od, index, sub, &one) != NULL;
 }
 
 uint16_t co_od_first_row(const co_od_t *od, uint16_t index)
@@ -90,13 +143,11 @@ bool co_od_has_index(const co_od_t *od, uint16_t index) { return co_od_first_row
 uint8_t co_od_sub_count(const co_od_t *od, uint16_t index)
 {
     uint16_t i = co_od_first_row(od, index);
-    uint8_t n = 0U;
+    unsigned n = 0U;
     for (; i < od->count && od->entries[i].index == index; i++) {
-        if (od->entries[i].sub != 0U) {
-            n++;
-        }
+        n += co_od_entry_subs(&od->entries[i]) - (od->entries[i].sub == 0U ? 1U : 0U);
     }
-    return n;
+    return (uint8_t)n;
 }
 
 uint16_t co_od_type_size(uint8_t type)
@@ -263,7 +314,8 @@ void co_od_entry_set_u32(co_node_t *node, const co_od_entry_t *e, uint32_t v)
 
 uint32_t co_od_u32_or(const co_node_t *node, uint16_t index, uint8_t sub, uint32_t fallback)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
     return e != NULL ? co_od_entry_u32(node, e) : fallback;
 }
 
@@ -544,7 +596,8 @@ static void comm_written(co_node_t *node, const co_od_entry_t *e)
 uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, size_t cap, size_t *len,
                     co_od_origin_t origin)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
     if (e == NULL) {
         *len = 0U;
         return co_od_missing(node->od, index);
@@ -586,7 +639,8 @@ uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, si
 uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *data, size_t len,
                      co_od_origin_t origin)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
     return e != NULL ? co_od_write_entry(node, e, data, len, origin) : co_od_missing(node->od, index);
 }
 
@@ -642,7 +696,8 @@ uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *
 
 void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
     if (e == NULL) {
         return;
     }
@@ -667,13 +722,15 @@ uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8
 
 void *co_od_value(co_node_t *node, uint16_t index, uint8_t sub)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
     return e != NULL ? co_od_ptr(node, e) : NULL;
 }
 
 static uint32_t get_sized(co_node_t *node, uint16_t index, uint8_t sub, uint16_t size)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
     return (e != NULL && e->size == size && !is_bytes(e)) ? co_od_entry_u32(node, e) : 0U;
 }
 
@@ -719,10 +776,15 @@ void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     const co_od_t *od = node->od;
     for (uint16_t i = lower_bound(od, first, 0U); i < od->count && od->entries[i].index <= last; i++) {
-        const co_od_entry_t *e = &od->entries[i];
-        co_od_copy_defaults(od, e->offset, e->size, node->values + e->offset);
-        if ((e->flags & CO_OD_NODEID) != 0U && node->node_id != CO_NODE_ID_UNCONFIGURED) {
-            co_od_entry_set_u32(node, e, co_od_entry_u32(node, e) + node->node_id);
+        const co_od_entry_t *row = &od->entries[i];
+        const uint8_t subs = co_od_entry_subs(row);
+        co_od_copy_defaults(od, row->offset, (size_t)row->size * subs, node->values + row->offset);
+        if ((row->flags & CO_OD_NODEID) != 0U && node->node_id != CO_NODE_ID_UNCONFIGURED) {
+            for (uint8_t k = 0U; k < subs; k++) {
+                co_od_entry_t one;
+                const co_od_entry_t *e = co_od_entry_at(row, k, &one);
+                co_od_entry_set_u32(node, e, co_od_entry_u32(node, e) + node->node_id);
+            }
         }
     }
 }

@@ -37,13 +37,13 @@ co_status_t co_pdo_count(co_node_t *node)
 #if !CO_CONFIG_PDO_TIMERS
     /* Timers compiled out: a dictionary that has them would take values that change nothing. */
     for (uint16_t n = 0U; n < nr; n++) {
-        if (co_od_find(node->od, (uint16_t)(RPDO_COMM + n), 5U) != NULL) {
+        if (co_od_exists(node->od, (uint16_t)(RPDO_COMM + n), 5U)) {
             return CO_ERR_RANGE;
         }
     }
     for (uint16_t n = 0U; n < nt; n++) {
-        if (co_od_find(node->od, (uint16_t)(TPDO_COMM + n), 3U) != NULL ||
-            co_od_find(node->od, (uint16_t)(TPDO_COMM + n), 5U) != NULL) {
+        if (co_od_exists(node->od, (uint16_t)(TPDO_COMM + n), 3U) ||
+            co_od_exists(node->od, (uint16_t)(TPDO_COMM + n), 5U)) {
             return CO_ERR_RANGE;
         }
     }
@@ -71,7 +71,7 @@ static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_
         /* a dummy entry skips the bytes of its type, exactly: 8 bits of a 32-bit dummy are no dummy */
         return out->len == co_od_type_size((uint8_t)index) ? CO_ABORT_NONE : CO_ABORT_NOT_MAPPABLE;
     }
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    const co_od_entry_t *e = co_od_find_row(node->od, index, sub); /* flags and size: the sub-index's too */
     if (e == NULL) {
         return co_od_has_index(node->od, index) ? CO_ABORT_NOT_MAPPABLE : CO_ABORT_NO_OBJECT;
     }
@@ -79,6 +79,7 @@ static uint32_t resolve(const co_node_t *node, uint32_t value, bool receive, co_
         return CO_ABORT_NOT_MAPPABLE;
     }
     out->row = (uint16_t)(e - node->od->entries);
+    out->k = (uint8_t)(sub - e->sub);
     return CO_ABORT_NONE;
 }
 
@@ -197,7 +198,10 @@ static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
     for (uint8_t i = 0U; i < p->n_map; i++) {
         if (p->map[i].row != CO_PDO_MAP_DUMMY) {
             /* The device hook may refuse a value; an RPDO has no way to answer, so it is dropped. */
-            (void)co_od_write_entry(node, &node->od->entries[p->map[i].row], &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
+            co_od_entry_t one;
+            const co_od_entry_t *e = &node->od->entries[p->map[i].row];
+            e = p->map[i].k == 0U ? e : co_od_entry_at(e, p->map[i].k, &one); /* a sub-index inside a run */
+            (void)co_od_write_entry(node, e, &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
         }
         pos = (uint8_t)(pos + p->map[i].len);
     }
@@ -266,7 +270,10 @@ static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
     uint8_t pos = 0U;
     memset(buf, 0, 8U);
     for (uint8_t i = 0U; i < p->n_map; i++) {
-        (void)co_od_sample(node, &node->od->entries[p->map[i].row], &buf[pos], p->map[i].len);
+        co_od_entry_t one;
+        const co_od_entry_t *e = &node->od->entries[p->map[i].row];
+        e = p->map[i].k == 0U ? e : co_od_entry_at(e, p->map[i].k, &one); /* a sub-index inside a run */
+        (void)co_od_sample(node, e, &buf[pos], p->map[i].len);
         pos = (uint8_t)(pos + p->map[i].len);
     }
     return pos;

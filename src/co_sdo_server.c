@@ -46,7 +46,8 @@ static bool segmented_enabled(const co_node_t *node)
 static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
                                const uint8_t *data)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
     uint32_t r = e != NULL ? CO_ABORT_NONE : co_od_missing(node->od, index);
     size_t len = 4U;
     if ((cmd & 0x01U) != 0U) {
@@ -124,7 +125,7 @@ void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, u
 uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size,
                                 bool staged)
 {
-    const co_od_entry_t *e = co_od_find(node->od, index, sub);
+    const co_od_entry_t *e = co_od_find_row(node->od, index, sub); /* flags and size are the sub-index's */
     if (e == NULL) {
         return co_od_has_index(node->od, index) ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NO_OBJECT;
     }

@@ -157,7 +157,8 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
         if (local.index < first || local.index > last) {
             continue;
         }
-        const co_od_entry_t *e = co_od_find(node->od, local.index, local.sub);
+        co_od_entry_t one;
+        const co_od_entry_t *e = co_od_find(node->od, local.index, local.sub, &one);
         if (e == NULL || (e->flags & CO_OD_STORE) == 0U) {
             continue;
         }
@@ -277,28 +278,32 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
     }
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
     for (uint16_t i = 0U; i < node->od->count; i++) {
-        const co_od_entry_t *e = &node->od->entries[i];
-        if ((e->flags & CO_OD_STORE) == 0U) {
+        const co_od_entry_t *row = &node->od->entries[i];
+        if ((row->flags & CO_OD_STORE) == 0U) {
             continue;
         }
-        const bool stored = reader_seek(&old, e->index, e->sub);
-        if (save && in_group(group, e->index)) {
-            if (!at_relative_default(node, e)) {
-                uint8_t value[255];
-                const size_t n = co_od_sample(node, e, value, sizeof value);
-                /* As the load will check it (a sub-index the node hides is skipped there); a check that depends on
-                 * another stored value sees the present one here, the loaded one there: the same for every value
-                 * saved before it in index order. */
-                const uint32_t refused = co_od_check_stored(node, e, value, n);
-                if (refused != CO_ABORT_NONE && refused != CO_ABORT_NO_SUBINDEX) {
-                    co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 1U, refused);
-                    (void)commit_store(node, CO_NVM_PARAMS, 0U, false);
-                    return CO_ERR_RANGE;
+        for (uint8_t k = 0U; k < co_od_entry_subs(row); k++) {
+            co_od_entry_t one;
+            const co_od_entry_t *e = co_od_entry_at(row, k, &one);
+            const bool stored = reader_seek(&old, e->index, e->sub);
+            if (save && in_group(group, e->index)) {
+                if (!at_relative_default(node, e)) {
+                    uint8_t value[255];
+                    const size_t n = co_od_sample(node, e, value, sizeof value);
+                    /* As the load will check it (a sub-index the node hides is skipped there); a check that
+                     * depends on another stored value sees the present one here, the loaded one there: the same
+                     * for every value saved before it in index order. */
+                    const uint32_t refused = co_od_check_stored(node, e, value, n);
+                    if (refused != CO_ABORT_NONE && refused != CO_ABORT_NO_SUBINDEX) {
+                        co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 1U, refused);
+                        (void)commit_store(node, CO_NVM_PARAMS, 0U, false);
+                        return CO_ERR_RANGE;
+                    }
+                    writer_put(&w, e->index, e->sub, value, (uint8_t)n);
                 }
-                writer_put(&w, e->index, e->sub, value, (uint8_t)n);
+            } else if (stored && (save || !in_group(group, e->index) || (e->flags & CO_OD_KEEP) != 0U)) {
+                writer_put(&w, e->index, e->sub, old.value, old.len);
             }
-        } else if (stored && (save || !in_group(group, e->index) || (e->flags & CO_OD_KEEP) != 0U)) {
-            writer_put(&w, e->index, e->sub, old.value, old.len);
         }
     }
     uint8_t h[HEADER_LEN];

@@ -29,7 +29,8 @@ static co_time_us_t timeout_after(co_node_t *node)
  * synchronous window 0x1007 needs no copy: synchronous TPDOs go out at the SYNC itself, inside any window. */
 static void load_parameters(co_node_t *node)
 {
-    const co_od_entry_t *e = co_od_find(node->od, 0x1005U, 0U);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(node->od, 0x1005U, 0U, &one);
     node->sync.can_id = e != NULL ? (uint16_t)(co_od_entry_u32(node, e) & CO_COBID_CAN_ID) : CO_NO_CAN_ID;
     node->sync.period_us = co_od_u32_or(node, 0x1006U, 0U, 0U);
     node->sync.overflow = (uint8_t)co_od_u32_or(node, 0x1019U, 0U, 0U);

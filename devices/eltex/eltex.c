@@ -51,7 +51,8 @@ static uint32_t get_u32(const uint8_t *p)
 /* Sets an integer object of up to 4 bytes directly (no hooks: the model owns it). */
 static void set_value(device_t *dev, uint16_t index, uint8_t sub, uint32_t v)
 {
-    const co_od_entry_t *e = co_od_find(dev->cls->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(dev->cls->od, index, sub, &one);
     if (e == NULL) {
         return;
     }

@@ -20,9 +20,9 @@
 #define CO_CONFIG_TIME32 0
 #endif
 
-/** 1: compact dictionary rows (co_od_entry_t, 10 bytes instead of 16): 8-bit flags, the limits by number (at most
- *  255 distinct pairs per dictionary), 16-bit value offsets (a values block of at most 64 KiB). For a firmware: it
- *  saves 6 bytes of flash per row. The generated tables and CO_OD_ROW() fit either layout; canopen-emu, which builds
+/** 1: compact dictionary rows (co_od_entry_t, 10 bytes instead of 16 on 32-bit targets): the limits by number (at
+ *  most 255 distinct pairs per dictionary), 16-bit value offsets (a values block of at most 64 KiB), 8-bit sizes (no
+ *  string or domain over 255 bytes). For a firmware: it saves 6 bytes of flash per row. The generated tables and CO_OD_ROW() fit either layout; canopen-emu, which builds
  *  dictionaries from EDS files at run time, needs 0 (the default). */
 #ifndef CO_CONFIG_OD_COMPACT
 #define CO_CONFIG_OD_COMPACT 0

@@ -87,6 +87,8 @@ typedef struct co_hooks {
      * An object is about to be written (by SDO, RPDO or a co_od_write with CO_ORIGIN_LOCAL), after all of
      * the core's checks passed. Return 0 to accept (the value is then stored at once), or an SDO abort
      * code to refuse (e.g. CO_ABORT_VALUE_HIGH, CO_ABORT_DEVICE_STATE); RPDO refusals are dropped silently.
+     * entry describes the one sub-index written (its index, sub, offset); for a sub-index inside a run it is a
+     * copy that lives during the call only (co_od_find()): compare index and sub, not the pointer.
      */
     uint32_t (*on_write)(void *ctx, co_node_t *node, const co_od_entry_t *entry, const uint8_t *data,
                          size_t len, co_od_origin_t origin);
@@ -276,6 +278,7 @@ typedef struct co_sync {
 typedef struct co_pdo_map {
     uint16_t row;               /**< The mapped object's row in co_od_t.entries, or CO_PDO_MAP_DUMMY. */
     uint8_t len;                /**< Bytes. */
+    uint8_t k;                  /**< Which of the row's sub-indices (0 unless the row is a run). */
 } co_pdo_map_t;
 
 typedef struct co_rpdo {

@@ -77,37 +77,58 @@ typedef struct co_od_limits {
     co_od_limit_t high;
 } co_od_limits_t;
 
-/** One sub-index of the object dictionary. Two layouts (co_config.h CO_CONFIG_OD_COMPACT); write tables with
- *  CO_OD_ROW()/CO_OD_ROW_LIMITED() and read a row's limits with co_od_entry_limits() to fit both. */
+/** A value's offset in a node's values block (16 bits in the compact layout). */
+#if CO_CONFIG_OD_COMPACT
+typedef uint16_t co_od_offset_t;
+#else
+typedef uint32_t co_od_offset_t;
+#endif
+
+/** One row of the object dictionary: one sub-index, or a run of `count` consecutive sub-indices sub..sub+count-1
+ *  of one object that share everything but their value (type, flags, size, limits), their values laid out one after
+ *  the other from offset (an array such as 0x1016's 127 consumer times is one row). Two layouts (co_config.h
+ *  CO_CONFIG_OD_COMPACT); write tables with CO_OD_ROW()/CO_OD_ROW_LIMITED()/CO_OD_RUN() and read a row's limits with
+ *  co_od_entry_limits() to fit both. What co_od_find() returns, and what the hooks are given, always describes the
+ *  one sub-index asked for (sub and offset its own), possibly in a caller's copy rather than in the table. */
 typedef struct co_od_entry {
     uint16_t index;                /**< Object index. */
-    uint8_t sub;                   /**< Sub-index. */
+    uint8_t sub;                   /**< Sub-index (of a run: its first). */
     uint8_t type;                  /**< co_od_type_t. */
-#if CO_CONFIG_OD_COMPACT
     uint8_t flags;                 /**< co_od_flag bits. */
+#if CO_CONFIG_OD_COMPACT
     uint8_t limit;                 /**< 0: no limits; n: co_od_t.limits[n - 1]. */
-    uint16_t size;                 /**< Value size in bytes (for strings: capacity). */
-    uint16_t offset;               /**< Offset of the value in the node's values block. */
+    uint8_t size;                  /**< Value size in bytes (for strings: capacity, at most 255 here). */
+    uint8_t count;                 /**< Sub-indices the row describes (0 counts as 1). */
+    co_od_offset_t offset;         /**< Offset of the value in the node's values block. */
 #else
-    uint16_t flags;                /**< co_od_flag bits. */
+    uint8_t count;                 /**< Sub-indices the row describes (0 counts as 1). */
     uint16_t size;                 /**< Value size in bytes (for strings: capacity). */
-    uint32_t offset;               /**< Offset of the value in the node's values block. */
+    co_od_offset_t offset;         /**< Offset of the value in the node's values block. */
     const co_od_limits_t *limits;  /**< NULL when the row has no limits. */
 #endif
 } co_od_entry_t;
 
 /* Row initialisers in either layout. CO_OD_ROW: a row without limits; CO_OD_ROW_LIMITED: a row with limits[n] of the
- * table's limits array (which co_od_t.limits must name). size and offset: sizeof/offsetof of the row's member of the
- * values struct, not cast, so that a value the layout's field cannot hold fails the build. */
+ * table's limits array (which co_od_t.limits must name); CO_OD_RUN/CO_OD_RUN_LIMITED: a run of count sub-indices
+ * from sub, each size bytes. size and offset: sizeof/offsetof of the row's member of the values struct (of a run:
+ * its first element), not cast, so that a value the layout's field cannot hold fails the build. */
 #if CO_CONFIG_OD_COMPACT
-#define CO_OD_ROW(index, sub, type, flags, size, offset) {(index), (sub), (type), (flags), 0U, (size), (offset)}
-#define CO_OD_ROW_LIMITED(index, sub, type, flags, size, offset, limits, n)                                        \
-    {(index), (sub), (type), (flags), (n) + 1U, (size), (offset)}
+#define CO_OD_RUN_LIMITED(index, sub, count, type, flags, size, offset, limits, n)                                 \
+    {(index), (sub), (type), (flags), (n) + 1U, (size), (count), (offset)}
+#define CO_OD_RUN(index, sub, count, type, flags, size, offset)                                                    \
+    {(index), (sub), (type), (flags), 0U, (size), (count), (offset)}
 #else
-#define CO_OD_ROW(index, sub, type, flags, size, offset) {(index), (sub), (type), (flags), (size), (offset), NULL}
-#define CO_OD_ROW_LIMITED(index, sub, type, flags, size, offset, limits, n)                                        \
-    {(index), (sub), (type), (flags), (size), (offset), &(limits)[n]}
+#define CO_OD_RUN_LIMITED(index, sub, count, type, flags, size, offset, limits, n)                                 \
+    {(index), (sub), (type), (flags), (count), (size), (offset), &(limits)[n]}
+#define CO_OD_RUN(index, sub, count, type, flags, size, offset)                                                    \
+    {(index), (sub), (type), (flags), (count), (size), (offset), NULL}
 #endif
+#define CO_OD_ROW(index, sub, type, flags, size, offset) CO_OD_RUN(index, sub, 1U, type, flags, size, offset)
+#define CO_OD_ROW_LIMITED(index, sub, type, flags, size, offset, limits, n)                                        \
+    CO_OD_RUN_LIMITED(index, sub, 1U, type, flags, size, offset, limits, n)
+
+/** Sub-indices a row describes (1, or a run's count). */
+static inline uint8_t co_od_entry_subs(const co_od_entry_t *e) { return e->count > 1U ? e->count : 1U; }
 
 /** One object of the dictionary: its index and its first row (its rows run to the next object's first row). */
 typedef struct co_od_object {
@@ -166,8 +187,16 @@ uint32_t co_od_check_limits(const co_od_t *od, const co_od_entry_t *e, const uin
 /** Copies len bytes of the default values image from offset into dst (0 beyond defaults_size). */
 void co_od_copy_defaults(const co_od_t *od, uint32_t offset, size_t len, void *dst);
 
-/** Finds a row, or NULL. O(log objects), or O(log rows) without the object table. */
-const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub);
+/**
+ * Finds the row of (index, sub), or NULL. O(log objects), or O(log rows) without the object table.
+ * @param one  where a row that is a run is narrowed to sub (co_od_entry_at()): the result then points at *one, which
+ *             must outlive its use. A sub-index that is a row of its own, or a run's first, is returned in the table.
+ */
+const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one);
+
+/** The k-th sub-index (k < co_od_entry_subs(row)) of a table row: the row itself for k = 0, else a copy of it in *one
+ *  with that sub-index, its offset and count 1. For walking a table's sub-indices in order. */
+const co_od_entry_t *co_od_entry_at(const co_od_entry_t *row, uint8_t k, co_od_entry_t *one);
 
 /** True when any row of the object exists (decides 0x06020000 against 0x06090011). */
 bool co_od_has_index(const co_od_t *od, uint16_t index);

@@ -27,7 +27,13 @@ static const uint16_t STATE_BITS[] = {0x0000, 0x0040, 0x0031, 0x0033, 0x0037, 0x
 #define MODE_CSV 9
 #define STEP_US 10000U
 
-static const co_od_entry_t *row(const co_od_t *od, uint16_t index) { return co_od_find(od, index, 0U); }
+/* Sub-index 0 of an object: a row of the table (co_od_find() returns a run's first sub-index in the table), which
+ * the resolved objects may keep pointing at. */
+static const co_od_entry_t *row(const co_od_t *od, uint16_t index)
+{
+    co_od_entry_t unused;
+    return co_od_find(od, index, 0U, &unused);
+}
 
 bool cia402_resolve(const co_od_t *od, cia402_objects_t *o, char *why, size_t cap)
 {

@@ -68,9 +68,9 @@ static uint16_t capacity(const eds_entry_t *e, FILE *log, const char *path, bool
     return (uint16_t)(len > 0U ? len : 1U);
 }
 
-static uint16_t flags_of(const eds_entry_t *e)
+static uint8_t flags_of(const eds_entry_t *e)
 {
-    uint16_t f = 0U;
+    unsigned f = 0U;
     const bool w = eds_access_writable(e->access);
     if (e->access != EDS_WO) {
         f |= CO_OD_READ;
@@ -95,7 +95,7 @@ static uint16_t flags_of(const eds_entry_t *e)
         !(e->index >= 0x1F50U && e->index <= 0x1F5FU)) {
         f |= CO_OD_STORE;
     }
-    return f;
+    return (uint8_t)f;
 }
 
 static void put_default(uint8_t *dst, const co_od_entry_t *row, const eds_value_t *v)
@@ -227,6 +227,7 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
         r->sub = e->sub;
         r->type = e->type;
         r->flags = flags_of(e);
+        r->count = 1U; /* one row per sub-index: the rows are built here, not generated */
         r->size = capacity(e, log, path, quiet);
         const uint32_t align = (r->size == 2U || r->size == 4U || r->size == 8U) ? r->size : 1U;
         offset = (offset + align - 1U) / align * align;

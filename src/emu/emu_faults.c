@@ -43,7 +43,8 @@ static uint64_t next_random(node_faults_t *f)
 static uint32_t od_cob(struct emu_node *n, uint16_t index, uint8_t sub, uint32_t fallback)
 {
     co_node_t *node = &n->dev.node;
-    if (co_od_find(n->dev.cls->od, index, sub) == NULL) {
+    co_od_entry_t one;
+    if (co_od_find(n->dev.cls->od, index, sub, &one) == NULL) {
         return fallback;
     }
     const uint32_t v = co_od_get_u32(node, index, sub);

@@ -96,7 +96,8 @@ static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len
 /* {"node", "object", "value", "type", "name"} of one object of n, or false after a failure response. */
 static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, uint8_t sub, json_t *r)
 {
-    const co_od_entry_t *e = co_od_find(n->dev.cls->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(n->dev.cls->od, index, sub, &one);
     if (e == NULL) {
         fail(q->s, q->id, "node %u has no object 0x%04X:%02X", co_node_id(&n->dev.node), index, sub);
         return false;
@@ -293,9 +294,12 @@ void cmd_objects(const request_t *q)
     n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
     q->emu->in_command = true;
     for (uint16_t i = 0U; i < od->count; i++) {
-        json_t *o = object_row(n, &od->entries[i], json_is_true(jv));
-        if (o != NULL) {
-            (void)json_array_append_new(rows, o);
+        for (uint8_t k = 0U; k < co_od_entry_subs(&od->entries[i]); k++) {
+            co_od_entry_t one;
+            json_t *o = object_row(n, co_od_entry_at(&od->entries[i], k, &one), json_is_true(jv));
+            if (o != NULL) {
+                (void)json_array_append_new(rows, o);
+            }
         }
     }
     q->emu->in_command = false;

@@ -18,8 +18,8 @@ static const char *const BEHAVIOURS[] = {"constant", "ramp", "sine", "random_wal
 
 typedef struct rule {
     behaviour_t kind;
-    const co_od_entry_t *row;
-    const co_od_entry_t *source;   /* follow */
+    co_od_entry_t row;             /* copies: a sub-index inside a run has no row of its own in the table */
+    co_od_entry_t source;          /* follow */
     double a, b, c, d;             /* per kind: see rule_value */
     double lo, hi;                 /* random_walk bounds */
     uint64_t seed;
@@ -31,7 +31,7 @@ typedef struct rule {
 } rule_t;
 
 typedef struct alarm {
-    const co_od_entry_t *row;
+    co_od_entry_t row;
     bool has_above, has_below;
     double above, below, hysteresis;
     uint16_t code;
@@ -251,32 +251,35 @@ static bool flag(parse_t *p, const yaml_node_t *n, const char *what)
 }
 
 /* "0x6064", "0x6064:00", "6064:1": an existing numeric object of at most 8 bytes. */
-static const co_od_entry_t *object(parse_t *p, const yaml_node_t *n, const char *what)
+/* The numeric object n names into *out; false (and a failure) if it is none. */
+static bool object(parse_t *p, const yaml_node_t *n, const char *what, co_od_entry_t *out)
 {
     uint16_t index;
     uint8_t sub;
     const char *t = scalar(n);
     if (t == NULL || !device_parse_address(t, &index, &sub)) {
         fail(p, n, "%s: '%s' is not an object (0xINDEX or 0xINDEX:SUB)", what, t != NULL ? t : "(not a value)");
-        return NULL;
+        return false;
     }
-    const co_od_entry_t *e = co_od_find(p->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(p->od, index, sub, &one);
     if (e == NULL) {
         fail(p, n, "%s: the device has no object %s", what, t);
-        return NULL;
+        return false;
     }
     if (e->size > 8U || e->type == CO_T_VISIBLE_STRING || e->type == CO_T_OCTET_STRING || e->type == CO_T_UNICODE_STRING ||
         e->type == CO_T_DOMAIN) {
         fail(p, n, "%s: %s is not a number", what, t);
-        return NULL;
+        return false;
     }
-    return e;
+    *out = *e;
+    return true;
 }
 
 static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml_node_t *body)
 {
     const char *name = scalar(key);
-    r->row = object(p, key, "objects");
+    (void)object(p, key, "objects", &r->row);
     if (body == NULL || body->type != YAML_MAPPING_NODE || body->data.mapping.pairs.top - body->data.mapping.pairs.start != 1) {
         fail(p, body != NULL ? body : key, "%s: one behaviour is expected (constant, ramp, sine, random_walk, steps, "
                                           "counter, follow)%s", name, NULL);
@@ -342,7 +345,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         break;
     case B_FOLLOW:
         only_keys(p, v, (const char *const[]){"object", "lag_ms", "gain", "offset", NULL}, "follow");
-        r->source = object(p, lookup(p, v, "object"), "follow");
+        (void)object(p, lookup(p, v, "object"), "follow", &r->source);
         r->a = key_number(p, v, "lag_ms", 0.0, false, "follow") / 1000.0;
         r->b = key_number(p, v, "gain", 1.0, false, "follow");
         r->c = key_number(p, v, "offset", 0.0, false, "follow");
@@ -386,7 +389,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
 static void parse_alarm(parse_t *p, alarm_t *a, const yaml_node_t *n)
 {
     only_keys(p, n, (const char *const[]){"object", "above", "below", "hysteresis", "emcy", "register", NULL}, "alarms");
-    a->row = object(p, lookup(p, n, "object"), "alarms");
+    (void)object(p, lookup(p, n, "object"), "alarms", &a->row);
     a->has_above = lookup(p, n, "above") != NULL;
     a->has_below = lookup(p, n, "below") != NULL;
     a->above = key_number(p, n, "above", 0.0, false, "alarms");
@@ -544,7 +547,7 @@ void rules_power_on(const rules_t *r, void *state, device_t *dev, co_time_us_t n
         rs[i].rng = rule->seed * 0x9E3779B97F4A7C15ULL + 1U;
         rs[i].next = now + rule->every_us;
         rs[i].value = rule->kind == B_WALK || rule->kind == B_COUNTER ? rule->a
-                      : rule->kind == B_FOLLOW ? rules_get(&dev->node, rule->row) : 0.0;
+                      : rule->kind == B_FOLLOW ? rules_get(&dev->node, &rule->row) : 0.0;
     }
     bool *active = alarm_states(r, state);
     for (uint32_t i = 0U; i < r->n_alarms; i++) {
@@ -603,7 +606,7 @@ static double rule_value(const rule_t *r, rule_state_t *s, device_t *dev, double
         return r->n_steps > 0U ? r->values[0] : 0.0;
     }
     case B_FOLLOW: {
-        const double x = rules_get(&dev->node, r->source) * r->b + r->c;
+        const double x = rules_get(&dev->node, &r->source) * r->b + r->c;
         s->value = r->a <= 0.0 ? x : s->value + (x - s->value) * (1.0 - exp(-dt / r->a));
         return s->value;
     }
@@ -631,7 +634,7 @@ co_time_us_t rules_step(const rules_t *r, void *state, device_t *dev, co_time_us
                 rs[i].next += (behind - 1000U) * rule->every_us;
             }
         }
-        rules_set(&dev->node, rule->row, rule_value(rule, &rs[i], dev, t, dt, now));
+        rules_set(&dev->node, &rule->row, rule_value(rule, &rs[i], dev, t, dt, now));
         const co_time_us_t due = rule->kind == B_CONSTANT ? CO_NEVER
                                  : (rule->kind == B_WALK || rule->kind == B_COUNTER) ? rs[i].next : now + r->tick_us;
         next = due < next ? due : next;
@@ -639,7 +642,7 @@ co_time_us_t rules_step(const rules_t *r, void *state, device_t *dev, co_time_us
     bool *active = alarm_states(r, state);
     for (uint32_t i = 0U; i < r->n_alarms; i++) {
         const alarm_t *a = &r->alarms[i];
-        const double v = rules_get(&dev->node, a->row);
+        const double v = rules_get(&dev->node, &a->row);
         const bool out = (a->has_above && v > a->above) || (a->has_below && v < a->below);
         const bool back = (!a->has_above || v <= a->above - a->hysteresis) && (!a->has_below || v >= a->below + a->hysteresis);
         if (out && !active[i]) {
@@ -660,7 +663,7 @@ uint32_t rules_on_write(const rules_t *r, void *state, device_t *dev, const co_o
                         size_t len)
 {
     rules_state_t *st = state;
-    if (r->cia402 && e == r->drive.controlword && len >= 2U) {
+    if (r->cia402 && e != NULL && e->index == r->drive.controlword->index && e->sub == r->drive.controlword->sub && len >= 2U) {
         /* the hook runs before the value is stored: the statusword is set from the new controlword */
         cia402_control(&r->drive, &st->drive, dev, (uint16_t)(data[0] | (data[1] << 8)));
     }

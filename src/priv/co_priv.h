@@ -146,6 +146,11 @@ uint32_t co_od_u32_or(const co_node_t *node, uint16_t index, uint8_t sub, uint32
 void co_od_reset_area(co_node_t *node, uint16_t first, uint16_t last);
 /* Number of sub-indices > 0 an object has in the table (e.g. size of 0x1003 or 0x1016). */
 uint8_t co_od_sub_count(const co_od_t *od, uint16_t index);
+/* The table row that holds (index, sub) (a run holds several sub-indices), or NULL: its flags, type, size and limits
+ * are the sub-index's; its sub and offset are the run's first (co_od_entry_at() narrows). */
+const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub);
+/* True when the dictionary has (index, sub). */
+bool co_od_exists(const co_od_t *od, uint16_t index, uint8_t sub);
 /* Index of the first row of an object, or od->count. */
 uint16_t co_od_first_row(const co_od_t *od, uint16_t index);
 /* The abort code of a row co_od_find did not find: 0x06020000 no such object, 0x06090011 no such sub-index. */

@@ -979,13 +979,20 @@ static void tpdo_sub_index_4_is_reserved_and_mapping_entries_have_distinct_names
     }
     const co_od_t *od = buerkert_class.od;
     char expect[32];
+    unsigned checked = 0U;
     for (uint16_t i = 0U; i < od->count; i++) {
-        const co_od_entry_t *e = &od->entries[i];
-        if (((e->index >= 0x1600U && e->index <= 0x1603U) || (e->index >= 0x1A00U && e->index <= 0x1A03U)) && e->sub > 0U) {
-            snprintf(expect, sizeof expect, "PDO Mapping Entry %u", (unsigned)e->sub);
-            TEST_ASSERT_EQUAL_STRING(expect, buerkert_class.od_names[i]);
+        for (uint8_t k = 0U; k < co_od_entry_subs(&od->entries[i]); k++) { /* the mapping entries are a run */
+            co_od_entry_t one;
+            const co_od_entry_t *e = co_od_entry_at(&od->entries[i], k, &one);
+            if (((e->index >= 0x1600U && e->index <= 0x1603U) || (e->index >= 0x1A00U && e->index <= 0x1A03U)) &&
+                e->sub > 0U) {
+                snprintf(expect, sizeof expect, "PDO Mapping Entry %u", (unsigned)e->sub);
+                TEST_ASSERT_EQUAL_STRING(expect, device_object_name(&buerkert_class, e));
+                checked++;
+            }
         }
     }
+    TEST_ASSERT_EQUAL_UINT(8U * 8U, checked);
 }
 
 int main(void)

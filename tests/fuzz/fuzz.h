@@ -52,7 +52,7 @@ typedef struct fz {
     const char *target;
 
     /* Read-only rows: the rows checked, the values expected now and the power-on image. */
-    uint16_t *ro_rows;
+    co_od_entry_t *ro_subs;         /* the read-only sub-indices (those of a run one by one) */
     uint16_t n_ro;
     bool has_history;               /* the OD has 0x1003 */
     uint8_t history_subs;           /* its sub-indices 1..n */

@@ -191,7 +191,8 @@ static uint8_t own_id(const fz_t *h)
 
 static uint32_t od_u32(fz_t *h, uint16_t index, uint8_t sub, uint32_t fallback)
 {
-    const co_od_entry_t *e = co_od_find(h->od, index, sub);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(h->od, index, sub, &one);
     if (e == NULL) {
         return fallback;
     }
@@ -444,7 +445,7 @@ static void check_read_only(fz_t *h, bool legit)
 {
     if (!legit) {
         for (uint16_t k = 0U; k < h->n_ro; k++) {
-            const co_od_entry_t *e = &h->od->entries[h->ro_rows[k]];
+            const co_od_entry_t *e = &h->ro_subs[k];
             const bool comm = e->index >= 0x1000U && e->index <= 0x1FFFU;
             const bool app = e->index >= 0x2000U && e->index <= 0x9FFFU;
             const bool reset = (h->resets & 4U) != 0U || (comm && (h->resets & 1U) != 0U) || (app && (h->resets & 2U) != 0U);
@@ -641,7 +642,8 @@ static void end_call(fz_t *h, bool legit)
     default:
         break;
     }
-    if (co_od_find(h->od, 0x1001U, 0U) != NULL && !h->er_skip) {
+    co_od_entry_t one;
+    if (co_od_find(h->od, 0x1001U, 0U, &one) != NULL && !h->er_skip) {
         uint8_t want = 0U;
         for (uint8_t i = 0U; i < n->emcy.n_active && i < CO_EMCY_ACTIVE_MAX; i++) {
             want |= n->emcy.active[i].reg;
@@ -1078,26 +1080,35 @@ static bool record(fz_t *h, fz_in_t *in)
 static void build_read_only(fz_t *h)
 {
     h->n_ro = 0U;
-    h->ro_rows = (uint16_t *)malloc(sizeof(uint16_t) * (size_t)(h->od->count + 1U));
+    size_t subs = 1U;
+    for (uint16_t i = 0U; i < h->od->count; i++) {
+        subs += co_od_entry_subs(&h->od->entries[i]);
+    }
+    h->ro_subs = (co_od_entry_t *)malloc(sizeof(co_od_entry_t) * subs);
     h->expect = (uint8_t *)malloc(h->od->values_size + 1U);
     h->poweron = (uint8_t *)malloc(h->od->values_size + 1U);
-    if (h->ro_rows == NULL || h->expect == NULL || h->poweron == NULL) {
+    if (h->ro_subs == NULL || h->expect == NULL || h->poweron == NULL) {
         abort();
     }
     for (uint16_t i = 0U; i < h->od->count; i++) {
-        const co_od_entry_t *e = &h->od->entries[i];
-        if ((e->flags & CO_OD_WRITE) != 0U || e->index == 0x1001U || e->index == 0x1003U || fzt_ro_exempt(e)) {
-            continue;
+        for (uint8_t k = 0U; k < co_od_entry_subs(&h->od->entries[i]); k++) { /* a run's sub-indices one by one */
+            co_od_entry_t one;
+            const co_od_entry_t *e = co_od_entry_at(&h->od->entries[i], k, &one);
+            if ((e->flags & CO_OD_WRITE) != 0U || e->index == 0x1001U || e->index == 0x1003U || fzt_ro_exempt(e)) {
+                continue;
+            }
+            h->ro_subs[h->n_ro++] = *e;
         }
-        h->ro_rows[h->n_ro++] = i;
     }
     /* 0x1003:00 may not exceed the sub-indices the history has (counted once: an OD scan after every call
      * was a tenth of a run). */
-    h->has_history = co_od_find(h->od, 0x1003U, 0U) != NULL;
+    co_od_entry_t one;
+    h->has_history = co_od_find(h->od, 0x1003U, 0U, &one) != NULL;
     h->history_subs = 0U;
     for (uint16_t i = 0U; i < h->od->count; i++) {
-        if (h->od->entries[i].index == 0x1003U && h->od->entries[i].sub != 0U) {
-            h->history_subs++;
+        const co_od_entry_t *row = &h->od->entries[i];
+        if (row->index == 0x1003U) {
+            h->history_subs = (uint8_t)(h->history_subs + co_od_entry_subs(row) - (row->sub == 0U ? 1U : 0U));
         }
     }
     memcpy(h->expect, h->values, h->od->values_size);
@@ -1144,7 +1155,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
     }
     fzt_fini(h);
-    free(h->ro_rows);
+    free(h->ro_subs);
     free(h->expect);
     free(h->poweron);
     return 0;

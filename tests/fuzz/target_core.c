@@ -66,8 +66,11 @@ static void check_entry(const core_ctx_t *c, const co_node_t *node, const co_od_
     if (node != c->node) {
         fz_fail(c->h, "%s hook called with another node", hook);
     }
-    if (e == NULL || e < test_od.entries || e >= test_od.entries + test_od.count) {
-        fz_fail(c->h, "%s hook called with an entry outside the object dictionary", hook);
+    co_od_entry_t one;
+    const co_od_entry_t *own = e != NULL ? co_od_find(&test_od, e->index, e->sub, &one) : NULL;
+    if (own == NULL || own->offset != e->offset || own->size != e->size || own->flags != e->flags ||
+        own->type != e->type) {
+        fz_fail(c->h, "%s hook called with an entry that is not one of the object dictionary's", hook);
     }
 }
 

@@ -157,7 +157,7 @@ static struct {
     bool edited;                    /* a file was made by hand since the last load */
     unsigned step;
     const char *what;               /* the step in progress, for messages */
-    uint16_t store_rows[1024];      /* indices of the OD's CO_OD_STORE rows */
+    co_od_entry_t store_subs[1024]; /* the OD's CO_OD_STORE sub-indices (those of a run one by one) */
     uint16_t n_store;
 } g;
 
@@ -693,9 +693,10 @@ static size_t object_value(rd_t *in, uint16_t *index, uint8_t *sub, uint8_t *v)
     if ((sel & 0x8000U) != 0U || g.n_store == 0U) {
         *index = u16(in);
         *sub = u8(in);
-        e = co_od_find(g.cls->od, *index, *sub);
+        static co_od_entry_t one; /* e may be returned in it */
+        e = co_od_find(g.cls->od, *index, *sub, &one);
     } else {
-        e = &g.cls->od->entries[g.store_rows[sel % g.n_store]];
+        e = &g.store_subs[sel % g.n_store];
         *index = e->index;
         *sub = e->sub;
     }
@@ -939,7 +940,7 @@ static void save_record(rd_t *in)
         }
         static uint8_t want[65536];
         for (uint16_t k = 0U; k < g.n_store; k++) {
-            const co_od_entry_t *e = &od->entries[g.store_rows[k]];
+            const co_od_entry_t *e = &g.store_subs[k];
             if (edited && strcmp(g.cls->name, "buerkert") == 0 && e->index == 0x2001U && e->sub <= 0x02U) {
                 continue; /* the Buerkert's address and baud rate are the LSS area's (co_lss_store), edited by hand */
             }
@@ -1041,9 +1042,13 @@ static void begin(uint8_t h0, uint8_t h1)
         (void)snprintf(g.path[i], sizeof g.path[i], "%s/%s", g.dir, g.name[i]);
     }
     g.n_store = 0U;
-    for (uint16_t i = 0U; i < g.cls->od->count && g.n_store < sizeof g.store_rows / sizeof g.store_rows[0]; i++) {
-        if ((g.cls->od->entries[i].flags & CO_OD_STORE) != 0U) {
-            g.store_rows[g.n_store++] = i;
+    for (uint16_t i = 0U; i < g.cls->od->count; i++) {
+        const co_od_entry_t *row = &g.cls->od->entries[i];
+        for (uint8_t k = 0U; (row->flags & CO_OD_STORE) != 0U && k < co_od_entry_subs(row); k++) {
+            co_od_entry_t one;
+            if (g.n_store < sizeof g.store_subs / sizeof g.store_subs[0]) {
+                g.store_subs[g.n_store++] = *co_od_entry_at(row, k, &one);
+            }
         }
     }
     g_cur_ok = false;

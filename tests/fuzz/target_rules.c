@@ -99,9 +99,11 @@ static void run_once(const rules_t *rules, const uint8_t *p, size_t n, run_t *r)
             }
         } else if (kind < 0x80U) {
             (void)co_od_write(&r->dev.node, 0x6040U, 0U, b, 2U, CO_ORIGIN_SDO);
-            (void)rules_on_write(rules, st, &r->dev, co_od_find(drive->od, 0x6040U, 0U), b, 2U);
+            co_od_entry_t one;
+            (void)rules_on_write(rules, st, &r->dev, co_od_find(drive->od, 0x6040U, 0U, &one), b, 2U);
         } else if (kind < 0xC0U) {
-            const co_od_entry_t *e = co_od_find(drive->od, WRITABLE[b[0] % (sizeof WRITABLE / sizeof WRITABLE[0])], 0U);
+            co_od_entry_t one;
+            const co_od_entry_t *e = co_od_find(drive->od, WRITABLE[b[0] % (sizeof WRITABLE / sizeof WRITABLE[0])], 0U, &one);
             const uint8_t value[4] = {b[1], b[2], b[3], 0U};
             if (e != NULL) {
                 (void)co_od_write(&r->dev.node, e->index, 0U, value, e->size <= 4U ? e->size : 4U, CO_ORIGIN_SDO);

@@ -1,10 +1,13 @@
-/* The unit tests' object dictionary (see test_od.h). Written by hand, in the generator's output format. */
+/* The unit tests' object dictionary (see test_od.h). Written by hand, in the generator's output format: arrays of
+ * like sub-indices are runs (one row for 0x1003:01-08, 0x1016:01-04, ...), as the generator writes them. */
 #include "test_od.h"
 
 #include <stddef.h>
 
 #define V test_od_values_t
 #define E(i, s, t, f, m) CO_OD_ROW(i, s, t, f, sizeof(((V *)0)->m), offsetof(V, m))
+/* A run: n sub-indices from s, the elements of array m (co_od.h) */
+#define R(i, s, n, t, f, m) CO_OD_RUN(i, s, n, t, f, sizeof(((V *)0)->m[0]), offsetof(V, m))
 #define EL(i, s, t, f, m, n) CO_OD_ROW_LIMITED(i, s, t, f, sizeof(((V *)0)->m), offsetof(V, m), limits, n)
 
 #define RO CO_OD_READ
@@ -22,14 +25,7 @@ static const co_od_entry_t entries[] = {
     E(0x1000, 0x00, CO_T_UNSIGNED32, RO, x1000_device_type),
     E(0x1001, 0x00, CO_T_UNSIGNED8, RO | CO_OD_TPDO, x1001_error_register),
     E(0x1003, 0x00, CO_T_UNSIGNED8, RW, x1003_count),
-    E(0x1003, 0x01, CO_T_UNSIGNED32, RO, x1003_errors[0]),
-    E(0x1003, 0x02, CO_T_UNSIGNED32, RO, x1003_errors[1]),
-    E(0x1003, 0x03, CO_T_UNSIGNED32, RO, x1003_errors[2]),
-    E(0x1003, 0x04, CO_T_UNSIGNED32, RO, x1003_errors[3]),
-    E(0x1003, 0x05, CO_T_UNSIGNED32, RO, x1003_errors[4]),
-    E(0x1003, 0x06, CO_T_UNSIGNED32, RO, x1003_errors[5]),
-    E(0x1003, 0x07, CO_T_UNSIGNED32, RO, x1003_errors[6]),
-    E(0x1003, 0x08, CO_T_UNSIGNED32, RO, x1003_errors[7]),
+    R(0x1003, 0x01, 8U, CO_T_UNSIGNED32, RO, x1003_errors),
     E(0x1005, 0x00, CO_T_UNSIGNED32, RWS, x1005_cob_id_sync),
     E(0x1006, 0x00, CO_T_UNSIGNED32, RWS, x1006_cycle_period),
     E(0x1007, 0x00, CO_T_UNSIGNED32, RWS, x1007_window),
@@ -50,20 +46,13 @@ static const co_od_entry_t entries[] = {
     E(0x1014, 0x00, CO_T_UNSIGNED32, RWS | CO_OD_NODEID, x1014_cob_id_emcy),
     E(0x1015, 0x00, CO_T_UNSIGNED16, RWS, x1015_inhibit_emcy),
     E(0x1016, 0x00, CO_T_UNSIGNED8, RO, x1016_n),
-    E(0x1016, 0x01, CO_T_UNSIGNED32, RWS, x1016_consumer[0]),
-    E(0x1016, 0x02, CO_T_UNSIGNED32, RWS, x1016_consumer[1]),
-    E(0x1016, 0x03, CO_T_UNSIGNED32, RWS, x1016_consumer[2]),
-    E(0x1016, 0x04, CO_T_UNSIGNED32, RWS, x1016_consumer[3]),
+    R(0x1016, 0x01, 4U, CO_T_UNSIGNED32, RWS, x1016_consumer),
     E(0x1017, 0x00, CO_T_UNSIGNED16, RWS, x1017_producer_hb),
     E(0x1018, 0x00, CO_T_UNSIGNED8, RO, x1018_n),
-    E(0x1018, 0x01, CO_T_UNSIGNED32, RO, x1018_identity[0]),
-    E(0x1018, 0x02, CO_T_UNSIGNED32, RO, x1018_identity[1]),
-    E(0x1018, 0x03, CO_T_UNSIGNED32, RO, x1018_identity[2]),
-    E(0x1018, 0x04, CO_T_UNSIGNED32, RO, x1018_identity[3]),
+    R(0x1018, 0x01, 4U, CO_T_UNSIGNED32, RO, x1018_identity),
     E(0x1019, 0x00, CO_T_UNSIGNED8, RWS, x1019_sync_overflow),
     E(0x1200, 0x00, CO_T_UNSIGNED8, RO, x1200_n),
-    E(0x1200, 0x01, CO_T_UNSIGNED32, RO | CO_OD_NODEID, x1200_cob[0]),
-    E(0x1200, 0x02, CO_T_UNSIGNED32, RO | CO_OD_NODEID, x1200_cob[1]),
+    R(0x1200, 0x01, 2U, CO_T_UNSIGNED32, RO | CO_OD_NODEID, x1200_cob),
 #define RPDO_COMM(k)                                                                    \
     E(0x1400 + k, 0x00, CO_T_UNSIGNED8, RO, rpdo_comm[k].n),                            \
     E(0x1400 + k, 0x01, CO_T_UNSIGNED32, RWS | CO_OD_NODEID, rpdo_comm[k].cob_id),      \
@@ -72,14 +61,7 @@ static const co_od_entry_t entries[] = {
     RPDO_COMM(0), RPDO_COMM(1),
 #define PDO_MAP(base, arr, k)                                                           \
     E(base + k, 0x00, CO_T_UNSIGNED8, RWS, arr[k].n),                                   \
-    E(base + k, 0x01, CO_T_UNSIGNED32, RWS, arr[k].entry[0]),                           \
-    E(base + k, 0x02, CO_T_UNSIGNED32, RWS, arr[k].entry[1]),                           \
-    E(base + k, 0x03, CO_T_UNSIGNED32, RWS, arr[k].entry[2]),                           \
-    E(base + k, 0x04, CO_T_UNSIGNED32, RWS, arr[k].entry[3]),                           \
-    E(base + k, 0x05, CO_T_UNSIGNED32, RWS, arr[k].entry[4]),                           \
-    E(base + k, 0x06, CO_T_UNSIGNED32, RWS, arr[k].entry[5]),                           \
-    E(base + k, 0x07, CO_T_UNSIGNED32, RWS, arr[k].entry[6]),                           \
-    E(base + k, 0x08, CO_T_UNSIGNED32, RWS, arr[k].entry[7])
+    R(base + k, 0x01, 8U, CO_T_UNSIGNED32, RWS, arr[k].entry)
     PDO_MAP(0x1600, rpdo_map, 0), PDO_MAP(0x1600, rpdo_map, 1),
 #define TPDO_COMM(k)                                                                    \
     E(0x1800 + k, 0x00, CO_T_UNSIGNED8, RO, tpdo_comm[k].n),                            \
@@ -98,15 +80,13 @@ static const co_od_entry_t entries[] = {
     E(0x2005, 0x00, CO_T_VISIBLE_STRING, RWS, x2005_description),
     E(0x2006, 0x00, CO_T_UNSIGNED64, RO, x2006_counter),
     E(0x6000, 0x00, CO_T_UNSIGNED8, RO, x6000_n),
-    E(0x6000, 0x01, CO_T_UNSIGNED8, RO | CO_OD_TPDO, x6000_inputs[0]),
-    E(0x6000, 0x02, CO_T_UNSIGNED8, RO | CO_OD_TPDO, x6000_inputs[1]),
+    R(0x6000, 0x01, 2U, CO_T_UNSIGNED8, RO | CO_OD_TPDO, x6000_inputs),
     E(0x6200, 0x00, CO_T_UNSIGNED8, RO, x6200_n),
     E(0x6200, 0x01, CO_T_UNSIGNED8, WO | CO_OD_RPDO, x6200_output),
     E(0x6300, 0x00, CO_T_UNSIGNED8, RO, x6300_n),
     E(0x6300, 0x01, CO_T_UNSIGNED32, RWS | CO_OD_RPDO | CO_OD_TPDO, x6300_value),
     E(0x6401, 0x00, CO_T_UNSIGNED8, RO, x6401_n),
-    E(0x6401, 0x01, CO_T_UNSIGNED16, RO | CO_OD_TPDO, x6401_analog[0]),
-    E(0x6401, 0x02, CO_T_UNSIGNED16, RO | CO_OD_TPDO, x6401_analog[1]),
+    R(0x6401, 0x01, 2U, CO_T_UNSIGNED16, RO | CO_OD_TPDO, x6401_analog),
 };
 
 static const test_od_values_t defaults = {

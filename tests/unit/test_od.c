@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "fixture.h"
+#include "priv/co_priv.h"
 
 /* The compact layout (ctest unit-mcu) is what a firmware's flash is counted with: 10 bytes a row on every target. */
 #if CO_CONFIG_OD_COMPACT
@@ -13,19 +14,62 @@ void tearDown(void) {}
 
 static void lookup(void)
 {
-    const co_od_entry_t *e = co_od_find(&test_od, 0x1018, 0x03);
+    co_od_entry_t one;
+    const co_od_entry_t *e = co_od_find(&test_od, 0x1018, 0x03, &one);
     TEST_ASSERT_NOT_NULL(e);
     TEST_ASSERT_EQUAL_HEX16(0x1018, e->index);
     TEST_ASSERT_EQUAL_HEX8(0x03, e->sub);
-    TEST_ASSERT_NULL(co_od_find(&test_od, 0x1018, 0x05));
-    TEST_ASSERT_NULL(co_od_find(&test_od, 0x0FFF, 0x00));
-    TEST_ASSERT_NULL(co_od_find(&test_od, 0xFFFF, 0xFF));
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0x1018, 0x05, &one));
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0x0FFF, 0x00, &one));
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0xFFFF, 0xFF, &one));
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0x1400, 0x03, &one)); /* a gap: 0x1400 has 0, 1, 2 and 5 */
+    TEST_ASSERT_NULL(co_od_find(&test_od, 0x1400, 0x06, &one));
     TEST_ASSERT_TRUE(co_od_has_index(&test_od, 0x1018));
     TEST_ASSERT_FALSE(co_od_has_index(&test_od, 0x2100));
-    /* every row is found at its own position: the table is sorted and unique */
+    /* every sub-index of every row is found, as itself: a row's first sub-index in the table, the others of a run
+     * as a copy with their own sub-index and offset; nothing past a run's end */
+    unsigned subs = 0U;
     for (uint16_t i = 0U; i < test_od.count; i++) {
-        TEST_ASSERT_EQUAL_PTR(&test_od.entries[i], co_od_find(&test_od, test_od.entries[i].index, test_od.entries[i].sub));
+        const co_od_entry_t *row = &test_od.entries[i];
+        for (uint8_t k = 0U; k < co_od_entry_subs(row); k++, subs++) {
+            e = co_od_find(&test_od, row->index, (uint8_t)(row->sub + k), &one);
+            TEST_ASSERT_EQUAL_PTR(k == 0U ? row : &one, e);
+            TEST_ASSERT_EQUAL_HEX16(row->index, e->index);
+            TEST_ASSERT_EQUAL_HEX8(row->sub + k, e->sub);
+            TEST_ASSERT_EQUAL_UINT32(row->offset + (uint32_t)k * row->size, e->offset);
+            TEST_ASSERT_EQUAL_UINT16(row->size, e->size);
+            TEST_ASSERT_EQUAL_HEX8(row->flags, e->flags);
+            TEST_ASSERT_EQUAL_PTR(co_od_entry_limits(&test_od, row), co_od_entry_limits(&test_od, e));
+            TEST_ASSERT_EQUAL_UINT8(k == 0U ? co_od_entry_subs(row) : 1U, co_od_entry_subs(e));
+        }
+        const bool next_is_adjacent = i + 1U < test_od.count && test_od.entries[i + 1U].index == row->index &&
+                                      test_od.entries[i + 1U].sub == row->sub + co_od_entry_subs(row);
+        if (!next_is_adjacent && row->sub + co_od_entry_subs(row) <= 0xFFU) {
+            TEST_ASSERT_NULL(co_od_find(&test_od, row->index, (uint8_t)(row->sub + co_od_entry_subs(row)), &one));
+        }
     }
+    TEST_ASSERT_EQUAL_UINT(118U, subs); /* the sub-indices test_od.c lists */
+    TEST_ASSERT_TRUE(test_od.count < subs); /* runs: 0x1003:01-08 and the others are one row each */
+    TEST_ASSERT_EQUAL_UINT8(8U, co_od_sub_count(&test_od, 0x1003));
+    TEST_ASSERT_EQUAL_UINT8(4U, co_od_sub_count(&test_od, 0x1016));
+    TEST_ASSERT_EQUAL_UINT8(3U, co_od_sub_count(&test_od, 0x1400));
+}
+
+/* A value inside a run is its own: writes and reads of 0x1016:03 touch its 4 bytes of the array, no other. */
+static void a_run_holds_one_value_per_sub_index(void)
+{
+    const test_od_values_t *v = &fx.values;
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x1016, 3, "\x64\x00\x07\x00", 4U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(0x00070064UL, v->x1016_consumer[2]);
+    TEST_ASSERT_EQUAL_HEX32(0U, v->x1016_consumer[1]);
+    TEST_ASSERT_EQUAL_HEX32(0U, v->x1016_consumer[3]);
+    TEST_ASSERT_EQUAL_HEX32(0x00ABCDEFUL, co_od_get_u32(&fx.node, 0x1018, 4));
+    TEST_ASSERT_EQUAL_HEX32(0x00001234UL, co_od_get_u32(&fx.node, 0x1018, 2));
+    TEST_ASSERT_EQUAL_PTR(&v->x1003_errors[6], co_od_value(&fx.node, 0x1003, 7));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_NO_SUBINDEX, co_od_write(&fx.node, 0x1016, 5, "\x00\x00\x00\x00", 4U, CO_ORIGIN_SDO));
+    /* node-ID-relative defaults of a run: each sub-index gets the node-ID added once */
+    TEST_ASSERT_EQUAL_HEX32(0x605UL, v->x1200_cob[0]);
+    TEST_ASSERT_EQUAL_HEX32(0x585UL, v->x1200_cob[1]);
 }
 
 static void type_sizes(void)
@@ -96,8 +140,9 @@ static void write_path_order(void)
 /* Inclusive limits of an unsigned and a signed row, at and just past each bound (also with 32-bit pairs: unit-mcu). */
 static void limits_at_their_bounds(void)
 {
-    const co_od_entry_t *u16 = co_od_find(&test_od, 0x2000, 0); /* 100..60000 */
-    const co_od_entry_t *i16 = co_od_find(&test_od, 0x2001, 0); /* -100..100 */
+    co_od_entry_t one;
+    const co_od_entry_t *u16 = co_od_find(&test_od, 0x2000, 0, &one); /* 100..60000 */
+    const co_od_entry_t *i16 = co_od_find(&test_od, 0x2001, 0, &one); /* -100..100 */
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, co_od_check_limits(&test_od, u16, (const uint8_t *)"\x63\x00", 2U));
     TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, u16, (const uint8_t *)"\x64\x00", 2U));
     TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, u16, (const uint8_t *)"\x60\xEA", 2U));
@@ -111,7 +156,7 @@ static void limits_at_their_bounds(void)
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, co_od_check_limits(&test_od, i16, (const uint8_t *)"\x00\x80", 2U));
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_check_limits(&test_od, i16, (const uint8_t *)"\xFF\x7F", 2U));
     /* a row without limits */
-    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, co_od_find(&test_od, 0x1017, 0), (const uint8_t *)"\xFF\xFF", 2U));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_check_limits(&test_od, co_od_find(&test_od, 0x1017, 0, &one), (const uint8_t *)"\xFF\xFF", 2U));
 }
 
 static void strings_shorter_than_capacity_are_zero_padded(void)
@@ -161,6 +206,7 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(lookup);
+    RUN_TEST(a_run_holds_one_value_per_sub_index);
     RUN_TEST(type_sizes);
     RUN_TEST(limits_at_their_bounds);
     RUN_TEST(local_access_bypasses_access_rights_not_sizes);

@@ -139,6 +139,32 @@ static void mapping_procedure_and_its_aborts(void)
     ASSERT_FRAME(0, 0x185U, 7, 0xA5, 0x34, 0x12, 0xEF, 0xBE, 0xAD, 0xDE);
 }
 
+/* Sub-indices inside a run (0x6000:01-02 and 0x6401:01-02 are one row each in test_od): each maps its own value. */
+static void mapping_sub_indices_inside_a_run(void)
+{
+    W(0x1800, 1, 0x80000185UL, 4);
+    W(0x1A00, 0, 0, 1);
+    W(0x1A00, 1, 0x60000208UL, 4);
+    W(0x1A00, 2, 0x64010210UL, 4);
+    W(0x1A00, 3, 0x60000108UL, 4);
+    W_ABORT(0x06040041UL, 0x1A00, 4, 0x60000308UL, 4); /* past the run's end: 0x6000 has no sub-index 3 */
+    W_ABORT(0x06040041UL, 0x1A00, 4, 0x64010208UL, 4); /* 8 bits of a U16 inside the run */
+    W(0x1A00, 0, 3, 1);
+    W(0x1800, 1, 0x00000185UL, 4);
+    fx.values.x6000_inputs[0] = 0x11U;
+    fx.values.x6000_inputs[1] = 0x22U;
+    fx.values.x6401_analog[0] = 0x3333U;
+    fx.values.x6401_analog[1] = 0x5544U;
+    fake_port_clear(&fx.port);
+    start();
+    ASSERT_FRAME(0, 0x185U, 4, 0x22, 0x44, 0x55, 0x11);
+    /* a change of the second element alone is a change of state of this TPDO */
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_set_u16(&fx.node, 0x6401, 2, 0x6677U));
+    fake_port_clear(&fx.port);
+    (void)fx_process();
+    ASSERT_FRAME(0, 0x185U, 4, 0x22, 0x77, 0x66, 0x11);
+}
+
 static void communication_parameter_rules(void)
 {
     W_ABORT(0x06090030UL, 0x1800, 2, 241, 1);
@@ -324,6 +350,7 @@ int main(void)
     RUN_TEST(v50_long_rpdo);
     RUN_TEST(v51_correct_rpdo_resets_the_error);
     RUN_TEST(mapping_procedure_and_its_aborts);
+    RUN_TEST(mapping_sub_indices_inside_a_run);
     RUN_TEST(communication_parameter_rules);
     RUN_TEST(tpdos_only_in_operational);
     RUN_TEST(change_of_state_sent_without_application_call);

@@ -863,12 +863,17 @@ static void blob_format(void)
     const uint8_t r2005[13] = {0x05, 0x20, 0x00, 0x09, 't', 'e', 's', 't', ' ', 'n', 'o', 'd', 'e'};
     TEST_ASSERT_NOT_NULL(find_record(0x2005, 0));
     TEST_ASSERT_EQUAL_HEX8_ARRAY(r2005, find_record(0x2005, 0), 13);
-    /* one record per stored row of the test OD that is not at a node-ID-relative default */
+    /* one record per stored sub-index of the test OD that is not at a node-ID-relative default: every sub-index of
+     * a run (0x1016:01-04 is one row) has its own record */
+    const uint8_t r1016_4[8] = {0x16, 0x10, 0x04, 0x04, 0x00, 0x00, 0x00, 0x00};
+    TEST_ASSERT_NOT_NULL(find_record(0x1016, 4));
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(r1016_4, find_record(0x1016, 4), 8);
+    TEST_ASSERT_NOT_NULL(find_record(0x1A01, 8));
     uint32_t expected = 0U;
     for (uint16_t i = 0U; i < test_od.count; i++) {
         const co_od_entry_t *e = &test_od.entries[i];
         if ((e->flags & CO_OD_STORE) != 0U && (e->flags & CO_OD_NODEID) == 0U) {
-            expected++;
+            expected += co_od_entry_subs(e);
         }
     }
     TEST_ASSERT_EQUAL_UINT32(expected, record_count());
