@@ -11,7 +11,7 @@ import pytest
 
 from canopen_emu import __version__ as PACKAGE_VERSION
 from canopen_emu import (ActiveError, ConnectionClosed, ControlError, ControlTimeout, Entry, NodeInfo, ObjectInfo,
-                         ProtocolError, connect)
+                         ProtocolError, Reading, connect)
 
 pytestmark = pytest.mark.canopen_emu_nodes("sds:16", "buerkert:17", "pro-ionizer:0x20")
 
@@ -52,6 +52,20 @@ def test_objects_lists_a_nodes_dictionary(canopen_emu):
     assert plain and all(o.value is None and o.error is None for o in plain)
     with pytest.raises(ControlError, match="objects needs one node, not all"):
         c.objects("all")
+
+
+def test_get_many_reads_several_objects_in_one_request(canopen_emu):
+    c = canopen_emu.client
+    c.set(16, "0x1017", 700)
+    readings = c.get_many(17, ["0x1017", (0x2540, 1), 0x1000, "0x5555"])
+    assert [r.object for r in readings] == ["0x1017:00", "0x2540:01", "0x1000:00", "0x5555:00"]
+    assert readings[0] == Reading(object="0x1017:00", value=500, type="UNSIGNED16")
+    assert type(readings[1].value) is float and readings[1].sub == 1
+    assert readings[2].value == c.get(17, 0x1000)
+    assert readings[3] == Reading(object="0x5555:00", error="object does not exist (0x06020000)")
+    assert c.get_many(16, ["0x1017"])[0].value == 700
+    with pytest.raises(ControlError, match="objects"):
+        c.get_many(16, [])
 
 
 def test_set_returns_the_value_read_back(canopen_emu):

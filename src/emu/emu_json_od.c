@@ -141,17 +141,75 @@ static void answer_value(const request_t *q, emu_node_t *n, uint16_t index, uint
     send_response(q->s, r);
 }
 
+/* get with "objects": the values of up to GET_OBJECTS_MAX objects of one node in one answer (what a view that plots
+ * or refreshes several values asks for at every turn), each {object, value, type} or {object, error}. */
+#define GET_OBJECTS_MAX 64U
+
+static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
+{
+    if (!json_is_array(list) || json_array_size(list) == 0U || json_array_size(list) > GET_OBJECTS_MAX ||
+        json_object_get(q->req, "object") != NULL || json_object_get(q->req, "sub") != NULL) {
+        fail(q->s, q->id, "get: \"objects\" must be a list of 1 to %u objects (\"0x6401:01\"), without \"object\"",
+             GET_OBJECTS_MAX);
+        return;
+    }
+    uint16_t index[GET_OBJECTS_MAX];
+    uint8_t sub[GET_OBJECTS_MAX];
+    for (size_t i = 0U; i < json_array_size(list); i++) {
+        const json_t *o = json_array_get(list, i);
+        if (!json_is_string(o) || strlen(json_string_value(o)) != json_string_length(o) ||
+            !device_parse_address(json_string_value(o), &index[i], &sub[i])) {
+            fail(q->s, q->id, "get: \"objects\"[%zu] is not \"INDEX[:SUB]\" in hex (\"0x6401:01\")", i);
+            return;
+        }
+    }
+    json_t *values = json_array();
+    n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
+    q->emu->in_command = true;
+    for (size_t i = 0U; i < json_array_size(list); i++) {
+        json_t *v = json_object();
+        char object[16];
+        (void)snprintf(object, sizeof object, "0x%04X:%02X", index[i], sub[i]);
+        (void)json_object_set_new(v, "object", json_string(object));
+        co_od_entry_t one;
+        const co_od_entry_t *e = co_od_find(n->dev.cls->od, index[i], sub[i], &one);
+        uint8_t buf[256];
+        size_t len = 0U;
+        const uint32_t abort_code = co_od_read(&n->dev.node, index[i], sub[i], buf, sizeof buf, &len, CO_ORIGIN_LOCAL);
+        if (e != NULL && abort_code == 0U) {
+            (void)json_object_set_new(v, "value", value_json(e, buf, len));
+            (void)json_object_set_new(v, "type", json_string(device_type_name(e->type)));
+        } else {
+            char text[160];
+            (void)snprintf(text, sizeof text, "%s (0x%08lX)", co_abort_text(abort_code), (unsigned long)abort_code);
+            (void)json_object_set_new(v, "error", json_string(text));
+        }
+        (void)json_array_append_new(values, v);
+    }
+    q->emu->in_command = false;
+    n->dirty = true;
+    json_t *r = response(q->id, true);
+    (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
+    (void)json_object_set_new(r, "values", values);
+    send_response(q->s, r);
+}
+
 void cmd_get(const request_t *q)
 {
-    static const char *const fields[] = {"node", "object", "sub", NULL};
+    static const char *const fields[] = {"node", "object", "sub", "objects", NULL};
     uint16_t index;
     uint8_t sub;
     char object[16];
     emu_node_t *n;
-    if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object)) {
+    if (!only_fields(q, fields) || (n = one_node(q)) == NULL) {
         return;
     }
-    answer_value(q, n, index, sub);
+    const json_t *list = json_object_get(q->req, "objects");
+    if (list != NULL) {
+        answer_values(q, n, list);
+    } else if (object_address(q, &index, &sub, object, sizeof object)) {
+        answer_value(q, n, index, sub);
+    }
 }
 
 /* The value as a word of `set`: numbers in decimal, true/false as 1/0, strings as they are. */

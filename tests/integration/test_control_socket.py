@@ -187,6 +187,54 @@ def test_objects_lists_the_dictionary_a_node_has(emulator, tmp_path):
     c.close()
 
 
+def test_get_reads_several_objects_in_one_answer(emulator, tmp_path):
+    """get with "objects": each value as get of it alone reads it, typed, in the order asked; an object the node
+    cannot read gives its SDO abort text instead of failing the request; bad lists are refused whole."""
+    emu, path = start(emulator, tmp_path, "pro-ionizer:16", "pro-ionizer/basic:20", "buerkert:17")
+    c = Client(path)
+    assert c.request(id=1, cmd="set", node=16, object="0x1017", value=700)["ok"]
+    asked = ["0x1017", "0x2002:06", "0x6401:02", "0x1018:04", "0x1003:01", "0x5555", "0x1018:09", "1008"]
+    answer = c.request(id=2, cmd="get", node=16, objects=asked)
+    assert answer["ok"] and answer["node"] == 16 and len(answer["values"]) == len(asked), answer
+    values = answer["values"]
+    assert [v["object"] for v in values] == ["0x1017:00", "0x2002:06", "0x6401:02", "0x1018:04", "0x1003:01",
+                                             "0x5555:00", "0x1018:09", "0x1008:00"]
+    assert values[0] == {"object": "0x1017:00", "value": 700, "type": "UNSIGNED16"}
+    for v in values[1:4]:
+        alone = c.request(id=3, cmd="get", node=16, object=v["object"])
+        assert (v["value"], v["type"]) == (alone["value"], alone["type"]), v
+    assert values[4] == {"object": "0x1003:01", "error": "no data available (0x08000024)"}
+    assert values[5] == {"object": "0x5555:00", "error": "object does not exist (0x06020000)"}
+    assert values[6] == {"object": "0x1018:09", "error": "sub-index does not exist (0x06090011)"}
+    assert values[7] == {"object": "0x1008:00", "value": "ES61", "type": "VISIBLE_STRING"}
+    # a variant's hidden sub-index is answered as an SDO upload of it would be
+    hidden = c.request(id=4, cmd="get", node=20, objects=["0x2002:11", "0x1017"])["values"]
+    assert hidden[0] == {"object": "0x2002:11", "error": "sub-index does not exist (0x06090011)"}, hidden
+    assert hidden[1]["type"] == "UNSIGNED16"
+    # a sub-index inside a run of the dictionary (0x1016's 127 consumer times are one row) is its own value
+    assert c.request(id=5, cmd="set", node=17, object="0x1016:05", value=0x00050064)["ok"]
+    run = c.request(id=6, cmd="get", node=17, objects=["0x1016:04", "0x1016:05", "0x1016:06", "0x2540:01"])
+    assert [v.get("value") for v in run["values"]] == [0, 0x00050064, 0, 0.0], run
+    assert run["values"][3]["type"] == "REAL32"
+    too_many = json.dumps({"id": 12, "cmd": "get", "node": 16, "objects": ["0x1017"] * 65})
+    for line, error in (
+            ('{"id":7,"cmd":"get","node":16,"objects":[]}',
+             'get: "objects" must be a list of 1 to 64 objects ("0x6401:01"), without "object"'),
+            (too_many, 'get: "objects" must be a list of 1 to 64 objects ("0x6401:01"), without "object"'),
+            ('{"id":8,"cmd":"get","node":16,"objects":["0x1017"],"object":"0x1017"}',
+             'get: "objects" must be a list of 1 to 64 objects ("0x6401:01"), without "object"'),
+            ('{"id":9,"cmd":"get","node":16,"objects":"0x1017"}',
+             'get: "objects" must be a list of 1 to 64 objects ("0x6401:01"), without "object"'),
+            ('{"id":10,"cmd":"get","node":16,"objects":["0x1017",4119]}',
+             'get: "objects"[1] is not "INDEX[:SUB]" in hex ("0x6401:01")'),
+            ('{"id":11,"cmd":"get","node":"all","objects":["0x1017"]}', "get needs one node, not all")):
+        c.send(line)
+        answer = json.loads(c.line())
+        check_schema(answer, "get")
+        assert answer == {"id": json.loads(line)["id"], "ok": False, "error": error}, answer
+    c.close()
+
+
 @pytest.mark.parametrize("line, error", [
     ("{bad", "malformed JSON at column 4: string or '}' expected near 'bad'"),
     ('{"id":1.5,"cmd":"list"}', '"id" must be a string, an integer or null'),

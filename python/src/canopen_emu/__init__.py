@@ -8,7 +8,7 @@
 """
 from ._version import __version__
 from .client import (PROTOCOL_VERSION, ActiveError, Address, Client, Entry, Event, LastEmcy, NodeInfo, NodeRef,
-                     NodeStatus, ObjectInfo, ObjectRef, ServerInfo, Value, connect, decode_value, encode_value)
+                     NodeStatus, ObjectInfo, ObjectRef, Reading, ServerInfo, Value, connect, decode_value, encode_value)
 from .emulator import DEFAULT_NODES, Emulator, find_executable
 from .errors import (CanopenEmuError, ConnectionClosed, ControlError, ControlTimeout, EmulatorError,
                      ProtocolError)
@@ -20,7 +20,7 @@ FAULT_KINDS = ("sdo-ignore", "sdo-delay", "sdo-abort", "heartbeat-stop", "heartb
 __all__ = [
     "__version__", "PROTOCOL_VERSION", "FAULT_KINDS", "DEFAULT_NODES",
     "connect", "Client", "Emulator", "find_executable", "decode_value", "encode_value",
-    "ServerInfo", "NodeInfo", "NodeStatus", "ActiveError", "LastEmcy", "Entry", "ObjectInfo",
+    "ServerInfo", "NodeInfo", "NodeStatus", "ActiveError", "LastEmcy", "Entry", "ObjectInfo", "Reading",
     "Address", "NodeRef", "ObjectRef", "Value", "Event",
     "CanopenEmuError", "ControlError", "ProtocolError", "ControlTimeout", "ConnectionClosed", "EmulatorError",
 ]

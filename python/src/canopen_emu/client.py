@@ -125,6 +125,16 @@ class Entry(_Addressed):
 
 
 @dataclass(frozen=True)
+class Reading(_Addressed):
+    """One value of ``get_many``: the object (``"0x1017:00"``), its value and data type, or ``error``, why it cannot
+    be read (``"object does not exist (0x06020000)"``; value and type are then ``None``)."""
+    object: str
+    value: Optional[Value] = None
+    type: Optional[str] = None
+    error: Optional[str] = None
+
+
+@dataclass(frozen=True)
 class ObjectInfo(_Addressed):
     """One sub-index of a node's dictionary (``objects``): the object (``"0x1017:00"``), its EDS ParameterName
     (``None`` when the EDS has none), data type, access (``"ro"``, ``"wo"``, ``"rw"``, ``"const"``), whether it may
@@ -368,6 +378,17 @@ class Client:
                   timeout: Optional[float] = None) -> Entry:
         """get() with the whole answer: value, data type, EDS name, normalised object."""
         return _entry(self.request("get", timeout=timeout, node=node, **object_fields(obj, sub)))
+
+    def get_many(self, node: NodeRef, objects: Sequence[ObjectRef], *,
+                 timeout: Optional[float] = None) -> List[Reading]:
+        """The values of up to 64 objects of one node in one request, in the order asked: ``get_many(16,
+        ["0x1017", (0x2002, 6)])``. An object the node cannot read gives a Reading with ``error``, not an
+        exception."""
+        names = [object_fields(o)["object"] if not isinstance(o, int) or isinstance(o, bool)
+                 else f"0x{o:04X}:00" for o in objects]
+        answer = self.request("get", timeout=timeout, node=node, objects=names)
+        return [Reading(object=v["object"], value=decode_value(v["value"], v["type"]) if "value" in v else None,
+                        type=v.get("type"), error=v.get("error")) for v in answer["values"]]
 
     def set(self, node: NodeRef, obj: ObjectRef, value: Value, sub: Optional[int] = None, *,
             timeout: Optional[float] = None) -> Value:
