@@ -890,6 +890,9 @@ def control_seeds():
         ("json-objects", '{"id":1,"cmd":"objects","node":16}\n{"id":2,"cmd":"objects","node":"17","values":true}\n'
                          '{"id":3,"cmd":"objects","node":20,"values":false}\n{"id":4,"cmd":"objects","node":"all"}\n'
                          '{"id":5,"cmd":"objects","node":16,"values":1}\n{"id":6,"cmd":"objects"}\n'),
+        ("json-get-many", '{"id":1,"cmd":"get","node":16,"objects":["0x1017","0x1016:05","0x5555","1008"]}\n'
+                          '{"id":2,"cmd":"get","node":17,"objects":[]}\n{"id":3,"cmd":"get","node":16,"objects":[4119]}\n'
+                          '{"id":4,"cmd":"get","node":16,"objects":["0x1017"],"object":"0x1017"}\n'),
         ("json-quit", '{"id":"q","cmd":"quit"}\nlist\n'),
         ("protocol-faults", "fault 16 sdo-ignore 2\nfault 17 sdo-ignore 30% 7\nfault 18 sdo-delay 100\n"
                             "fault 20 sdo-abort 0x1017 0x08000020\nfault 21 heartbeat-stop\nfault 22 heartbeat-jitter 50\n"
