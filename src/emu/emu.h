@@ -98,6 +98,7 @@ typedef struct emu {
     emu_session_t *sessions[MAX_SESSIONS]; /* those that may subscribe to events */
     size_t n_sessions;
     bool in_command;        /* a command runs: a device's messages are its reply, not events */
+    bool command_restricted; /* the command line running comes from a restricted session (emu_session_t) */
     bool quit;
 } emu_t;
 
