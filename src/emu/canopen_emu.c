@@ -58,7 +58,7 @@ static bool add_interface(emu_config_t *cfg, const char *name)
     return true;
 }
 
-/* --control-tcp: HOST:PORT, checked before anything starts (the address is resolved later). */
+/* --control-tcp and --web: HOST:PORT, checked before anything starts (the address is resolved later). */
 static bool host_port_option(const char *option, const char *example_port, const char *arg, const char **out)
 {
     if (!tcp_host_port_ok(arg)) {
@@ -111,6 +111,7 @@ int main(int argc, char **argv)
         {"quiet", no_argument, NULL, 'q'},           {"help", no_argument, NULL, 'h'},
         {"version", no_argument, NULL, 'V'},         {"control-socket", required_argument, NULL, 'u'},
         {"control-tcp", required_argument, NULL, 't'}, {"rules", required_argument, NULL, 'r'},
+        {"web", required_argument, NULL, 'w'},
         {NULL, 0, NULL, 0}};
     const char *rules[16];
     size_t n_rules = 0U;
@@ -151,6 +152,11 @@ int main(int argc, char **argv)
             break;
         case 't':
             if (!host_port_option("--control-tcp", "5020", optarg, &config.control_tcp)) {
+                return 2;
+            }
+            break;
+        case 'w':
+            if (!host_port_option("--web", "8080", optarg, &config.web)) {
                 return 2;
             }
             break;
@@ -211,6 +217,7 @@ int main(int argc, char **argv)
     int status = runtime_start(&emu, &config);
     if (status != 0) {
         sockets_close(&emu, &emu.sockets); /* a socket file made before the failure goes */
+        web_stop(&emu, &emu.web);
         return status;
     }
     status = runtime_loop(&emu);
