@@ -304,7 +304,7 @@ def test_session_round_trip_reaches_the_bus(emu):
     session = session_answer.json()["session"]
     assert re.fullmatch(r"[0-9a-f]{32}", session), session
     before = heartbeat_times(emu.bus, 16, 3)
-    assert 1.6 <= before[2] - before[0] <= 2.4, before  # the default: 1000 ms
+    assert 1.5 <= before[2] - before[0] <= 2.6, before  # the default: 1000 ms
     answer = emu.exchange(session, '{"id":1,"cmd":"hello"}', '{"id":2,"cmd":"list"}',
                           '{"id":3,"cmd":"set","node":16,"object":"0x1017","value":500}')
     assert answer.status == 200
@@ -323,7 +323,7 @@ def test_session_round_trip_reaches_the_bus(emu):
                        "name": "Producer heartbeat time"}
     emu.bus.expect(lambda i, d: i == 0x710, 3.0, "a first heartbeat after the set")
     after = heartbeat_times(emu.bus, 16, 3)
-    assert 0.8 <= after[2] - after[0] <= 1.2, after  # two periods of 500 ms
+    assert 0.7 <= after[2] - after[0] <= 1.4, after  # two periods of 500 ms (the default would give 2 s)
     assert emu.bus.sdo(16, upload(0x1017, 0))[4:6] == struct.pack("<H", 500)
     got = emu.exchange(session, '{"id":4,"cmd":"get","node":16,"object":"0x1017"}', "get 16 0x1017").lines()
     check_schema(got[0], "get")
@@ -421,8 +421,14 @@ def test_body_limits(emu):
         raw.sendall(f"POST /api/session/{session} HTTP/1.1\r\nHost: 127.0.0.1:{emu.port}\r\n"
                     f"X-Canopen-Emu: {emu.token()}\r\nContent-Length: 1000000\r\n\r\n".encode())
         assert raw.recv(65536).startswith(b"HTTP/1.1 413 ")
-    answer = emu.exchange(session, '{"id":1,"cmd":"hello"}')  # the session is unharmed
-    assert (answer.status, answer.lines()[0]["id"]) == (200, 1)
+    # The session is unharmed. Its hello waits behind what is left of the 16384 lines (512 bytes run a pass; on a
+    # loaded machine the passes so far may not have run them all): its answer comes with this or a later exchange.
+    lines = emu.exchange(session, '{"id":1,"cmd":"hello"}').lines()
+    end = time.monotonic() + 5.0
+    while not lines and time.monotonic() < end:
+        time.sleep(0.02)
+        lines = emu.exchange(session).lines()
+    assert [(m["id"], m["ok"], m["program"]) for m in lines] == [(1, True, "canopen-emu")], lines
 
 
 def test_a_session_without_exchange_for_10_s_is_removed(emu):
