@@ -32,7 +32,7 @@ typedef struct web_request {
     char body[WEB_BODY_MAX];
 } web_request_t;
 
-/* ---- The API --------------------------------------------------------------------------------------------------- */
+/* ---- The API -------------------------------------------------------------------------------------------------- */
 
 /* POST /api/session: a new session, its id in {"session":"ID"}. */
 static enum MHD_Result open_session(emu_web_t *w, struct MHD_Connection *c, co_time_us_t now)
@@ -44,7 +44,7 @@ static enum MHD_Result open_session(emu_web_t *w, struct MHD_Connection *c, co_t
             logline(LOG_QUIET, "web: a session refused: %d are open already", WEB_SESSIONS_MAX);
         }
         return web_send_error(c, MHD_HTTP_SERVICE_UNAVAILABLE, true,
-                          full ? "too many web sessions (at most 8)" : "cannot open a session", NULL);
+                              full ? "too many web sessions (at most 8)" : "cannot open a session", NULL);
     }
     char body[64];
     (void)snprintf(body, sizeof body, "{\"session\":\"%s\"}\n", s->id);
@@ -61,11 +61,13 @@ static enum MHD_Result exchange(emu_web_t *w, struct MHD_Connection *c, const we
 {
     web_session_t *s = web_session_find(w, q->id);
     if (s == NULL || s->overflow) { /* an overflowing one is removed, and logged, at the end of this pass */
-        return web_send_error(c, MHD_HTTP_NOT_FOUND, true, "no such session (expired or dropped): open a new one", NULL);
+        return web_send_error(c, MHD_HTTP_NOT_FOUND, true, "no such session (expired or dropped): open a new one",
+                              NULL);
     }
     if (!web_session_queue(w->emu, s, q->body, q->len, now)) {
         return web_send_error(c, MHD_HTTP_TOO_MANY_REQUESTS, true,
-                          "earlier requests of this session still wait to run: exchange with an empty body first", NULL);
+                              "earlier requests of this session still wait to run: exchange with an empty body first",
+                              NULL);
     }
     size_t len = 0U;
     char *out = web_session_take_output(s, &len);
@@ -96,33 +98,32 @@ static bool api_route(const char *path, api_route_t *route, char *id)
     return true;
 }
 
-/* ---- libmicrohttpd's callbacks ---------------------------------------------------------------------------------- */
-
-/* The state of a GET that passed the checks (it has no body to keep). */
-static char static_request;
+/* ---- libmicrohttpd's callbacks -------------------------------------------------------------------------------- */
 
 /* The first call of a request, its headers read: everything is checked that can be. A refusal is answered now (the
  * connection is then closed: any body is not read); otherwise the state for the next calls, which take the body
  * and answer (an answer queued at the first call would close the connection, keep-alive lost). */
-static enum MHD_Result begin(emu_web_t *w, struct MHD_Connection *c, const char *path, const char *method, void **state)
+static enum MHD_Result begin(emu_web_t *w, struct MHD_Connection *c, const char *path, const char *method,
+                             void **state)
 {
     const bool api = strcmp(path, "/api") == 0 || strncmp(path, "/api/", 5U) == 0;
     if (!web_host_ok(w, c, MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST))) {
-        return web_send_error(c, MHD_HTTP_MISDIRECTED_REQUEST, api, "the Host header does not name this server", NULL);
+        return web_send_error(c, MHD_HTTP_MISDIRECTED_REQUEST, api, "the Host header does not name this server",
+                              NULL);
     }
     if (!api) {
         if (strcmp(method, MHD_HTTP_METHOD_GET) != 0) {
             return web_send_error(c, MHD_HTTP_METHOD_NOT_ALLOWED, false, "only GET", MHD_HTTP_METHOD_GET);
         }
-        *state = &static_request;
+        *state = w; /* a GET that passed: it has no body to keep, its state is the web itself */
         return MHD_YES;
     }
     if (strcmp(method, MHD_HTTP_METHOD_POST) != 0) {
         return web_send_error(c, MHD_HTTP_METHOD_NOT_ALLOWED, true, "the API takes POST only", MHD_HTTP_METHOD_POST);
     }
     if (!web_token_ok(w, c)) {
-        return web_send_error(c, MHD_HTTP_FORBIDDEN, true, "missing or wrong " WEB_TOKEN_HEADER " token: load the page again",
-                          NULL);
+        return web_send_error(c, MHD_HTTP_FORBIDDEN, true,
+                              "missing or wrong " WEB_TOKEN_HEADER " token: load the page again", NULL);
     }
     api_route_t route;
     char id[WEB_ID_HEX + 1] = "";
@@ -149,18 +150,18 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
                                   const char *version, const char *upload_data, size_t *upload_data_size, void **state)
 {
     emu_web_t *w = (emu_web_t *)cls;
-    web_request_t *q = (web_request_t *)*state;
     (void)version;
-    if (q == NULL) {
+    if (*state == NULL) {
         return begin(w, c, url, method, state);
     }
-    if (*state == &static_request) {
+    if (*state == w) { /* a GET */
         if (*upload_data_size > 0U) {
             *upload_data_size = 0U; /* a GET's body means nothing: discarded */
             return MHD_YES;
         }
         return web_serve_file(w, c, url);
     }
+    web_request_t *q = (web_request_t *)*state;
     if (*upload_data_size > 0U) {
         if (*upload_data_size > sizeof q->body - q->len) {
             q->too_large = true; /* read on and discarded: answered when it has ended */
@@ -180,10 +181,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 
 static void on_completed(void *cls, struct MHD_Connection *c, void **state, enum MHD_RequestTerminationCode why)
 {
-    (void)cls;
     (void)c;
     (void)why;
-    if (*state != &static_request) {
+    if (*state != cls) { /* an API request's (a GET's is the web itself) */
         free(*state);
     }
     *state = NULL;
@@ -200,7 +200,7 @@ static void on_log(void *cls, const char *fmt, va_list ap)
     logline(LOG_NORMAL, "web: %s", text);
 }
 
-/* ---- Start, main loop, stop --------------------------------------------------------------------------------------- */
+/* ---- Start, main loop, stop ------------------------------------------------------------------------------------- */
 
 void web_init(emu_web_t *w)
 {

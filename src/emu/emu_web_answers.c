@@ -7,7 +7,7 @@
 
 #include "emu_web_files.h"
 
-/* ---- Answers ------------------------------------------------------------------------------------------------- */
+/* ---- Answers ----------------------------------------------------------------------------------------------------- */
 
 /* Every answer: the page runs only its own files and is framed by nobody; API answers are never stored. */
 enum MHD_Result web_send(struct MHD_Connection *c, unsigned status, struct MHD_Response *r, bool api)
@@ -44,7 +44,7 @@ enum MHD_Result web_send_error(struct MHD_Connection *c, unsigned status, bool a
     return web_send(c, status, r, api);
 }
 
-/* ---- Static files --------------------------------------------------------------------------------------------- */
+/* ---- Static files ------------------------------------------------------------------------------------------------ */
 
 /* A file of the embedded table, by exact path ("/" is "/index.html"): nothing is read from disk, no path joined. */
 enum MHD_Result web_serve_file(const emu_web_t *w, struct MHD_Connection *c, const char *path)
@@ -70,7 +70,8 @@ enum MHD_Result web_serve_file(const emu_web_t *w, struct MHD_Connection *c, con
     }
     const char *match = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_IF_NONE_MATCH);
     const bool same = match != NULL && strcmp(match, f->etag) == 0;
-    struct MHD_Response *r = MHD_create_response_from_buffer(same ? 0U : f->size, (void *)f->data, MHD_RESPMEM_PERSISTENT);
+    struct MHD_Response *r =
+        MHD_create_response_from_buffer(same ? 0U : f->size, (void *)f->data, MHD_RESPMEM_PERSISTENT);
     if (r != NULL) {
         if (!same) {
             (void)MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, f->mime);

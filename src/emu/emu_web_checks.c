@@ -9,7 +9,7 @@
 #include <strings.h>
 #include <sys/socket.h>
 
-/* ---- Checks every request passes ------------------------------------------------------------------------------ */
+/* ---- Checks every request passes --------------------------------------------------------------------------------- */
 
 /* The numeric address a socket address holds (an IPv4-mapped IPv6 address as IPv4), or "". */
 static void numeric_address(const struct sockaddr_storage *a, char *out, size_t size)
