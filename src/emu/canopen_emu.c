@@ -19,6 +19,7 @@
 #include "emu_output.h"
 #include "emu_runtime.h"
 #include "emu_script.h"
+#include "emu_tcp.h"
 #include "emu_version.h" /* generated: EMU_VERSION, EMU_GIT_REVISION (cmake/version.cmake) */
 
 static emu_t emu;
@@ -54,6 +55,18 @@ static bool add_interface(emu_config_t *cfg, const char *name)
         return false;
     }
     cfg->ifaces[cfg->n_ifaces++] = name;
+    return true;
+}
+
+/* --control-tcp and --web: HOST:PORT, checked before anything starts (the address is resolved later). */
+static bool host_port_option(const char *option, const char *example_port, const char *arg, const char **out)
+{
+    if (!tcp_host_port_ok(arg)) {
+        fprintf(stderr, "canopen-emu: %s takes HOST:PORT (127.0.0.1:%s, [::1]:%s, localhost:0; port 0: any free one), "
+                "not '%s'\n", option, example_port, example_port, arg);
+        return false;
+    }
+    *out = arg;
     return true;
 }
 
@@ -98,6 +111,7 @@ int main(int argc, char **argv)
         {"quiet", no_argument, NULL, 'q'},           {"help", no_argument, NULL, 'h'},
         {"version", no_argument, NULL, 'V'},         {"control-socket", required_argument, NULL, 'u'},
         {"control-tcp", required_argument, NULL, 't'}, {"rules", required_argument, NULL, 'r'},
+        {"web", required_argument, NULL, 'w'},
         {NULL, 0, NULL, 0}};
     const char *rules[16];
     size_t n_rules = 0U;
@@ -136,17 +150,16 @@ int main(int argc, char **argv)
         case 'u':
             config.control_socket = optarg;
             break;
-        case 't': {
-            const char *colon = strrchr(optarg, ':');
-            long long port;
-            if (colon == NULL || colon == optarg || !device_parse_int(colon + 1, 0, 65535, &port)) {
-                fprintf(stderr, "canopen-emu: --control-tcp takes HOST:PORT (127.0.0.1:5020, [::1]:5020, localhost:0; "
-                        "port 0: any free one), not '%s'\n", optarg);
+        case 't':
+            if (!host_port_option("--control-tcp", "5020", optarg, &config.control_tcp)) {
                 return 2;
             }
-            config.control_tcp = optarg;
             break;
-        }
+        case 'w':
+            if (!host_port_option("--web", "8080", optarg, &config.web)) {
+                return 2;
+            }
+            break;
         case 'l':
             list_devices(stdout);
             return 0;
@@ -204,6 +217,7 @@ int main(int argc, char **argv)
     int status = runtime_start(&emu, &config);
     if (status != 0) {
         sockets_close(&emu, &emu.sockets); /* a socket file made before the failure goes */
+        web_stop(&emu, &emu.web);
         return status;
     }
     status = runtime_loop(&emu);

@@ -8,8 +8,10 @@
  *   emu_faults.c    protocol faults injected between a node and its bus
  *   emu_events.c    what the nodes report (NMT changes, EMCY, aborts, stores...) turned into log lines
  *   emu_session.c   the control protocol: a session's lines (the command language or JSON: emu_json.c),
- *                   its answers and its event subscriptions; emu_control.c (stdin) and emu_socket.c (the
- *                   control sockets) are its transports
+ *                   its answers and its event subscriptions; emu_control.c (stdin), emu_socket.c (the
+ *                   control sockets; emu_tcp.c binds TCP) and emu_web.c (the web view, --web: HTTP checks and
+ *                   answers in emu_web_checks.c, emu_web_answers.c, sessions in emu_web_sessions.c) are its
+ *                   transports
  *   emu_commands.c  the command language; emu_script.c (--script) feeds it lines too; emu_lines.c cuts lines
  *   emu_cmdline.c   help, device list, DEVICE[/VARIANT][:NODE-ID][@IFACE] arguments
  *   emu_output.c    log and replies, never blocking; emu_fd_flags.c stdin's O_NONBLOCK, cleared at exit
@@ -29,6 +31,7 @@
 #include "emu_script.h"
 #include "emu_session.h"
 #include "emu_socket.h"
+#include "emu_web.h"
 
 /** Nodes on one bus: node-IDs 1..127. */
 #define MAX_NODES 127
@@ -38,8 +41,8 @@
 #define MAX_NODES_ALL (MAX_NODES * MAX_BUSES)
 
 #define LOCAL_QUEUE_LEN 4096U
-/** Control sessions: stdin and the clients of the control sockets. */
-#define MAX_SESSIONS 65
+/** Control sessions: stdin, the clients of the control sockets, the web view's sessions. */
+#define MAX_SESSIONS (1 + MAX_CLIENTS + WEB_SESSIONS_MAX)
 
 struct emu_bus;
 struct emu;
@@ -95,9 +98,11 @@ typedef struct emu {
     emu_script_t script;
     emu_control_t control;
     emu_sockets_t sockets;
+    emu_web_t web;
     emu_session_t *sessions[MAX_SESSIONS]; /* those that may subscribe to events */
     size_t n_sessions;
     bool in_command;        /* a command runs: a device's messages are its reply, not events */
+    bool command_restricted; /* the command line running comes from a restricted session (emu_session_t) */
     bool quit;
 } emu_t;
 

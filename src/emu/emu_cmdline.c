@@ -22,6 +22,8 @@ void usage(FILE *out)
             "      --control -         read control commands from stdin even when it is not a terminal\n"
             "      --control-socket PATH  accept control clients on a Unix socket (mode 0600)\n"
             "      --control-tcp HOST:PORT  accept control clients on TCP (127.0.0.1:5020; port 0: any free one)\n"
+            "      --web HOST:PORT     serve the web view to browsers (127.0.0.1:8080, then open\n"
+            "                          http://127.0.0.1:8080/; port 0: any free one; docs/web.md)\n"
             "      --script FILE       run control commands from FILE ('@MS command' lines, see canopen-emu(1))\n"
             "      --rules FILE        behaviour rules (YAML) for a device read from an EDS/DCF (docs/eds.md)\n"
             "      --list-devices      list the device types and exit\n"

@@ -177,9 +177,22 @@ command_result_t run_command(emu_t *emu, char *line)
     return run_command_words(emu, argc, argv);
 }
 
+const char *command_restriction(const char *word)
+{
+    if (strcmp(word, "quit") == 0 || strcmp(word, "exit") == 0) {
+        return "stops the emulator";
+    }
+    return strcmp(word, "export-dcf") == 0 ? "writes a file" : NULL;
+}
+
 command_result_t run_command_words(emu_t *emu, int argc, char **argv)
 {
     const co_time_us_t now = socketcan_now_us();
+    const char *refused = emu->command_restricted ? command_restriction(argv[0]) : NULL;
+    if (refused != NULL) {
+        reply("error: %s is refused in a web session: it %s", argv[0], refused);
+        return COMMAND_ERROR;
+    }
     if (strcmp(argv[0], "quit") == 0 || strcmp(argv[0], "exit") == 0) {
         emu->quit = true;
         return COMMAND_OK;

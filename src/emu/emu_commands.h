@@ -22,6 +22,11 @@ command_result_t run_command(emu_t *emu, char *line);
 /** The same for a line already split into words (argv[0] the command; the words may be changed). */
 command_result_t run_command_words(emu_t *emu, int argc, char **argv);
 
+/** Why a restricted session (emu_session_t.restricted: a web session) may not run the command named word: "stops
+ *  the emulator" (quit, exit) or "writes a file" (export-dcf: any path the emulator's user may write); NULL when it
+ *  may. run_command_words refuses them while emu->command_restricted is set, json_run for a restricted session. */
+const char *command_restriction(const char *word);
+
 /** The nodes NODE names (ID, ID@IFACE, all, all@IFACE; word may be changed and is restored): up to max of them
  *  into out, their count returned; -1 after a reply saying why none can be (no such interface, not a node-ID,
  *  an ID on several buses). 0 matches are not an error here. */

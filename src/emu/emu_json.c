@@ -571,7 +571,10 @@ void json_run(emu_t *emu, emu_session_t *s, const char *line)
         while (i < sizeof table / sizeof table[0] && strcmp(table[i].name, q.cmd) != 0) {
             i++;
         }
-        if (i < sizeof table / sizeof table[0]) {
+        const char *refused = s->restricted ? command_restriction(q.cmd) : NULL;
+        if (refused != NULL) {
+            fail(s, q.id, "%s is refused in a web session: it %s", q.cmd, refused);
+        } else if (i < sizeof table / sizeof table[0]) {
             table[i].run(&q);
         } else if (strlen(q.cmd) == 0U || strpbrk(q.cmd, " \t\r\n") != NULL || strlen(q.cmd) >= 64U) {
             fail(s, q.id, "'%s' is not a command", q.cmd);

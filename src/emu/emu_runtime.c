@@ -16,6 +16,7 @@
 #include "emu_output.h"
 #include "emu_script.h"
 #include "emu_socket.h"
+#include "emu_web.h"
 
 static volatile sig_atomic_t stop_signal;
 
@@ -31,6 +32,7 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
     char err[512];
     /* From here on the log and the replies go through emu_output.c, which never blocks (it ignores SIGPIPE). */
     sockets_init(&emu->sockets);
+    web_init(&emu->web);
     if (cfg->control_socket != NULL) {
         if (sockets_listen_unix(&emu->sockets, cfg->control_socket, err, sizeof err) != 0) {
             output_error("%s", err);
@@ -48,6 +50,17 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
         if (remote) {
             logline(LOG_QUIET, "control: warning: tcp %s is not a loopback address: whoever can reach it controls the "
                     "emulated nodes (no authentication)", emu->sockets.tcp_name);
+        }
+    }
+    if (cfg->web != NULL) {
+        if (web_start(emu, &emu->web, cfg->web, err, sizeof err) != 0) {
+            output_error("%s", err);
+            return 1;
+        }
+        logline(LOG_NORMAL, "web: listening on http://%s/", emu->web.listener.name);
+        if (emu->web.listener.remote) {
+            logline(LOG_QUIET, "web: warning: %s is not a loopback address: anyone who reaches it can change the "
+                    "devices (the page hands its token to whoever loads it)", emu->web.listener.name);
         }
     }
     for (size_t i = 0U; i < cfg->n_ifaces; i++) {
@@ -86,8 +99,8 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
 
 int runtime_loop(emu_t *emu)
 {
-    /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients */
-    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS];
+    /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients, the web */
+    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1];
     while (!emu->quit && stop_signal == 0) {
         /* Read afresh: the time of the last wake-up would be late by this pass's reading and commands, and a deadline
          * that fell in between would cost another whole pass (with 127 nodes, more than the clock read saves). */
@@ -125,8 +138,10 @@ int runtime_loop(emu_t *emu)
         }
         nfds += output_poll_fds(&pfd[nfds]); /* POLLOUT wakes the loop to write more: the next pass does */
         const nfds_t sockets_index = nfds;
-        nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds);
+        nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
+        const nfds_t web_index = nfds;
         now = socketcan_now_us();
+        nfds += web_poll_fds(&emu->web, &pfd[nfds], now, &next);
         struct timespec ts;
         struct timespec *timeout = NULL;
         if (next != CO_NEVER) {
@@ -155,7 +170,8 @@ int runtime_loop(emu_t *emu)
         if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
             control_read(emu);
         }
-        sockets_service(emu, &emu->sockets, &pfd[sockets_index], nfds - sockets_index);
+        sockets_service(emu, &emu->sockets, &pfd[sockets_index], web_index - sockets_index);
+        web_service(emu, &emu->web, &pfd[web_index], nfds - web_index, now);
     }
     return 0;
 }
@@ -164,6 +180,7 @@ void runtime_stop(emu_t *emu)
 {
     logline(LOG_NORMAL, "stopping%s", stop_signal != 0 ? " (signal)" : "");
     sockets_close(emu, &emu->sockets);
+    web_stop(emu, &emu->web);
     unsigned long sent = 0UL, dropped = 0UL, rx_lost = 0UL;
     for (size_t i = 0U; i < emu->n_buses; i++) {
         bus_close(emu->buses[i], &sent, &dropped, &rx_lost);

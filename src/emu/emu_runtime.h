@@ -19,12 +19,13 @@ typedef struct emu_config {
     bool control;                    /* commands from stdin */
     const char *control_socket;      /* Unix socket path, or NULL */
     const char *control_tcp;         /* HOST:PORT, or NULL */
+    const char *web;                 /* HOST:PORT of the web view, or NULL */
     int log_level;
 } emu_config_t;
 
-/** Opens the control sockets and the buses, powers the nodes on (one power-on time for all) and starts the
- *  control inputs. Returns 0, or
- *  the exit status (1) after a message. The script must be loaded already (emu->script). */
+/** Opens the control sockets, the web view and the buses, powers the nodes on (one power-on time for all) and
+ *  starts the control inputs. Returns 0, or the exit status (1) after a message. The script must be loaded already
+ *  (emu->script). */
 int runtime_start(emu_t *emu, const emu_config_t *cfg);
 
 /** Runs until `quit`, SIGINT or SIGTERM; returns the exit status. */

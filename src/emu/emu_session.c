@@ -197,6 +197,8 @@ void session_run_line(emu_t *emu, emu_session_t *s, char *line)
         }
     }
     output_set_reply_sink(text_sink, s);
+    emu->command_restricted = s->restricted;
     (void)run_command(emu, line);
+    emu->command_restricted = false;
     output_set_reply_sink(NULL, NULL);
 }

@@ -60,6 +60,8 @@ typedef struct emu_session {
     size_t n_nodes;             /* 0: events of every node */
     uint32_t frame_id;          /* frames whose COB-ID & frame_mask == frame_id */
     uint32_t frame_mask;
+    bool restricted;            /* a web session: commands that stop the emulator or write a file are refused
+                                 * (command_restriction, emu_commands.h) */
 } emu_session_t;
 
 /** A session with no subscriptions, writing through write(ctx, ...). */

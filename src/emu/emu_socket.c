@@ -2,11 +2,8 @@
 #define _GNU_SOURCE /* accept4, MSG_NOSIGNAL, PATH_MAX and POSIX calls, as in every file of the Linux program */
 #include "emu_socket.h"
 
-#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
-#include <netdb.h>
-#include <netinet/in.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,6 +15,7 @@
 #include "emu.h"
 #include "emu_events.h"
 #include "emu_output.h"
+#include "emu_tcp.h"
 
 void sockets_init(emu_sockets_t *k)
 {
@@ -77,90 +75,16 @@ int sockets_listen_unix(emu_sockets_t *k, const char *path, char *err, size_t er
     return 0;
 }
 
-static bool is_loopback(const struct sockaddr *a)
-{
-    if (a->sa_family == AF_INET) {
-        return (ntohl(((const struct sockaddr_in *)(const void *)a)->sin_addr.s_addr) >> 24) == 127U;
-    }
-    if (a->sa_family == AF_INET6) {
-        const struct in6_addr *v6 = &((const struct sockaddr_in6 *)(const void *)a)->sin6_addr;
-        return IN6_IS_ADDR_LOOPBACK(v6) ||
-               (IN6_IS_ADDR_V4MAPPED(v6) && v6->s6_addr[12] == 127U);
-    }
-    return false;
-}
-
 int sockets_listen_tcp(emu_sockets_t *k, const char *host_port, bool *remote, char *err, size_t errlen)
 {
-    char host[256];
-    const char *colon = strrchr(host_port, ':');
-    if (colon == NULL || colon == host_port || colon[1] == '\0' || (size_t)(colon - host_port) >= sizeof host) {
-        (void)snprintf(err, errlen, "--control-tcp takes HOST:PORT (127.0.0.1:5020, [::1]:5020, localhost:0), not '%s'",
-                       host_port);
-        return EINVAL;
+    tcp_listener_t l;
+    const int e = tcp_listen(&l, "--control-tcp", host_port, MAX_CLIENTS, err, errlen);
+    if (e != 0) {
+        return e;
     }
-    memcpy(host, host_port, (size_t)(colon - host_port));
-    host[colon - host_port] = '\0';
-    if (host[0] == '[' && host[strlen(host) - 1U] == ']') { /* [::1] */
-        memmove(host, host + 1, strlen(host) - 2U);
-        host[strlen(host) - 2U] = '\0';
-    }
-    long long port;
-    if (!device_parse_int(colon + 1, 0, 65535, &port)) {
-        (void)snprintf(err, errlen, "--control-tcp: bad port '%s' (0..65535; 0: any free one)", colon + 1);
-        return EINVAL;
-    }
-    struct addrinfo hints, *res = NULL;
-    memset(&hints, 0, sizeof hints);
-    hints.ai_family = AF_UNSPEC;
-    hints.ai_socktype = SOCK_STREAM;
-    hints.ai_flags = AI_NUMERICSERV;
-    char service[8];
-    (void)snprintf(service, sizeof service, "%lld", port);
-    const int gai = getaddrinfo(host, service, &hints, &res);
-    if (gai != 0 || res == NULL) {
-        (void)snprintf(err, errlen, "--control-tcp: cannot resolve '%s': %s", host, gai_strerror(gai));
-        return EINVAL;
-    }
-    int fd = -1, e = 0;
-    for (const struct addrinfo *a = res; a != NULL && fd < 0; a = a->ai_next) {
-        fd = socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol);
-        if (fd < 0) {
-            e = errno;
-            continue;
-        }
-        const int one = 1;
-        (void)setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-        if (bind(fd, a->ai_addr, a->ai_addrlen) != 0 || listen(fd, MAX_CLIENTS) != 0) {
-            e = errno;
-            (void)close(fd);
-            fd = -1;
-            continue;
-        }
-        *remote = !is_loopback(a->ai_addr);
-    }
-    freeaddrinfo(res);
-    if (fd < 0) {
-        (void)snprintf(err, errlen, "--control-tcp %s: %s", host_port, strerror(e));
-        return e != 0 ? e : EINVAL;
-    }
-    struct sockaddr_storage bound;
-    socklen_t len = sizeof bound;
-    char name[INET6_ADDRSTRLEN] = "?";
-    unsigned bound_port = 0U;
-    if (getsockname(fd, (struct sockaddr *)&bound, &len) == 0) {
-        if (bound.ss_family == AF_INET) {
-            const struct sockaddr_in *v4 = (const struct sockaddr_in *)(const void *)&bound;
-            (void)inet_ntop(AF_INET, &v4->sin_addr, name, sizeof name);
-            bound_port = ntohs(v4->sin_port);
-        } else if (bound.ss_family == AF_INET6) {
-            const struct sockaddr_in6 *v6 = (const struct sockaddr_in6 *)(const void *)&bound;
-            (void)inet_ntop(AF_INET6, &v6->sin6_addr, name, sizeof name);
-            bound_port = ntohs(v6->sin6_port);
-        }
-    }
-    (void)snprintf(k->tcp_name, sizeof k->tcp_name, strchr(name, ':') != NULL ? "[%s]:%u" : "%s:%u", name, bound_port);
-    k->tcp_fd = fd;
+    k->tcp_fd = l.fd;
+    (void)snprintf(k->tcp_name, sizeof k->tcp_name, "%s", l.name);
+    *remote = l.remote;
     return 0;
 }
 
@@ -172,39 +96,22 @@ static void client_write(void *ctx, const char *line, size_t len)
     if (c->overflow || c->gone) {
         return;
     }
-    if (len > CLIENT_OUTPUT_MAX - c->out_len) {
+    if (!byte_buffer_append(&c->out, line, len, CLIENT_OUTPUT_MAX)) {
         c->overflow = true; /* it does not read: closed at the next pass, logged there */
-        return;
     }
-    if (c->out_len + len > c->out_cap) {
-        size_t cap = c->out_cap == 0U ? 4096U : c->out_cap;
-        while (cap < c->out_len + len) {
-            cap *= 2U;
-        }
-        char *grown = realloc(c->out, cap);
-        if (grown == NULL) {
-            c->overflow = true;
-            return;
-        }
-        c->out = grown;
-        c->out_cap = cap;
-    }
-    memcpy(c->out + c->out_len, line, len);
-    c->out_len += len;
 }
 
 static void client_flush(control_client_t *c)
 {
-    while (c->out_len > 0U && !c->gone) {
-        const ssize_t w = send(c->fd, c->out, c->out_len, MSG_NOSIGNAL | MSG_DONTWAIT);
+    while (c->out.len > 0U && !c->gone) {
+        const ssize_t w = send(c->fd, c->out.data, c->out.len, MSG_NOSIGNAL | MSG_DONTWAIT);
         if (w < 0) {
             if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
                 c->gone = true; /* EPIPE, ECONNRESET: the client went away */
             }
             return;
         }
-        memmove(c->out, c->out + w, c->out_len - (size_t)w);
-        c->out_len -= (size_t)w;
+        byte_buffer_consume(&c->out, (size_t)w);
     }
 }
 
@@ -248,7 +155,7 @@ static void client_close(emu_t *emu, emu_sockets_t *k, size_t i)
     }
     events_remove_session(emu, &c->session);
     (void)close(c->fd);
-    free(c->out);
+    byte_buffer_free(&c->out);
     free(c);
     k->clients[i] = k->clients[--k->n_clients];
 }
@@ -267,7 +174,7 @@ nfds_t sockets_poll_fds(const emu_sockets_t *k, struct pollfd *pfd, nfds_t max)
     }
     for (size_t i = 0U; i < k->n_clients && n < max; i++) {
         pfd[n].fd = k->clients[i]->fd;
-        pfd[n].events = (short)(POLLIN | (k->clients[i]->out_len > 0U ? POLLOUT : 0));
+        pfd[n].events = (short)(POLLIN | (k->clients[i]->out.len > 0U ? POLLOUT : 0));
         pfd[n].revents = 0;
         n++;
     }
@@ -336,7 +243,7 @@ void sockets_close(emu_t *emu, emu_sockets_t *k)
         sockets_flush(k);
         bool waiting = false;
         for (size_t j = 0U; j < k->n_clients; j++) {
-            waiting = waiting || (k->clients[j]->out_len > 0U && !k->clients[j]->gone);
+            waiting = waiting || (k->clients[j]->out.len > 0U && !k->clients[j]->gone);
         }
         struct timespec t;
         (void)clock_gettime(CLOCK_MONOTONIC, &t);

@@ -16,6 +16,7 @@
 #include <stddef.h>
 #include <sys/un.h>
 
+#include "emu_buffer.h"
 #include "emu_session.h"
 
 struct emu;
@@ -28,9 +29,7 @@ struct emu;
 typedef struct control_client {
     int fd;
     emu_session_t session;
-    char *out;              /* bytes waiting for the client (malloc'd, grows up to CLIENT_OUTPUT_MAX) */
-    size_t out_len;
-    size_t out_cap;
+    byte_buffer_t out;      /* bytes waiting for the client (up to CLIENT_OUTPUT_MAX) */
     bool overflow;          /* more than CLIENT_OUTPUT_MAX waited: closed at the next pass */
     bool gone;              /* the peer closed or an error happened: closed at the next pass */
 } control_client_t;
@@ -51,8 +50,8 @@ void sockets_init(emu_sockets_t *k);
  *  0, or an errno with a message in err. */
 int sockets_listen_unix(emu_sockets_t *k, const char *path, char *err, size_t errlen);
 
-/** Listens on TCP HOST:PORT ("127.0.0.1:5020", "[::1]:5020", "localhost:0"). 0, or an errno with a message in
- *  err; *remote is set when the address is not a loopback one (the caller warns). */
+/** Listens on TCP HOST:PORT ("127.0.0.1:5020", "[::1]:5020", "localhost:0"; emu_tcp.h). 0, or an errno with a
+ *  message in err; *remote is set when the address is not a loopback one (the caller warns). */
 int sockets_listen_tcp(emu_sockets_t *k, const char *host_port, bool *remote, char *err, size_t errlen);
 
 /** Adds the listeners and clients to pfd (at most max entries); returns how many. */

@@ -246,6 +246,7 @@ def test_deb_package_fields(deb):
     assert fields["Version"] == VERSION
     assert fields["Architecture"] == arch
     assert re.search(r"\blibc6 \(>= [0-9.]+\)", fields.get("Depends", "")), fields
+    assert re.search(r"\blibmicrohttpd12 \(>= [0-9.]+\)", fields["Depends"]), fields  # --web's HTTP
 
 
 def test_deb_package_holds_exactly_the_installed_files(deb, prefix):

@@ -1,0 +1,479 @@
+"""The web view (--web HOST:PORT, docs/web.md) without a browser: the page and its files, the HTTP API's sessions
+(a control session per browser: requests in, answers and events out), and the checks every request passes (Host,
+token, method, path, size), against canopen-emu-fakecan (the whole program, its CAN channel a test double: see
+test_emulator_native.py), in the plain and in the ASan+UBSan build.
+
+Environment (tests/native/CMakeLists.txt): CO_SOURCE_DIR, CO_EMU_FAKECAN (the program), CO_SANITIZED.
+"""
+
+import http.client
+import json
+import os
+import re
+import socket
+import struct
+import subprocess
+import threading
+import time
+
+import jsonschema
+import pytest
+
+from test_emulator_native import EMU, SANITIZER_MARKS, SRC, FakeBus, upload
+
+NODES = ("pro-ionizer:16", "sds:17")
+CSP = "default-src 'self'; frame-ancestors 'none'"
+PLACEHOLDER = b"@CANOPEN_EMU_TOKEN@"
+REFUSED_QUIT = "quit is refused in a web session: it stops the emulator"
+REFUSED_EXIT = "exit is refused in a web session: it stops the emulator"
+REFUSED_EXPORT = "export-dcf is refused in a web session: it writes a file"
+NO_SESSION = {"error": "no such session (expired or dropped): open a new one"}
+
+SCHEMA = json.loads((SRC / "docs/control-protocol.schema.json").read_text())
+KNOWN = ("hello", "list", "show", "get", "set", "objects", "subscribe", "unsubscribe", "quit")
+
+
+def validator(pointer):
+    return jsonschema.Draft202012Validator({**SCHEMA, "$ref": pointer})
+
+
+VALIDATE_EVENT = validator("#/$defs/event")
+VALIDATE_ERROR = validator("#/$defs/error_response")
+VALIDATE_RESPONSE = {cmd: validator(f"#/$defs/responses/{cmd}") for cmd in KNOWN + ("command",)}
+
+
+def check_schema(msg, cmd):
+    """A web session's JSON lines are the control protocol's (docs/control-protocol.schema.json)."""
+    if "event" in msg:
+        VALIDATE_EVENT.validate(msg)
+    elif msg.get("ok") is False and "lines" not in msg:
+        VALIDATE_ERROR.validate(msg)
+    else:
+        VALIDATE_RESPONSE[cmd if cmd in KNOWN else "command"].validate(msg)
+
+
+class Answer:
+    def __init__(self, status, headers, body):
+        self.status, self.headers, self.body = status, headers, body
+
+    def json(self):
+        return json.loads(self.body)
+
+    def lines(self):
+        """An exchange's lines: JSON objects as dicts, the command language's text lines as strings."""
+        text = self.body.decode()
+        assert text == "" or text.endswith("\n"), text
+        return [json.loads(line) if line.startswith("{") else line for line in text.splitlines()]
+
+
+class WebEmulator:
+    """canopen-emu-fakecan with --web (and --control - for the test's quit): its port from the log, as a user reads
+    it; requests with a Host header and token of the test's choosing."""
+
+    def __init__(self, tmp_path, web="127.0.0.1:0", nodes=NODES):
+        if not EMU:
+            pytest.fail("CO_EMU_FAKECAN is not set (the test is run by ctest: tests/native/CMakeLists.txt)",
+                        pytrace=False)
+        self.bus = FakeBus(tmp_path / f"bus-{time.monotonic_ns()}")
+        env = dict(os.environ, CO_FAKECAN_SOCKET=self.bus.listener.getsockname(),
+                   ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1",
+                   UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1")
+        self.proc = subprocess.Popen([EMU, "-i", "fakecan0", "--nvm-dir", str(tmp_path / "nvm"), "--control", "-",
+                                      "--web", web, *nodes],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                     env=env)
+        self.bus.proc = self.proc
+        self.err_lines, self.out_lines = [], []
+        for stream, lines in ((self.proc.stderr, self.err_lines), (self.proc.stdout, self.out_lines)):
+            threading.Thread(target=lambda s=stream, l=lines: l.extend(s), daemon=True).start()
+        self.bus.accept()
+        line = self.wait_log("web: listening on http://")
+        self.address, port = re.search(r"web: listening on http://(.+):(\d+)/$", line).groups()
+        self.port = int(port)
+        self._token = None
+
+    def log(self):
+        return "".join(self.err_lines)
+
+    def wait_log(self, text, timeout=10.0):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            found = [line for line in list(self.err_lines) if text in line]
+            if found:
+                return found[0].rstrip("\n")
+            if self.proc.poll() is not None:
+                break
+            time.sleep(0.02)
+        raise AssertionError(f"no log line with {text!r}; status {self.proc.poll()}; log:\n{self.log()[-4000:]}")
+
+    def request(self, method, path, body=None, headers=None, host=True, token=None, chunked=False):
+        """One request on a connection of its own. host: True = 127.0.0.1:PORT, a string = that, None = no Host
+        header. token: the X-Canopen-Emu header (None: none)."""
+        conn = http.client.HTTPConnection("127.0.0.1", self.port, timeout=10)
+        try:
+            conn.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+            if host is not None:
+                conn.putheader("Host", f"127.0.0.1:{self.port}" if host is True else host)
+            if token is not None:
+                conn.putheader("X-Canopen-Emu", token)
+            for name, value in (headers or {}).items():
+                conn.putheader(name, value)
+            if chunked:
+                conn.putheader("Transfer-Encoding", "chunked")
+            elif body is not None:
+                conn.putheader("Content-Length", str(len(body)))
+            conn.endheaders()
+            if body is not None:
+                if chunked:
+                    for k in range(0, len(body), 4096):
+                        piece = body[k:k + 4096]
+                        conn.send(b"%x\r\n%s\r\n" % (len(piece), piece))
+                    conn.send(b"0\r\n\r\n")
+                else:
+                    conn.send(body)
+            resp = conn.getresponse()
+            return Answer(resp.status, resp.headers, resp.read())
+        finally:
+            conn.close()
+
+    def token(self):
+        if self._token is None:
+            page = self.request("GET", "/")
+            assert page.status == 200, page.status
+            self._token = re.search(rb'<meta name="canopen-emu-token" content="([0-9a-f]{32})">', page.body).group(1).decode()
+        return self._token
+
+    def open_session(self):
+        answer = self.request("POST", "/api/session", token=self.token())
+        assert answer.status == 200, (answer.status, answer.body)
+        return answer.json()["session"]
+
+    def exchange(self, session, *lines):
+        body = "".join(line + "\n" for line in lines).encode()
+        return self.request("POST", f"/api/session/{session}", body=body, token=self.token())
+
+    def quit(self, timeout=20.0):
+        """quit on stdin (a web session may not); returns the exit status; fails on any sanitizer report."""
+        try:
+            self.proc.stdin.write("quit\n")
+            self.proc.stdin.flush()
+            self.proc.wait(timeout=timeout)
+        except (subprocess.TimeoutExpired, BrokenPipeError):
+            self.proc.kill()
+            self.proc.wait()
+            raise AssertionError("canopen-emu did not end after quit:\n" + self.log()[-3000:])
+        finally:
+            self.bus.close()
+        time.sleep(0.1)  # the pump threads take the last lines
+        assert not any(mark in self.log() for mark in SANITIZER_MARKS), self.log()[-6000:]
+        return self.proc.returncode
+
+
+@pytest.fixture
+def emu(tmp_path):
+    e = WebEmulator(tmp_path)
+    yield e
+    if e.proc.poll() is None:
+        assert e.quit() == 0, e.log()[-3000:]
+
+
+def assert_security_headers(answer, api):
+    assert answer.headers["Content-Security-Policy"] == CSP
+    assert answer.headers["X-Content-Type-Options"] == "nosniff"
+    assert answer.headers["Referrer-Policy"] == "no-referrer"
+    if api:
+        assert answer.headers["Cache-Control"] == "no-store"
+
+
+def heartbeat_times(bus, node, count, timeout=5.0):
+    return [bus.expect(lambda i, d: i == 0x700 + node and len(d) == 1, timeout, f"heartbeat of node {node}")[0]
+            for _ in range(count)]
+
+
+# ---- the page and its files -------------------------------------------------------------------------------------
+
+def test_page_is_served_with_the_token_and_the_security_headers(emu):
+    """/ and /index.html are web/index.html with this run's token in the placeholder's place; the other files are
+    served byte for byte with their type and ETag (304 when the browser has them); every answer carries the CSP."""
+    source = (SRC / "web/index.html").read_bytes()
+    assert source.count(PLACEHOLDER) == 1
+    for path in ("/", "/index.html", "/index.html?reload=1"):
+        page = emu.request("GET", path)
+        assert page.status == 200, (path, page.status)
+        assert page.headers["Content-Type"] == "text/html; charset=utf-8"
+        assert page.headers["Cache-Control"] == "no-store"
+        assert_security_headers(page, api=False)
+        token = re.search(rb'content="([0-9a-f]{32})"', page.body).group(1)
+        assert page.body == source.replace(PLACEHOLDER, token)
+        assert token.decode() == emu.token()
+    for name, mime in (("app.js", "text/javascript; charset=utf-8"), ("style.css", "text/css; charset=utf-8")):
+        answer = emu.request("GET", "/" + name)
+        assert answer.status == 200
+        assert answer.headers["Content-Type"] == mime
+        assert answer.body == (SRC / "web" / name).read_bytes()
+        assert_security_headers(answer, api=False)
+        etag = answer.headers["ETag"]
+        assert re.fullmatch(r'"[0-9a-f]{16}"', etag), etag
+        again = emu.request("GET", "/" + name, headers={"If-None-Match": etag})
+        assert (again.status, again.body, again.headers["ETag"]) == (304, b"", etag)
+        other = emu.request("GET", "/" + name, headers={"If-None-Match": '"0000000000000000"'})
+        assert (other.status, other.body) == (200, answer.body)
+
+
+def test_unknown_paths_are_404_and_nothing_is_read_from_disk(emu):
+    for path in ("/nope", "/index.htm", "/INDEX.HTML", "/index.html/", "//index.html", "/web/index.html",
+                 "/../etc/passwd", "/%2e%2e/etc/passwd", "/..%2f..%2fetc%2fpasswd", "/./index.html",
+                 "/etc/passwd", "/CMakeLists.txt", "/api.js"):
+        answer = emu.request("GET", path)
+        assert (answer.status, answer.body) == (404, b"not found\n"), path
+        assert answer.headers["Content-Type"] == "text/plain; charset=utf-8"
+        assert_security_headers(answer, api=False)
+    token = emu.token()
+    for path in ("/api", "/api/", "/api/sessions", "/api/session/", "/api/session/xyz", "/api/session/" + "A" * 32,
+                 "/api/session/" + "0" * 31, "/api/session/../session"):
+        answer = emu.request("POST", path, body=b"", token=token)
+        assert (answer.status, answer.json()) == (404, {"error": "no such API path"}), path
+        assert_security_headers(answer, api=True)
+    answer = emu.request("POST", "/api/session/" + "0" * 32, body=b"", token=token)
+    assert (answer.status, answer.json()) == (404, NO_SESSION)
+
+
+def test_only_get_for_files_and_post_for_the_api(emu):
+    token = emu.token()
+    session = emu.open_session()
+    for method, path in (("POST", "/"), ("PUT", "/index.html"), ("DELETE", "/app.js"), ("HEAD", "/")):
+        answer = emu.request(method, path, body=b"" if method in ("POST", "PUT") else None)
+        body = b"" if method == "HEAD" else b"only GET\n"  # a HEAD answer has no body
+        assert (answer.status, answer.headers["Allow"], answer.body) == (405, "GET", body), (method, path)
+    for method, path in (("GET", "/api/session"), ("GET", f"/api/session/{session}"), ("PUT", "/api/session"),
+                         ("DELETE", f"/api/session/{session}")):
+        answer = emu.request(method, path, token=token)
+        assert (answer.status, answer.headers["Allow"]) == (405, "POST"), (method, path)
+        assert answer.json() == {"error": "the API takes POST only"}
+        assert_security_headers(answer, api=True)
+    assert emu.exchange(session).status == 200  # the session is still there: DELETE removed nothing
+
+
+# ---- the checks of every request -------------------------------------------------------------------------------
+
+def test_host_header_must_name_this_server(emu):
+    """Against DNS rebinding: a page of another site that makes its name point here sends its own name."""
+    port = emu.port
+    for host in (f"localhost:{port}", f"LocalHost:{port}", f"127.0.0.1:{port}", f"[::1]:{port}"):
+        assert emu.request("GET", "/", host=host).status == 200, host
+        assert emu.request("POST", "/api/session", host=host, token=emu.token()).status == 200, host
+    for host in (f"evil.example:{port}", f"localhost.evil.example:{port}", f"127.0.0.1.nip.io:{port}",
+                 f"localhost:{port + 1}", "localhost", f"localhost:{port}x", f"[::1]x:{port}", f":{port}", ""):
+        answer = emu.request("GET", "/", host=host)
+        assert (answer.status, answer.body) == (421, b"the Host header does not name this server\n"), host
+        assert_security_headers(answer, api=False)
+        api = emu.request("POST", "/api/session", host=host, token=emu.token())
+        assert (api.status, api.json()) == (421, {"error": "the Host header does not name this server"}), host
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as raw:  # HTTP/1.0: no Host header at all
+        raw.sendall(b"GET / HTTP/1.0\r\n\r\n")
+        reply = b""
+        while chunk := raw.recv(65536):
+            reply += chunk
+    assert reply.startswith(b"HTTP/1.0 421 ") or reply.startswith(b"HTTP/1.1 421 "), reply[:200]
+
+
+def test_api_needs_the_token_of_the_page(emu):
+    """Another site's page cannot send the custom header without a CORS preflight, which is never answered; a
+    program that did not load the page has no token."""
+    expected = {"error": "missing or wrong X-Canopen-Emu token: load the page again"}
+    real = emu.token()
+    for token in (None, "", "0" * 32, real[:-1], real + "0", real.upper(), real[:16], real + real):
+        answer = emu.request("POST", "/api/session", token=token)
+        assert (answer.status, answer.json()) == (403, expected), token
+        assert_security_headers(answer, api=True)
+    session = emu.open_session()
+    answer = emu.request("POST", f"/api/session/{session}", body=b'{"id":1,"cmd":"hello"}\n', token="f" * 32)
+    assert (answer.status, answer.json()) == (403, expected)
+    assert emu.exchange(session).lines() == []  # the refused request did not run: nothing waits
+
+
+# ---- sessions --------------------------------------------------------------------------------------------------
+
+def test_session_round_trip_reaches_the_bus(emu):
+    """hello, list and set in one exchange, answered in order; the set of 0x1017 changes node 16's heartbeat period
+    on the bus and reads back over SDO and with get."""
+    session_answer = emu.request("POST", "/api/session", token=emu.token())
+    assert session_answer.status == 200
+    assert session_answer.headers["Content-Type"] == "application/json"
+    assert_security_headers(session_answer, api=True)
+    session = session_answer.json()["session"]
+    assert re.fullmatch(r"[0-9a-f]{32}", session), session
+    before = heartbeat_times(emu.bus, 16, 3)
+    assert 1.5 <= before[2] - before[0] <= 2.6, before  # the default: 1000 ms
+    answer = emu.exchange(session, '{"id":1,"cmd":"hello"}', '{"id":2,"cmd":"list"}',
+                          '{"id":3,"cmd":"set","node":16,"object":"0x1017","value":500}')
+    assert answer.status == 200
+    assert answer.headers["Content-Type"] == "application/x-ndjson"
+    assert_security_headers(answer, api=True)
+    hello, nodes, written = answer.lines()
+    for msg, cmd in ((hello, "hello"), (nodes, "list"), (written, "set")):
+        check_schema(msg, cmd)
+    assert (hello["id"], hello["ok"], hello["program"], hello["protocol"], hello["buses"]) == \
+        (1, True, "canopen-emu", 1, ["fakecan0"])
+    assert nodes == {"id": 2, "ok": True, "nodes": [
+        {"node": 16, "device": "pro-ionizer", "variant": "full", "started_as": 16, "state": "PRE-OPERATIONAL",
+         "bus": "fakecan0"},
+        {"node": 17, "device": "sds", "variant": "N", "started_as": 17, "state": "PRE-OPERATIONAL", "bus": "fakecan0"}]}
+    assert written == {"id": 3, "ok": True, "node": 16, "object": "0x1017:00", "value": 500, "type": "UNSIGNED16",
+                       "name": "Producer heartbeat time"}
+    emu.bus.expect(lambda i, d: i == 0x710, 3.0, "a first heartbeat after the set")
+    after = heartbeat_times(emu.bus, 16, 3)
+    assert 0.7 <= after[2] - after[0] <= 1.4, after  # two periods of 500 ms (the default would give 2 s)
+    assert emu.bus.sdo(16, upload(0x1017, 0))[4:6] == struct.pack("<H", 500)
+    got = emu.exchange(session, '{"id":4,"cmd":"get","node":16,"object":"0x1017"}', "get 16 0x1017").lines()
+    check_schema(got[0], "get")
+    assert got[0] == {"id": 4, "ok": True, "node": 16, "object": "0x1017:00", "value": 500, "type": "UNSIGNED16",
+                      "name": "Producer heartbeat time"}
+    assert got[1].startswith("node 16: 0x1017:00 = 500 "), got
+    assert emu.exchange(session).lines() == []  # everything was delivered once
+
+
+def test_subscribed_events_come_with_a_later_exchange(emu):
+    """Events that happen between exchanges wait in the session and come with the next one, however it was caused:
+    an NMT start from the bus; an EMCY a command raised comes with that command's answer or later."""
+    session = emu.open_session()
+    answer = emu.exchange(session, '{"id":1,"cmd":"subscribe","events":["nmt","emcy"],"nodes":[16]}').lines()
+    assert answer == [{"id": 1, "ok": True, "events": ["nmt", "emcy"]}]
+    emu.bus.send(0x000, bytes([0x01, 16]))  # NMT start node 16
+    emu.bus.expect(lambda i, d: i == 0x710 and d == b"\x05", 5.0, "heartbeat of node 16 in Operational")
+    events = emu.exchange(session).lines()
+    for event in events:
+        check_schema(event, None)
+    assert [{k: e[k] for k in ("event", "node", "device", "bus", "from", "to")} for e in events] == [
+        {"event": "nmt", "node": 16, "device": "pro-ionizer", "bus": "fakecan0", "from": "PRE-OPERATIONAL",
+         "to": "OPERATIONAL"}]
+    lines = emu.exchange(session, '{"id":2,"cmd":"emcy","node":16,"args":["0x3210","0x05"]}').lines()
+    assert [m["ok"] for m in lines if m.get("id") == 2] == [True], lines
+    _, _, frame = emu.bus.expect(lambda i, d: i == 0x090, 5.0, "EMCY of node 16")
+    assert frame[:3] == bytes([0x10, 0x32, 0x05]), frame.hex()
+    end = time.monotonic() + 5.0
+    while not any(isinstance(m, dict) and m.get("event") == "emcy" for m in lines) and time.monotonic() < end:
+        lines += emu.exchange(session).lines()
+        time.sleep(0.05)
+    emcy = [m for m in lines if isinstance(m, dict) and m.get("event") == "emcy"]
+    assert len(emcy) == 1, lines
+    check_schema(emcy[0], None)
+    assert {k: emcy[0][k] for k in ("node", "device", "code", "register", "info")} == \
+        {"node": 16, "device": "pro-ionizer", "code": 0x3210, "register": 0x05, "info": "0000000000"}
+    emu.bus.send(0x000, bytes([0x01, 17]))  # node 17 is not subscribed to
+    emu.bus.sdo(17, upload(0x1001, 0))  # answered after the NMT frame before it was handled
+    assert emu.exchange(session).lines() == []
+
+
+def test_quit_exit_and_export_dcf_are_refused_in_both_framings(emu, tmp_path):
+    session = emu.open_session()
+    dcf = tmp_path / "node16.dcf"
+    answer = emu.exchange(session, "quit", "exit", f"export-dcf 16 {dcf}", '{"id":1,"cmd":"quit"}',
+                          '{"id":2,"cmd":"exit"}', f'{{"id":3,"cmd":"export-dcf","node":16,"args":["{dcf}"]}}')
+    assert answer.lines() == [
+        f"error: {REFUSED_QUIT}", f"error: {REFUSED_EXIT}", f"error: {REFUSED_EXPORT}",
+        {"id": 1, "ok": False, "error": REFUSED_QUIT}, {"id": 2, "ok": False, "error": REFUSED_EXIT},
+        {"id": 3, "ok": False, "error": REFUSED_EXPORT}]
+    assert not dcf.exists()
+    time.sleep(0.3)
+    assert emu.proc.poll() is None
+    assert emu.exchange(session, '{"id":4,"cmd":"list"}').lines()[0]["ok"] is True
+
+
+def test_at_most_eight_sessions(emu):
+    sessions = [emu.open_session() for _ in range(8)]
+    assert len(set(sessions)) == 8
+    refused = emu.request("POST", "/api/session", token=emu.token())
+    assert (refused.status, refused.json()) == (503, {"error": "too many web sessions (at most 8)"})
+    assert_security_headers(refused, api=True)
+    emu.wait_log("web: a session refused: 8 are open already")
+    for k, session in enumerate(sessions):  # each one is its own: the answer goes to the session that asked
+        assert emu.exchange(session, f'{{"id":{k},"cmd":"hello"}}').lines()[0]["id"] == k
+
+
+def test_a_session_overflowing_its_buffer_is_dropped(emu):
+    """80 requests of ~25 kB answers each: the first 512 bytes of the body run at once and come back; the rest run
+    in the next passes, pile up past 1 MiB unasked for, and the session is dropped (logged); a new one works."""
+    session = emu.open_session()
+    request = '{"id":1,"cmd":"objects","node":16,"values":true}'
+    answer = emu.exchange(session, *[request] * 80)
+    assert answer.status == 200
+    lines = answer.lines()
+    assert len(lines) == 512 // (len(request) + 1), len(lines)  # WEB_FEED_MAX bytes ran with the exchange
+    assert all(m["id"] == 1 and m["ok"] is True for m in lines)
+    emu.wait_log("web: web session 1 dropped: more than 1048576 bytes waited for its next exchange")
+    gone = emu.exchange(session)
+    assert (gone.status, gone.json()) == (404, NO_SESSION)
+    assert emu.exchange(emu.open_session(), '{"id":2,"cmd":"hello"}').lines()[0]["id"] == 2
+
+
+def test_body_limits(emu):
+    session = emu.open_session()
+    too_large = {"error": "a request body has at most 16384 bytes"}
+    answer = emu.request("POST", f"/api/session/{session}", body=b"\n" * 16384, token=emu.token())
+    assert (answer.status, answer.body) == (200, b"")  # 16384 empty lines: accepted, nothing to answer
+    answer = emu.request("POST", f"/api/session/{session}", body=b"\n" * 16385, token=emu.token())
+    assert (answer.status, answer.json()) == (413, too_large)
+    assert_security_headers(answer, api=True)
+    answer = emu.request("POST", f"/api/session/{session}", body=b"\n" * 20000, token=emu.token(), chunked=True)
+    assert (answer.status, answer.json()) == (413, too_large)
+    with socket.create_connection(("127.0.0.1", emu.port), timeout=10) as raw:  # announced, never sent
+        raw.sendall(f"POST /api/session/{session} HTTP/1.1\r\nHost: 127.0.0.1:{emu.port}\r\n"
+                    f"X-Canopen-Emu: {emu.token()}\r\nContent-Length: 1000000\r\n\r\n".encode())
+        assert raw.recv(65536).startswith(b"HTTP/1.1 413 ")
+    # The session is unharmed. Its hello waits behind what is left of the 16384 lines (512 bytes run a pass; on a
+    # loaded machine the passes so far may not have run them all): its answer comes with this or a later exchange.
+    lines = emu.exchange(session, '{"id":1,"cmd":"hello"}').lines()
+    end = time.monotonic() + 5.0
+    while not lines and time.monotonic() < end:
+        time.sleep(0.02)
+        lines = emu.exchange(session).lines()
+    assert [(m["id"], m["ok"], m["program"]) for m in lines] == [(1, True, "canopen-emu")], lines
+
+
+def test_a_session_without_exchange_for_10_s_is_removed(emu):
+    kept, idle = emu.open_session(), emu.open_session()
+    start = time.monotonic()
+    while time.monotonic() - start < 8.0:
+        assert emu.exchange(kept).status == 200
+        time.sleep(1.0)
+    assert "removed: no exchange" not in emu.log()
+    while time.monotonic() - start < 11.0:
+        assert emu.exchange(kept).status == 200
+        time.sleep(1.0)
+    emu.wait_log("web: web session 2 removed: no exchange for 10 s", timeout=2.0)
+    assert "web session 1 removed" not in emu.log()
+    gone = emu.exchange(idle, '{"id":1,"cmd":"hello"}')
+    assert (gone.status, gone.json()) == (404, NO_SESSION)
+    assert emu.exchange(kept, '{"id":2,"cmd":"hello"}').lines()[0]["id"] == 2
+
+
+# ---- addresses ---------------------------------------------------------------------------------------------------
+
+def test_loopback_is_not_warned_about(emu):
+    assert emu.address == "127.0.0.1"
+    assert "warning" not in emu.log()
+
+
+def test_a_non_loopback_address_is_warned_about(tmp_path):
+    emu = WebEmulator(tmp_path, web="0.0.0.0:0")
+    try:
+        assert emu.address == "0.0.0.0"
+        emu.wait_log(f"web: warning: 0.0.0.0:{emu.port} is not a loopback address: anyone who reaches it can change "
+                     "the devices (the page hands its token to whoever loads it)")
+        assert emu.request("GET", "/", host=f"localhost:{emu.port}").status == 200
+        assert emu.request("GET", "/", host=f"0.0.0.0:{emu.port}").status == 200  # the address named
+        assert emu.request("GET", "/", host=f"evil.example:{emu.port}").status == 421
+    finally:
+        assert emu.quit() == 0, emu.log()[-3000:]
+
+
+@pytest.mark.parametrize("arg", ["nonsense", "127.0.0.1", "127.0.0.1:65536", ":8080", "127.0.0.1:-1"])
+def test_a_bad_web_argument_is_refused_before_anything_starts(tmp_path, arg):
+    if not EMU:
+        pytest.fail("CO_EMU_FAKECAN is not set", pytrace=False)
+    r = subprocess.run([EMU, "--nvm-dir", str(tmp_path), "--web", arg, "sds:17"], capture_output=True, text=True,
+                       timeout=30)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith(f"canopen-emu: --web takes HOST:PORT (127.0.0.1:8080, [::1]:8080, localhost:0; "
+                               f"port 0: any free one), not '{arg}'\n"), r.stderr
