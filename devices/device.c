@@ -594,6 +594,24 @@ const char *device_object_unit(const device_class_t *cls, const co_od_entry_t *e
     return row_text(cls, cls->od_units, e);
 }
 
+const char *device_object_title(const device_class_t *cls, uint16_t index)
+{
+    const co_od_t *od = cls->od;
+    size_t lo = 0U;
+    size_t hi = cls->od_object_names != NULL && od->objects != NULL ? od->n_objects : 0U;
+    while (lo < hi) {
+        const size_t mid = (lo + hi) / 2U;
+        if (od->objects[mid].index < index) {
+            lo = mid + 1U;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo < od->n_objects && cls->od_object_names != NULL && od->objects != NULL && od->objects[lo].index == index
+               ? cls->od_object_names[lo]
+               : NULL;
+}
+
 co_time_us_t device_save_phase_us(const device_t *dev)
 {
     return (co_time_us_t)(dev->cfg.node_id % 60U) * 1000000U;

@@ -48,6 +48,7 @@ typedef struct device_class {
     const co_od_t *od;             /**< Generated object dictionary. */
     const char *const *od_names;   /**< Its rows' EDS names, in table order (generated with it), or NULL. */
     const char *const *od_units;   /**< Its rows' units (NULL entries where none), in table order, or NULL. */
+    const char *const *od_object_names; /**< Its objects' EDS names, in the order of od->objects, or NULL. */
     uint8_t default_node_id;       /**< Node-ID when the user gives none (the manual's factory setting). */
     uint8_t default_bit_timing;    /**< LSS bit-timing index at the factory setting. */
     uint32_t core_options;         /**< CO_OPT_* for co_node_init. */
@@ -183,6 +184,9 @@ const char *device_object_name(const device_class_t *cls, const co_od_entry_t *e
 
 /** The unit of an object's value (od/<device>.toml [units]), or NULL. */
 const char *device_object_unit(const device_class_t *cls, const co_od_entry_t *e);
+
+/** The EDS name of an object as a whole, by index ("Identity object" for 0x1018), or NULL. */
+const char *device_object_title(const device_class_t *cls, uint16_t index);
 
 /**
  * When a node's periodic NVM writes fall within each minute: (configured node-ID mod 60) seconds past it.

@@ -110,6 +110,7 @@ class Od:
     name: str
     rows: list[Row] = field(default_factory=list)
     device_info: dict[str, str] = field(default_factory=dict)
+    object_names: dict[int, str] = field(default_factory=dict)  # the ParameterName of each object (index)
 
     def find(self, index: int, sub: int) -> Row | None:
         for r in self.rows:
@@ -137,6 +138,7 @@ def read_eds(path: Path, reader: str) -> Od:
     model = json.loads(r.stdout)
     od = Od(str(path), Path(path).stem)
     od.device_info = model["device"]
+    od.object_names = {o["index"]: o["name"].strip() for o in model["objects"]}
     for e in model["entries"]:
         dtype = e["type"]
         if dtype not in TYPES:
@@ -344,6 +346,7 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
             pair = f"{{{c_limit(lo, r.dtype)}, {c_limit(hi, r.dtype)}}}"
             row_limit[r.member] = limit_pairs.setdefault(pair, len(limit_pairs))
     runs = table_runs(od.rows, row_limit)
+    firsts = [i for i, run in enumerate(runs) if i == 0 or runs[i - 1][0].index != run[0].index]  # object table
     # The values whose default is not 0 first: the defaults image holds just them (co_od_t.defaults_size). A run's
     # values stay together (its row gives the first one's offset): a run with any default but 0 goes first whole.
     nonzero = [r for run in runs if not all(zero_default(x) for x in run) for r in run]
@@ -362,7 +365,9 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
              f" * sub-index; for tools, a firmware that does not use them links none of them). */\n")
     h.append(f"extern const char *const {c_name}_od_names[{len(od.rows)}];\n")
     h.append(f"/** The unit of each sub-index's value (the profile's [units]), NULL where it has none; table order. */\n")
-    h.append(f"extern const char *const {c_name}_od_units[{len(od.rows)}];\n\n")
+    h.append(f"extern const char *const {c_name}_od_units[{len(od.rows)}];\n")
+    h.append(f"/** The EDS ParameterName of each object (\"Identity object\"), in the order of the object table. */\n")
+    h.append(f"extern const char *const {c_name}_od_object_names[{len(firsts)}];\n\n")
     h.append(f"#define {upper}_OD_SUB_INDICES {len(od.rows)}U\n")
     h.append(f"#define {upper}_OD_ROWS {len(runs)}U\n")
     h.append(f"#define {upper}_OD_SIGNATURE 0x{signature(od, c_name):08X}UL\n\n#endif\n")
@@ -400,7 +405,6 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
             c.append(f"    RUN_LIMITED({args}, {row_limit[r.member]}), /* to :{run[-1].sub:02X} */\n" if has_limits(r)
                      else f"    RUN({args}), /* to :{run[-1].sub:02X} */\n")
     c.append("};\n\n")
-    firsts = [i for i, run in enumerate(runs) if i == 0 or runs[i - 1][0].index != run[0].index]
     c.append(f"static const co_od_object_t objects[{len(firsts)}] = {{\n")
     for k in range(0, len(firsts), 6):
         c.append("    " + " ".join(f"{{0x{runs[i][0].index:04X}, {i}U}}," for i in firsts[k:k + 6]) + "\n")
@@ -439,6 +443,11 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     n.append(f"const char *const {c_name}_od_names[{len(od.rows)}] = {{\n")
     for r in od.rows:
         n.append(f"    \"{c_string(r.name)}\", /* 0x{r.index:04X}:{r.sub:02X} */\n")
+    n.append("};\n\n")
+    n.append(f"const char *const {c_name}_od_object_names[{len(firsts)}] = {{\n")
+    for i in firsts:
+        index = runs[i][0].index
+        n.append(f"    \"{c_string(od.object_names.get(index, ''))}\", /* 0x{index:04X} */\n")
     n.append("};\n\n")
     n.append(f"const char *const {c_name}_od_units[{len(od.rows)}] = {{\n")
     for r in od.rows:

@@ -879,6 +879,7 @@ const device_class_t buerkert_class = {
     .od = &buerkert_fc_od,
     .od_names = buerkert_fc_od_names,
     .od_units = buerkert_fc_od_units,
+    .od_object_names = buerkert_fc_od_object_names,
     .default_node_id = 1U,
     .default_bit_timing = 2U,
     .core_options = CO_OPT_SDO_SEGMENTED | CO_OPT_SDO_BLOCK | CO_OPT_LSS_NO_UNCONFIGURE,

@@ -1176,6 +1176,7 @@ const device_class_t pro_ionizer_class = {
     .od = &pro_ionizer_od,
     .od_names = pro_ionizer_od_names,
     .od_units = pro_ionizer_od_units,
+    .od_object_names = pro_ionizer_od_object_names,
     .default_node_id = 99U,
     .default_bit_timing = 4U,
     .core_options = CO_OPT_NMT_ACCEPT_LONG | CO_OPT_TPDO_NO_COS, /* TPDOs: the 0x2002:01 grid only (E12) */

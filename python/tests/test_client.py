@@ -40,7 +40,9 @@ def test_objects_lists_a_nodes_dictionary(canopen_emu):
     rows = {o.object: o for o in c.objects(17, values=True)}
     assert len(rows) == 307  # od/buerkert-flow-controller.eds
     assert rows["0x1017:00"] == ObjectInfo(object="0x1017:00", name="Producer Heartbeat Time", type="UNSIGNED16",
-                                           access="rw", tpdo=False, rpdo=False, stored=True, value=500)
+                                           access="rw", tpdo=False, rpdo=False, stored=True, value=500,
+                                           object_name="Producer Heartbeat Time")
+    assert rows["0x1018:04"].object_name == "Identity Object"
     setpoint = rows["0x2540:01"]
     assert (setpoint.index, setpoint.sub, setpoint.unit, setpoint.rpdo) == (0x2540, 1, "l/min", True)
     assert type(setpoint.value) is float

@@ -24,6 +24,7 @@ typedef struct eds_class {
     co_od_limits_t *limits;
     uint8_t *defaults;
     const char **names;
+    const char **object_names; /* per entry of objects */
     char *path;
     char *name;
     char *summary;
@@ -192,12 +193,29 @@ static void free_class(eds_class_t *c)
     free(c->limits);
     free(c->defaults);
     free(c->names);
+    free(c->object_names);
     free(c->path);
     free(c->name);
     free(c->summary);
     rules_free(c->rules);
     eds_free(c->file);
     free(c);
+}
+
+/* The file's name of the object index (its objects are sorted by index), or NULL. */
+static const char *object_name(const eds_file_t *f, uint16_t index)
+{
+    uint32_t lo = 0U;
+    uint32_t hi = f->n_objects;
+    while (lo < hi) {
+        const uint32_t mid = (lo + hi) / 2U;
+        if (f->objects[mid].index < index) {
+            lo = mid + 1U;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo < f->n_objects && f->objects[lo].index == index ? f->objects[lo].name : NULL;
 }
 
 /* Builds the table of a file read without errors. */
@@ -212,10 +230,12 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     c->objects = calloc(n > 0U ? n : 1U, sizeof *c->objects);
     c->limits = calloc(n, sizeof *c->limits);
     c->names = calloc(n, sizeof *c->names);
+    c->object_names = calloc(n > 0U ? n : 1U, sizeof *c->object_names);
     c->path = strdup(path);
     const char *base = strrchr(path, '/');
     c->name = strdup(base != NULL ? base + 1 : path);
-    if (c->rows == NULL || c->objects == NULL || c->limits == NULL || c->names == NULL || c->path == NULL || c->name == NULL || n > 0xFFFFU) {
+    if (c->rows == NULL || c->objects == NULL || c->limits == NULL || c->names == NULL || c->object_names == NULL ||
+        c->path == NULL || c->name == NULL || n > 0xFFFFU) {
         free_class(c);
         return NULL;
     }
@@ -270,6 +290,7 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
         if (i == 0U || c->rows[i - 1U].index != c->rows[i].index) { /* the reader's entries are in (index, sub) order */
             c->objects[c->od.n_objects].index = c->rows[i].index;
             c->objects[c->od.n_objects].first = (uint16_t)i;
+            c->object_names[c->od.n_objects] = object_name(f, c->rows[i].index);
             c->od.n_objects++;
         }
     }
@@ -278,6 +299,7 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     cls->summary = c->summary != NULL ? c->summary : c->name;
     cls->od = &c->od;
     cls->od_names = c->names;
+    cls->od_object_names = c->object_names;
     cls->default_node_id = f->comm.node_id; /* 0: the command line must give one */
     cls->default_bit_timing = bit_timing_of(f);
     cls->core_options = CO_OPT_SDO_SEGMENTED | CO_OPT_SDO_BLOCK | (f->lss_supported ? 0U : CO_OPT_NO_LSS);

@@ -309,6 +309,8 @@ static json_t *object_row(emu_node_t *n, const co_od_entry_t *e, bool values)
     (void)json_object_set_new(o, "object", json_string(object));
     const char *name = device_object_name(cls, e);
     (void)json_object_set_new(o, "name", name != NULL ? jstr(name) : json_null());
+    const char *title = device_object_title(cls, e->index);
+    (void)json_object_set_new(o, "object_name", title != NULL ? jstr(title) : json_null());
     (void)json_object_set_new(o, "type", json_string(device_type_name(e->type)));
     (void)json_object_set_new(o, "access", json_string(access_name(e->flags)));
     (void)json_object_set_new(o, "tpdo", json_boolean((e->flags & CO_OD_TPDO) != 0U));

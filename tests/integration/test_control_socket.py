@@ -152,10 +152,14 @@ def test_objects_lists_the_dictionary_a_node_has(emulator, tmp_path):
     addresses = [tuple(int(x, 16) for x in r["object"].split(":")) for r in full["objects"]]
     assert addresses == sorted(addresses)
     # [1017]: UNSIGNED16 rw, LowLimit 0, HighLimit 60000, saved by 0x1010
-    assert rows["0x1017:00"] == {"object": "0x1017:00", "name": "Producer heartbeat time", "type": "UNSIGNED16",
-                                 "access": "rw", "tpdo": False, "rpdo": False, "stored": True, "low": 0,
+    assert rows["0x1017:00"] == {"object": "0x1017:00", "name": "Producer heartbeat time",
+                                 "object_name": "Producer heartbeat time", "type": "UNSIGNED16", "access": "rw", "tpdo": False, "rpdo": False, "stored": True, "low": 0,
                                  "high": 60000, "value": 700}
     assert rows["0x1008:00"]["access"] == "const" and rows["0x1008:00"]["value"] == "ES61"
+    # every sub-index of a record carries the record's name; its own is the sub-index's
+    assert {rows[f"0x1018:0{k}"]["object_name"] for k in range(5)} == {"Identity Object"}
+    assert rows["0x1018:01"]["name"] != "Identity Object"
+    assert rows["0x1003:01"]["object_name"] == "Pre-defined Error Field"
     assert (rows["0x2002:29"]["low"], rows["0x2002:29"]["high"]) == (29, 90)  # [2002sub29] LowLimit / HighLimit
     assert (rows["0x2002:35"]["type"], rows["0x2002:35"]["low"]) == ("INTEGER16", -1000)  # a signed limit
     assert rows["0x6401:02"]["unit"] == "µA" and rows["0x6401:02"]["tpdo"], rows["0x6401:02"]
@@ -175,7 +179,7 @@ def test_objects_lists_the_dictionary_a_node_has(emulator, tmp_path):
     # a REAL32 set-point of the Bürkert device, RPDO-mappable, with its unit
     bk = {r["object"]: r for r in c.request(id=7, cmd="objects", node=17, values=True)["objects"]}
     assert len(bk) == 307 and bk["0x2540:01"] == {
-        "object": "0x2540:01", "name": "Value", "type": "REAL32", "access": "rw", "tpdo": False, "rpdo": True,
+        "object": "0x2540:01", "name": "Value", "object_name": "Control Value", "type": "REAL32", "access": "rw", "tpdo": False, "rpdo": True,
         "stored": False, "unit": "l/min", "value": 0.0}
     for line, error in (('{"id":8,"cmd":"objects","node":16,"values":1}', 'objects: "values" must be true or false'),
                         ('{"id":9,"cmd":"objects","node":"all"}', "objects needs one node, not all"),

@@ -140,7 +140,8 @@ class ObjectInfo(_Addressed):
     (``None`` when the EDS has none), data type, access (``"ro"``, ``"wo"``, ``"rw"``, ``"const"``), whether it may
     be mapped into a TPDO / an RPDO, whether 0x1010 saves it, its unit and limits where there are, and with
     ``values=True`` its value (decoded as get's) or ``error``, why it cannot be read (``"no data available
-    (0x08000024)"``)."""
+    (0x08000024)"``); ``object_name`` is the EDS name of the object as a whole (``"Identity Object"`` for each
+    sub-index of 0x1018)."""
     object: str
     name: Optional[str]
     type: str
@@ -153,6 +154,7 @@ class ObjectInfo(_Addressed):
     high: Optional[Value] = None
     value: Optional[Value] = None
     error: Optional[str] = None
+    object_name: Optional[str] = None
 
 
 def decode_value(value: Any, type_name: str) -> Value:
@@ -716,4 +718,4 @@ def _object_info(o: Mapping[str, Any]) -> ObjectInfo:
         return decode_value(o[key], o["type"]) if key in o else None
     return ObjectInfo(object=o["object"], name=o["name"], type=o["type"], access=o["access"], tpdo=o["tpdo"],
                       rpdo=o["rpdo"], stored=o["stored"], unit=o.get("unit"), low=typed("low"), high=typed("high"),
-                      value=typed("value"), error=o.get("error"))
+                      value=typed("value"), error=o.get("error"), object_name=o.get("object_name"))
