@@ -133,6 +133,7 @@ def test_hello_nodes_and_show(canopen_emu):
         "canopen-emu", PACKAGE_VERSION, 1, ("vcan0",))
     assert hello.events == EVENT_KINDS
     assert c.server == hello  # connect() asked it already
+    assert abs(hello.clock_unix_us / 1e6 - time.time()) < 5 and hello.clock_time_us > 0
     expected = [NodeInfo(16, "sds", "N", 16, "PRE-OPERATIONAL", "vcan0"),
                 NodeInfo(17, "buerkert", None, 17, "PRE-OPERATIONAL", "vcan0"),
                 NodeInfo(0x20, "pro-ionizer", "full", 0x20, "PRE-OPERATIONAL", "vcan0")]

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "emu.h"
 #include "emu_commands.h"
@@ -258,6 +259,17 @@ static void cmd_hello(const request_t *q)
         (void)json_array_append_new(buses, json_string(q->emu->buses[i]->can.ifname));
     }
     (void)json_object_set_new(r, "buses", buses);
+    /* The events' clock (µs since the start) and the wall clock read together: a client turns time_us into dates
+     * (a candump log's time stamps) without a second request. */
+    struct timespec wall;
+    (void)clock_gettime(CLOCK_REALTIME, &wall);
+    const co_time_us_t now = socketcan_now_us();
+    json_t *clock = json_object();
+    (void)json_object_set_new(clock, "time_us",
+                              json_integer((json_int_t)(now > q->emu->start ? now - q->emu->start : 0U)));
+    (void)json_object_set_new(clock, "unix_us",
+                              json_integer((json_int_t)wall.tv_sec * 1000000 + (json_int_t)(wall.tv_nsec / 1000)));
+    (void)json_object_set_new(r, "clock", clock);
     send_response(q->s, r);
 }
 

@@ -122,8 +122,14 @@ def test_text_and_json_on_one_connection(emulator, tmp_path):
     assert (r["type"], r["unit"]) == ("REAL32", "l/min"), r
     r = c.request(id=32, cmd="get", node=16, object="0x6401:02")
     assert (r["type"], r["unit"], r["name"]) == ("INTEGER16", "µA", "Read Effective Current"), r
+    before = time.time()
     hello = c.request(id=4, cmd="hello")
+    after = time.time()
     assert hello["protocol"] == 1 and hello["program"] == "canopen-emu" and hello["buses"] == [IFACE], hello
+    # the two clocks read together: the wall clock within the request's round trip, the events' clock since the
+    # start (this test's emulator started less than a minute ago)
+    assert before * 1e6 - 1000 <= hello["clock"]["unix_us"] <= after * 1e6 + 1000, (before, hello["clock"], after)
+    assert 0 < hello["clock"]["time_us"] < 60_000_000, hello["clock"]
     listed = c.request(id=5, cmd="list")["nodes"]
     assert [(n["node"], n["device"], n["state"], n["bus"]) for n in listed] == [
         (16, "sds", "PRE-OPERATIONAL", IFACE), (17, "buerkert", "PRE-OPERATIONAL", IFACE)]

@@ -48,6 +48,10 @@ class ServerInfo:
     events: Tuple[str, ...]
     buses: Tuple[str, ...]
     raw: Dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    #: The events' clock (µs since the emulator started) and the wall clock (µs since 1970) read together; None
+    #: from an emulator older than this field.
+    clock_time_us: Optional[int] = field(default=None, compare=False)
+    clock_unix_us: Optional[int] = field(default=None, compare=False)
 
 
 @dataclass(frozen=True)
@@ -344,7 +348,9 @@ class Client:
         """The emulator's program name, version, protocol version, event kinds and buses."""
         answer = self.request("hello")
         info = ServerInfo(program=answer["program"], version=answer["version"], protocol=answer["protocol"],
-                          events=tuple(answer["events"]), buses=tuple(answer["buses"]), raw=answer)
+                          events=tuple(answer["events"]), buses=tuple(answer["buses"]), raw=answer,
+                          clock_time_us=answer.get("clock", {}).get("time_us"),
+                          clock_unix_us=answer.get("clock", {}).get("unix_us"))
         self.server = info
         return info
 
