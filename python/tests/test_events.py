@@ -56,6 +56,17 @@ def test_frame_events_show_the_heartbeat_period(canopen_emu):
     assert all(450_000 < b - a < 550_000 for a, b in zip(stamps, stamps[1:])), stamps
 
 
+def test_frame_events_of_several_filters(canopen_emu, can_bus):
+    c = canopen_emu.client
+    bus = can_bus("vcan0")
+    assert c.subscribe("frame", frames=[(0x120, 0x7F0), 0x7FF, "0x711"]) == ["frame"]
+    for cob_id in (0x125, 0x135, 0x7FF):
+        bus.send(can.Message(arbitration_id=cob_id, data=[1], is_extended_id=False))
+    got = [c.wait_for("frame", timeout=3) for _ in range(3)]
+    ids = sorted(ev["id"] for ev in got)
+    assert 0x125 in ids and 0x7FF in ids and 0x135 not in ids, got  # 0x135 & 0x7F0 is 0x130: no filter takes it
+
+
 def test_events_that_come_during_requests_are_queued_not_lost(canopen_emu, can_bus):
     c = canopen_emu.client
     bus = can_bus("vcan0")

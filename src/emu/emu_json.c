@@ -466,6 +466,26 @@ static bool event_mask(const request_t *q, json_t *events, uint32_t *mask)
     return true;
 }
 
+/* "frames": one "COB-ID[/MASK]" or a list of 1 to SESSION_FRAME_FILTERS of them, into ff (n: how many). */
+static bool frame_filters(const json_t *frames, session_frame_filter_t *ff, size_t *n)
+{
+    if (json_is_string(frames)) {
+        *n = 1U;
+        return json_parse_frame_filter(json_string_value(frames), &ff[0].id, &ff[0].mask);
+    }
+    if (!json_is_array(frames) || json_array_size(frames) == 0U || json_array_size(frames) > SESSION_FRAME_FILTERS) {
+        return false;
+    }
+    for (size_t i = 0U; i < json_array_size(frames); i++) {
+        const json_t *f = json_array_get(frames, i);
+        if (!json_is_string(f) || !json_parse_frame_filter(json_string_value(f), &ff[i].id, &ff[i].mask)) {
+            return false;
+        }
+    }
+    *n = json_array_size(frames);
+    return true;
+}
+
 static void cmd_subscribe(const request_t *q)
 {
     static const char *const fields[] = {"events", "nodes", "frames", NULL};
@@ -478,10 +498,13 @@ static void cmd_subscribe(const request_t *q)
     }
     emu_session_t *s = q->s;
     json_t *frames = json_object_get(q->req, "frames");
-    uint32_t fid = s->frame_id, fmask = s->frame_mask;
+    session_frame_filter_t ff[SESSION_FRAME_FILTERS];
+    size_t n_ff = s->n_frames;
+    memcpy(ff, s->frames, sizeof ff);
     if ((mask & ((uint32_t)1U << EVENT_FRAME)) != 0U) {
-        if (!json_is_string(frames) || !json_parse_frame_filter(json_string_value(frames), &fid, &fmask)) {
-            fail(q->s, q->id, "subscribe: frame events need \"frames\": \"COB-ID[/MASK]\" (\"0x700/0x780\": every heartbeat)");
+        if (!frame_filters(frames, ff, &n_ff)) {
+            fail(q->s, q->id, "subscribe: frame events need \"frames\": \"COB-ID[/MASK]\" or a list of at most %d "
+                              "(\"0x700/0x780\": every heartbeat)", SESSION_FRAME_FILTERS);
             return;
         }
     } else if (frames != NULL) {
@@ -518,8 +541,8 @@ static void cmd_subscribe(const request_t *q)
     }
     s->events |= mask;
     s->events_json = true;
-    s->frame_id = fid;
-    s->frame_mask = fmask;
+    memcpy(s->frames, ff, sizeof ff);
+    s->n_frames = n_ff;
     memcpy(s->nodes, filters, sizeof filters[0] * n_filters);
     s->n_nodes = n_filters;
     json_t *r = response(q->id, true);

@@ -51,8 +51,17 @@ void session_printf(emu_session_t *s, const char *fmt, ...)
 bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus,
                    uint32_t cob_id)
 {
-    if ((s->events & ((uint32_t)1U << kind)) == 0U || (kind == EVENT_FRAME && (cob_id & s->frame_mask) != s->frame_id)) {
+    if ((s->events & ((uint32_t)1U << kind)) == 0U) {
         return false;
+    }
+    if (kind == EVENT_FRAME) {
+        size_t k = 0U;
+        while (k < s->n_frames && (cob_id & s->frames[k].mask) != s->frames[k].id) {
+            k++;
+        }
+        if (k == s->n_frames) {
+            return false;
+        }
     }
     if (s->n_nodes == 0U || node_id == 0U) {
         return true; /* no node filter, or an event of no node (an interface's) */
@@ -149,11 +158,20 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
         return;
     }
     if ((mask & ((uint32_t)1U << EVENT_FRAME)) != 0U) {
-        const char *filter = strtok_r(NULL, " \t\r", &save);
-        if (mask != ((uint32_t)1U << EVENT_FRAME) || filter == NULL || !json_parse_frame_filter(filter, &s->frame_id, &s->frame_mask)) {
-            session_printf(s, "error: usage: subscribe frame COB-ID[/MASK] (0x700/0x780: every heartbeat)");
+        session_frame_filter_t frames[SESSION_FRAME_FILTERS];
+        size_t n = 0U;
+        bool ok = mask == ((uint32_t)1U << EVENT_FRAME);
+        for (char *w = strtok_r(NULL, " \t\r", &save); ok && w != NULL; w = strtok_r(NULL, " \t\r", &save)) {
+            ok = n < SESSION_FRAME_FILTERS && json_parse_frame_filter(w, &frames[n].id, &frames[n].mask);
+            n++;
+        }
+        if (!ok || n == 0U) {
+            session_printf(s, "error: usage: subscribe frame COB-ID[/MASK] ... (at most %d; 0x700/0x780: every "
+                              "heartbeat)", SESSION_FRAME_FILTERS);
             return;
         }
+        memcpy(s->frames, frames, sizeof frames[0] * n);
+        s->n_frames = n;
     } else {
         size_t n = 0U;
         for (char *w = strtok_r(NULL, " \t\r", &save); w != NULL; w = strtok_r(NULL, " \t\r", &save)) {

@@ -42,6 +42,14 @@ int event_kind_of(const char *name);
 
 /** Node filters a subscription may have. */
 #define SESSION_NODE_FILTERS 16
+/** COB-ID filters of frame events a subscription may have (a trace of NMT, SDO and EMCY: three). */
+#define SESSION_FRAME_FILTERS 4
+
+/** Frames whose COB-ID & mask == id. */
+typedef struct session_frame_filter {
+    uint32_t id;
+    uint32_t mask;
+} session_frame_filter_t;
 
 typedef struct session_node_filter {
     uint8_t id;
@@ -58,8 +66,8 @@ typedef struct emu_session {
     bool events_json;           /* subscribed with JSON: events are JSON lines */
     session_node_filter_t nodes[SESSION_NODE_FILTERS];
     size_t n_nodes;             /* 0: events of every node */
-    uint32_t frame_id;          /* frames whose COB-ID & frame_mask == frame_id */
-    uint32_t frame_mask;
+    session_frame_filter_t frames[SESSION_FRAME_FILTERS]; /* frame events: those any of these filters takes */
+    size_t n_frames;
     bool restricted;            /* a web session: commands that stop the emulator or write a file are refused
                                  * (command_restriction, emu_commands.h) */
 } emu_session_t;

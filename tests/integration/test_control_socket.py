@@ -85,6 +85,15 @@ class Client:
                 return msg
         raise AssertionError(f"no {kind} event {match} within {timeout} s")
 
+    def event_or_answer(self, timeout=5.0):
+        """The next answer; events that come first are kept for event()."""
+        deadline = Deadline(timeout)
+        while True:
+            msg = json.loads(self.line(deadline.left()))
+            if "event" not in msg:
+                return msg
+            self.events.append(msg)
+
     def close(self):
         self.sock.close()
 
@@ -314,6 +323,25 @@ def test_frame_events_follow_the_cob_id_filter(emulator, tmp_path):
     stamps = [float(line.split()[2]) for line in lines]
     assert all(0.45 < b - a < 0.55 for a, b in zip(stamps, stamps[1:])), stamps  # the 500 ms heartbeat
     c.close()
+    # several filters at once (JSON; the command language takes several words the same way): the node's SDO
+    # answers and its heartbeats, not the requests
+    j = Client(path)
+    assert j.request(id=1, cmd="subscribe", events=["frame"], frames=["0x591", "0x700/0x780"])["ok"]
+    bus = can.Bus(channel=IFACE, interface="socketcan")
+    try:
+        bus.send(can.Message(arbitration_id=0x611, data=[0x40, 0x18, 0x10, 1, 0, 0, 0, 0], is_extended_id=False))
+        got = [j.event("frame", timeout=2.0) for _ in range(3)]
+    finally:
+        bus.shutdown()
+    ids = {(e["dir"], e["id"]) for e in got}
+    assert ("tx", 0x591) in ids and ("tx", 0x711) in ids and not any(e["id"] == 0x611 for e in got), got
+    for frames in ([], ["0x591"] * 5, ["0x591", "bad"], 7):  # sent as they are: the schema refuses most of them
+        j.send(json.dumps({"id": 2, "cmd": "subscribe", "events": ["frame"], "frames": frames}))
+        answer = j.event_or_answer()
+        check_schema(answer, "subscribe")
+        assert answer == {"id": 2, "ok": False, "error": 'subscribe: frame events need "frames": "COB-ID[/MASK]" '
+                                                          'or a list of at most 4 ("0x700/0x780": every heartbeat)'}
+    j.close()
 
 
 def test_many_clients_and_one_too_many(emulator, tmp_path):

@@ -478,21 +478,22 @@ class Client:
     # --- events -----------------------------------------------------------------------------------------------
 
     def subscribe(self, events: Union[str, Iterable[str]], nodes: Optional[Sequence[NodeRef]] = None,
-                  frames: Union[None, str, int, Tuple[int, int]] = None) -> List[str]:
+                  frames: Union[None, str, int, Tuple[int, int], Sequence[Union[str, int, Tuple[int, int]]]] = None
+                  ) -> List[str]:
         """Asks for events of these kinds (``"all"``: every kind but ``frame``), of these nodes only (at most 16;
         replaces the node filter); ``frame`` events need ``frames``: a COB-ID, ``(cob_id, mask)`` or
-        ``"COB-ID[/MASK]"``. Returns the kinds now subscribed. Subscriptions add up."""
+        ``"COB-ID[/MASK]"``, or a list of up to 4 of them. Returns the kinds now subscribed. Subscriptions add
+        up."""
         fields: Dict[str, Any] = {"events": events if events == "all" else
                                   [events] if isinstance(events, str) else list(events)}
         if nodes is not None:
             fields["nodes"] = list(nodes)
         if frames is not None:
-            if isinstance(frames, tuple):
-                fields["frames"] = f"0x{frames[0]:X}/0x{frames[1]:X}"
-            elif isinstance(frames, int):
-                fields["frames"] = f"0x{frames:X}"
-            else:
-                fields["frames"] = frames
+            def one(f: Union[str, int, Tuple[int, int]]) -> str:
+                if isinstance(f, tuple):
+                    return f"0x{f[0]:X}/0x{f[1]:X}"
+                return f"0x{f:X}" if isinstance(f, int) else f
+            fields["frames"] = ([one(f) for f in frames] if isinstance(frames, list) else one(frames))
         return list(self.request("subscribe", **fields)["events"])
 
     def unsubscribe(self, events: Union[None, str, Iterable[str]] = None) -> None:
