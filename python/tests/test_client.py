@@ -70,6 +70,12 @@ def test_get_many_reads_several_objects_in_one_request(canopen_emu):
         c.get_many(16, [])
 
 
+def test_device_commands_of_a_node(canopen_emu):
+    usages = dict(canopen_emu.client.device_commands(16))  # sds:16
+    assert usages["load UA"] == "web charge current in uA (+ = positively charged web)"
+    assert "pollution PERCENT" in usages
+
+
 def test_set_returns_the_value_read_back(canopen_emu):
     c = canopen_emu.client
     assert c.set(16, "0x1017", 700) == 700

@@ -358,6 +358,40 @@ static void cmd_show(const request_t *q)
 }
 
 /* Any other command of the language: "args" are its words after NODE; the reply lines come back as "lines". */
+/* The device commands of one node's help, as a list a page can make controls of: each "  USAGE  TEXT" line of the
+ * reply as {usage, text} (the usage ends at the first two blanks in a row). NULL unless the lines are one node's. */
+static json_t *command_list(const json_t *lines)
+{
+    size_t headers = 0U;
+    json_t *list = json_array();
+    for (size_t i = 0U; i < json_array_size(lines); i++) {
+        const char *line = json_string_value(json_array_get(lines, i));
+        if (line == NULL) {
+            continue;
+        }
+        if (strncmp(line, "node ", 5U) == 0) {
+            headers++; /* "node 16 (sds) commands:" */
+            continue;
+        }
+        if (strncmp(line, "  ", 2U) != 0 || line[2] == ' ' || line[2] == '(' || line[2] == '\0') {
+            continue; /* "  (only the common ones)" or a continuation */
+        }
+        const char *usage = line + 2;
+        const char *gap = strstr(usage, "  ");
+        const size_t usage_len = gap != NULL ? (size_t)(gap - usage) : strlen(usage);
+        const char *text = gap != NULL ? gap + strspn(gap, " ") : "";
+        json_t *c = json_object();
+        (void)json_object_set_new(c, "usage", json_stringn(usage, usage_len));
+        (void)json_object_set_new(c, "text", jstr(text));
+        (void)json_array_append_new(list, c);
+    }
+    if (headers != 1U) {
+        json_decref(list);
+        return NULL;
+    }
+    return list;
+}
+
 static void cmd_words(const request_t *q)
 {
     static const char *const fields[] = {"node", "args", NULL};
@@ -414,6 +448,10 @@ static void cmd_words(const request_t *q)
             (void)snprintf(c.error, sizeof c.error, "%s", colon != NULL ? colon + 2 : last);
         }
         (void)json_object_set_new(r, "error", jstr(c.error[0] != '\0' ? c.error : "refused"));
+    }
+    json_t *commands = res == COMMAND_OK && strcmp(q->cmd, "help") == 0 ? command_list(c.lines) : NULL;
+    if (commands != NULL) {
+        (void)json_object_set_new(r, "commands", commands);
     }
     (void)json_object_set_new(r, "lines", c.lines);
     send_response(q->s, r);

@@ -896,6 +896,7 @@ def control_seeds():
         ("json-frame-filters", '{"id":1,"cmd":"subscribe","events":["frame"],"frames":["0x000","0x080/0x780","0x711"]}\n'
                                '{"id":2,"cmd":"subscribe","events":["frame"],"frames":[]}\n'
                                'subscribe frame 0x700/0x780 0x591 0x000 0x080 0x100\nsubscribe frame 0x580/0x780 bad\n'),
+        ("json-help-commands", '{"id":1,"cmd":"help","node":16}\n{"id":2,"cmd":"help","node":"all"}\n{"id":3,"cmd":"help"}\n'),
         ("json-quit", '{"id":"q","cmd":"quit"}\nlist\n'),
         ("protocol-faults", "fault 16 sdo-ignore 2\nfault 17 sdo-ignore 30% 7\nfault 18 sdo-delay 100\n"
                             "fault 20 sdo-abort 0x1017 0x08000020\nfault 21 heartbeat-stop\nfault 22 heartbeat-jitter 50\n"

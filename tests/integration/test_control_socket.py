@@ -312,6 +312,22 @@ def test_events_carry_the_emulators_time(emulator, tmp_path):
     c.close()
 
 
+def test_help_of_a_node_lists_its_commands(emulator, tmp_path):
+    emu, path = start(emulator, tmp_path, "sds:16", "buerkert:17")
+    c = Client(path)
+    answer = c.request(id=1, cmd="help", node=16)
+    commands = {cmd["usage"]: cmd["text"] for cmd in answer["commands"]}
+    assert commands["pollution PERCENT"] == "pollution as % of the pollution factor 0x2002:02 (sets the conductance)"
+    assert commands["supply VOLTS"] == "supply voltage (default 24.0)"
+    # one entry per usage line of the reply, in its order
+    usage_lines = [line for line in answer["lines"] if line.startswith("  ") and line[2] not in " ("]
+    assert [cmd["usage"] for cmd in answer["commands"]] == [line[2:].split("  ")[0] for line in usage_lines]
+    assert len(answer["commands"]) >= 8, answer
+    assert "commands" not in c.request(id=2, cmd="help")  # the common commands: text only
+    assert "commands" not in c.request(id=3, cmd="help", node="all")  # several nodes' lists are not mixed
+    c.close()
+
+
 def test_frame_events_follow_the_cob_id_filter(emulator, tmp_path):
     emu, path = start(emulator, tmp_path, "buerkert:17")
     c = Client(path)

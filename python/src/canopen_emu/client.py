@@ -434,6 +434,11 @@ class Client:
         """The common commands, or a node's device commands."""
         return self.command(node, "help")
 
+    def device_commands(self, node: NodeRef) -> List[Tuple[str, str]]:
+        """A node's device commands as (usage, text): ``("pollution PERCENT", "pollution as % of ...")``."""
+        answer = self.request("help", node=node)
+        return [(c["usage"], c["text"]) for c in answer.get("commands", [])]
+
     def emcy(self, node: NodeRef, code: int, register: Optional[int] = None, info: Sequence[int] = ()) -> List[str]:
         """Raises a raw CiA error: EMCY, 0x1001, 0x1003 (``emcy NODE CODE [REG [B0..B4]]``)."""
         if info and register is None:
