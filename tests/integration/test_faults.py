@@ -134,7 +134,17 @@ def test_heartbeat_state_and_jitter(emulator, network, capture):
     since = time.time()
     beats = [m.timestamp for m in capture.wait_for(0x727, count=12, since=since, timeout=4)]
     gaps = [b - a for a, b in zip(beats, beats[1:])]
-    assert all(0.035 <= g <= 0.165 for g in gaps), gaps  # 100 ms +- up to 60 ms
+    # each heartbeat leaves 0..60 ms late against the node's 100 ms grid: every gap is 100 ms +- up to 60 ms. A
+    # frame the machine itself held up further (a loaded host stalls User-Mode Linux now and then) shows as one
+    # long gap and one short one: such a pair is taken once, when the two together are two periods +- 60 ms.
+    i, stalls = 0, 0
+    while i < len(gaps):
+        if 0.035 <= gaps[i] <= 0.165:
+            i += 1
+        elif stalls == 0 and i + 1 < len(gaps) and 0.135 <= gaps[i] + gaps[i + 1] <= 0.265:
+            i, stalls = i + 2, 1
+        else:
+            raise AssertionError(f"gap {i} is not 100 ms +- 60 ms: {gaps}")
     assert max(gaps) - min(gaps) > 0.02, gaps  # and not all alike
     assert all(bytes(m.data) == b"\x7f" for m in capture.matching(0x727, since=since))
 
