@@ -365,6 +365,25 @@ def test_subscribed_events_come_with_a_later_exchange(emu):
     assert emu.exchange(session).lines() == []
 
 
+def test_show_answers_with_the_events_clock(emu):
+    """show's time_us is the events' clock when it answered: after the event that came before it, and it advances
+    as the host's clock does (a page tells the age of a heartbeat from it)."""
+    session = emu.open_session()
+    assert emu.exchange(session, '{"id":1,"cmd":"subscribe","events":["nmt"]}').lines()[0]["ok"] is True
+    emu.bus.send(0x000, bytes([0x01, 16]))  # NMT start node 16
+    emu.bus.expect(lambda i, d: i == 0x710 and d == b"\x05", 5.0, "heartbeat of node 16 in Operational")
+    (event,) = emu.exchange(session).lines()
+    first = emu.exchange(session, '{"id":2,"cmd":"show","node":16}').lines()[0]
+    asked = time.monotonic()
+    check_schema(first, "show")
+    assert event["time_us"] <= first["time_us"] < event["time_us"] + 5_000_000, (event, first)
+    assert first["nodes"][0]["last_heartbeat_us"] <= first["time_us"], first
+    time.sleep(0.5)  # a span of the host's clock to compare with
+    second = emu.exchange(session, '{"id":3,"cmd":"show","node":16}').lines()[0]
+    span = time.monotonic() - asked
+    assert 500_000 <= second["time_us"] - first["time_us"] <= span * 1e6 + 100_000, (first["time_us"], second, span)
+
+
 def test_quit_exit_and_export_dcf_are_refused_in_both_framings(emu, tmp_path):
     session = emu.open_session()
     dcf = tmp_path / "node16.dcf"
