@@ -206,7 +206,9 @@ def test_page_is_served_with_the_token_and_the_security_headers(emu):
         token = re.search(rb'content="([0-9a-f]{32})"', page.body).group(1)
         assert page.body == source.replace(PLACEHOLDER, token)
         assert token.decode() == emu.token()
-    for name, mime in (("app.js", "text/javascript; charset=utf-8"), ("style.css", "text/css; charset=utf-8")):
+    files = [(name, "text/javascript; charset=utf-8") for name in ("app.js", "api.js", "format.js", "nodes.js",
+                                                                    "overview.js")]
+    for name, mime in files + [("style.css", "text/css; charset=utf-8"), ("icon.svg", "image/svg+xml")]:
         answer = emu.request("GET", "/" + name)
         assert answer.status == 200
         assert answer.headers["Content-Type"] == mime
@@ -223,7 +225,7 @@ def test_page_is_served_with_the_token_and_the_security_headers(emu):
 def test_unknown_paths_are_404_and_nothing_is_read_from_disk(emu):
     for path in ("/nope", "/index.htm", "/INDEX.HTML", "/index.html/", "//index.html", "/web/index.html",
                  "/../etc/passwd", "/%2e%2e/etc/passwd", "/..%2f..%2fetc%2fpasswd", "/./index.html",
-                 "/etc/passwd", "/CMakeLists.txt", "/api.js"):
+                 "/etc/passwd", "/CMakeLists.txt", "/package.json", "/api.mjs"):
         answer = emu.request("GET", path)
         assert (answer.status, answer.body) == (404, b"not found\n"), path
         assert answer.headers["Content-Type"] == "text/plain; charset=utf-8"
