@@ -1,77 +1,57 @@
-// The web view of canopen-emu, first page (docs/web.md): one control session over HTTP, the nodes' list asked for
-// every 250 ms. The page is a control-protocol client (docs/control-protocol.md): each exchange posts request
-// lines and gets back every line queued for the session since the last one (answers and subscribed events).
+// The web view of canopen-emu (docs/web.md): the overview of every node. The page is a control-protocol client
+// (docs/control-protocol.md) over one web session: it exchanges every 250 ms, asks `show all` once a second, and
+// takes the events nmt, boot-up, emcy and fault in between, so that a change shows with the next exchange.
+
+import {Session, poster} from "./api.js";
+import {NodeTable} from "./nodes.js";
+import {Overview} from "./overview.js";
+
+const EXCHANGE_MS = 250;
+const SHOW_MS = 1000;
+const EVENTS = ["nmt", "boot-up", "emcy", "fault"];
 
 const token = document.querySelector('meta[name="canopen-emu-token"]').content;
-const statusLine = document.getElementById("status");
-const rows = document.querySelector("#nodes tbody");
-const PERIOD_MS = 250;
+const nodes = new NodeTable();
+const view = new Overview(document.getElementById("nodes"), document.getElementById("status"));
+let exchangeProblem = "connecting"; // why the last exchange failed; null: it did not
+let requestProblem = null; // why the last show (or the subscribe) failed; null: it did not
+let showAsked = false; // a show is on its way: never a second one, however slow the answers come
+let lastShow = -Infinity; // performance.now() of the last show asked
 
-let session = null; // the id of our session; null: make one (at start, or after it expired)
-let nextId = 1;
-
-function post(path, body) {
-  return fetch(path, {
-    method: "POST",
-    headers: {"X-Canopen-Emu": token, "Content-Type": "application/x-ndjson"},
-    body,
-    cache: "no-store",
-  });
+function askShow() {
+  showAsked = true;
+  lastShow = performance.now();
+  session.request("show", {node: "all"})
+    .then((answer) => {
+      nodes.show(answer, performance.now());
+      requestProblem = null;
+    })
+    .catch((error) => { requestProblem = `show all: ${error.message}`; })
+    .finally(() => { showAsked = false; });
 }
 
-async function openSession() {
-  const answer = await post("/api/session", "");
-  if (!answer.ok) {
-    throw new Error(`no session: HTTP ${answer.status} ${(await answer.json()).error ?? ""}`);
-  }
-  session = (await answer.json()).session;
-}
-
-function showNodes(nodes) {
-  const fresh = document.createDocumentFragment();
-  for (const node of nodes) {
-    const tr = document.createElement("tr");
-    for (const value of [node.node, node.device, node.bus, node.state]) {
-      const td = document.createElement("td");
-      td.textContent = String(value); // text, never markup: nothing the emulator says becomes HTML
-      tr.append(td);
-    }
-    fresh.append(tr);
-  }
-  rows.replaceChildren(fresh);
-  statusLine.textContent = `${nodes.length} node(s)`;
-}
-
-async function exchange() {
-  if (session === null) {
-    await openSession();
-  }
-  const id = nextId++;
-  const answer = await post(`/api/session/${session}`, JSON.stringify({id, cmd: "list"}) + "\n");
-  if (answer.status === 404) {
-    session = null; // expired or dropped: the next exchange makes a new one
-    throw new Error("session expired; reconnecting");
-  }
-  if (!answer.ok) {
-    throw new Error(`HTTP ${answer.status}`);
-  }
-  for (const line of (await answer.text()).split("\n")) {
-    if (line !== "") {
-      const message = JSON.parse(line);
-      if (message.id === id && message.ok) {
-        showNodes(message.nodes);
-      }
-    }
-  }
-}
+const session = new Session(poster(token), {
+  onOpen: (s) => {
+    s.request("subscribe", {events: EVENTS}).catch((error) => { requestProblem = `subscribe: ${error.message}`; });
+    lastShow = -Infinity; // a new session: everything anew, at once
+  },
+  onEvent: (event) => nodes.event(event, performance.now()),
+  onStray: (line) => console.warn("canopen-emu: a line no request of this page asked for:", line),
+});
 
 async function loop() {
   try {
-    await exchange();
+    if (!showAsked && performance.now() - lastShow >= SHOW_MS) {
+      askShow();
+    }
+    await session.exchange();
+    exchangeProblem = null;
   } catch (error) {
-    statusLine.textContent = error.message;
+    // fetch's TypeError: no HTTP answer at all
+    exchangeProblem = error instanceof TypeError ? "the emulator does not answer (stopped?)" : error.message;
   }
-  setTimeout(loop, PERIOD_MS);
+  view.schedule(() => ({rows: nodes.rows(performance.now()), problem: exchangeProblem ?? requestProblem}));
+  setTimeout(loop, EXCHANGE_MS);
 }
 
 loop();

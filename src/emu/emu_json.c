@@ -354,6 +354,9 @@ static void cmd_show(const request_t *q)
     }
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "nodes", nodes);
+    /* The events' clock now: a view tells how long ago the times above were without an event to compare with. */
+    const co_time_us_t now = socketcan_now_us();
+    (void)json_object_set_new(r, "time_us", json_integer((json_int_t)(now > q->emu->start ? now - q->emu->start : 0U)));
     send_response(q->s, r);
 }
 

@@ -300,8 +300,10 @@ def test_events_carry_the_emulators_time(emulator, tmp_path):
         c.request(id=2, cmd="emcy", node=16, args=["0x5000", 1, 0xA1, 0xB2, 0xC3, 0xD4, 0xE5])
         emcy = c.event("emcy", node=16)
         assert (emcy["code"], emcy["register"], emcy["info"]) == (0x5000, 1, "A1B2C3D4E5"), emcy
-        last = c.request(id=21, cmd="show", node=16)["nodes"][0]["last_emcy"]  # the same EMCY, on the same clock
+        shown = c.request(id=21, cmd="show", node=16)
+        last = shown["nodes"][0]["last_emcy"]  # the same EMCY, on the same clock
         assert last == {"code": 0x5000, "register": 1, "info": "A1B2C3D4E5", "time_us": emcy["time_us"]}, last
+        assert emcy["time_us"] <= shown["time_us"] < emcy["time_us"] + 5_000_000, shown  # the answer's now, after it
         c.request(id=3, cmd="power-cycle", node=16)
         boot = c.event("boot-up", node=16)
         assert boot["time_us"] >= ev["time_us"]

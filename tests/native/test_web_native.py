@@ -206,7 +206,9 @@ def test_page_is_served_with_the_token_and_the_security_headers(emu):
         token = re.search(rb'content="([0-9a-f]{32})"', page.body).group(1)
         assert page.body == source.replace(PLACEHOLDER, token)
         assert token.decode() == emu.token()
-    for name, mime in (("app.js", "text/javascript; charset=utf-8"), ("style.css", "text/css; charset=utf-8")):
+    files = [(name, "text/javascript; charset=utf-8") for name in ("app.js", "api.js", "format.js", "nodes.js",
+                                                                    "overview.js")]
+    for name, mime in files + [("style.css", "text/css; charset=utf-8"), ("icon.svg", "image/svg+xml")]:
         answer = emu.request("GET", "/" + name)
         assert answer.status == 200
         assert answer.headers["Content-Type"] == mime
@@ -223,7 +225,7 @@ def test_page_is_served_with_the_token_and_the_security_headers(emu):
 def test_unknown_paths_are_404_and_nothing_is_read_from_disk(emu):
     for path in ("/nope", "/index.htm", "/INDEX.HTML", "/index.html/", "//index.html", "/web/index.html",
                  "/../etc/passwd", "/%2e%2e/etc/passwd", "/..%2f..%2fetc%2fpasswd", "/./index.html",
-                 "/etc/passwd", "/CMakeLists.txt", "/api.js"):
+                 "/etc/passwd", "/CMakeLists.txt", "/package.json", "/api.mjs"):
         answer = emu.request("GET", path)
         assert (answer.status, answer.body) == (404, b"not found\n"), path
         assert answer.headers["Content-Type"] == "text/plain; charset=utf-8"
@@ -363,6 +365,25 @@ def test_subscribed_events_come_with_a_later_exchange(emu):
     emu.bus.send(0x000, bytes([0x01, 17]))  # node 17 is not subscribed to
     emu.bus.sdo(17, upload(0x1001, 0))  # answered after the NMT frame before it was handled
     assert emu.exchange(session).lines() == []
+
+
+def test_show_answers_with_the_events_clock(emu):
+    """show's time_us is the events' clock when it answered: after the event that came before it, and it advances
+    as the host's clock does (a page tells the age of a heartbeat from it)."""
+    session = emu.open_session()
+    assert emu.exchange(session, '{"id":1,"cmd":"subscribe","events":["nmt"]}').lines()[0]["ok"] is True
+    emu.bus.send(0x000, bytes([0x01, 16]))  # NMT start node 16
+    emu.bus.expect(lambda i, d: i == 0x710 and d == b"\x05", 5.0, "heartbeat of node 16 in Operational")
+    (event,) = emu.exchange(session).lines()
+    first = emu.exchange(session, '{"id":2,"cmd":"show","node":16}').lines()[0]
+    asked = time.monotonic()
+    check_schema(first, "show")
+    assert event["time_us"] <= first["time_us"] < event["time_us"] + 5_000_000, (event, first)
+    assert first["nodes"][0]["last_heartbeat_us"] <= first["time_us"], first
+    time.sleep(0.5)  # a span of the host's clock to compare with
+    second = emu.exchange(session, '{"id":3,"cmd":"show","node":16}').lines()[0]
+    span = time.monotonic() - asked
+    assert 500_000 <= second["time_us"] - first["time_us"] <= span * 1e6 + 100_000, (first["time_us"], second, span)
 
 
 def test_quit_exit_and_export_dcf_are_refused_in_both_framings(emu, tmp_path):

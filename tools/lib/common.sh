@@ -1,10 +1,14 @@
 # Shared by tools/run-tests and tools/demo (sourced, POSIX sh): Debian packages and the Python venv.
 
-# need_tools "cmd:package ..." installs the packages whose command is missing (as root, with apt-get); an
-# absolute path instead of a command is a file the package gives (a library's header).
+# need_tools "cmd:package ..." [APT-OPTION...] installs the packages whose command is missing (as root, with
+# apt-get); an absolute path instead of a command is a file the package gives (a library's header). The options go
+# to apt-get install: --no-install-recommends keeps a package's recommends out (chromium's: some 100 packages,
+# systemd among them, that a headless browser under test never uses).
 need_tools() {
   _need=""
-  for _t in $1; do
+  _list=$1
+  shift
+  for _t in $_list; do
     case ${_t%%:*} in
       /*) [ -e "${_t%%:*}" ] || _need="$_need ${_t#*:}" ;;
       *) command -v "${_t%%:*}" >/dev/null 2>&1 || _need="$_need ${_t#*:}" ;;
@@ -13,9 +17,9 @@ need_tools() {
   [ -z "$_need" ] && return 0
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
     echo "installing$_need"
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $_need >/dev/null
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" $_need >/dev/null
   else
-    echo "missing$_need; install them (Debian: apt-get install$_need)" >&2
+    echo "missing$_need; install them (Debian: apt-get install${1:+ $*}$_need)" >&2
     return 1
   fi
 }

@@ -1,0 +1,132 @@
+// web/api.js: the page's session over HTTP, against a stand-in for the emulator's /api (docs/web.md "HTTP API").
+import {test} from "node:test";
+import assert from "node:assert/strict";
+
+import {Session, poster} from "../../../web/api.js";
+
+/** A stand-in emulator: records every post; answers each with the next of `replies` (a function of the post, or a
+ * {status, text}); an Error in replies is thrown as fetch throws when nothing answers. */
+function fakeApi(replies) {
+  const posts = [];
+  const post = async (path, body) => {
+    posts.push({path, body});
+    const reply = replies.shift();
+    assert.ok(reply !== undefined, `no reply left for ${path} ${body}`);
+    if (reply instanceof Error) {
+      throw reply;
+    }
+    return typeof reply === "function" ? reply(path, body) : reply;
+  };
+  return {post, posts};
+}
+
+const opened = (id) => ({status: 200, text: JSON.stringify({session: id})});
+const lines = (...objects) => ({status: 200, text: objects.map((o) => JSON.stringify(o) + "\n").join("")});
+
+test("poster sends the token and the body, and gives status and text", async () => {
+  const calls = [];
+  const post = poster("ab".repeat(16), async (path, options) => {
+    calls.push({path, options});
+    return {status: 200, text: async () => "{}\n"};
+  });
+  assert.deepEqual(await post("/api/session/x", "line"), {status: 200, text: "{}\n"});
+  assert.deepEqual(calls, [{path: "/api/session/x", options: {
+    method: "POST", headers: {"X-Canopen-Emu": "ab".repeat(16), "Content-Type": "application/x-ndjson"},
+    body: "line", cache: "no-store"}}]);
+});
+
+test("opens a session, runs onOpen first, posts the queued requests and matches answers by id", async () => {
+  const events = [];
+  const api = fakeApi([opened("s1"),
+    lines({id: 2, ok: true, events: ["nmt"]}, {event: "nmt", node: 16}, {id: 1, ok: true, nodes: []})]);
+  const session = new Session(api.post, {
+    onOpen: (s) => { s.request("subscribe", {events: ["nmt"]}).then((a) => events.push(["subscribed", a.events])); },
+    onEvent: (e) => events.push(["event", e.node]),
+  });
+  const shown = session.request("show", {node: "all"});
+  await session.exchange();
+  assert.deepEqual(await shown, {id: 1, ok: true, nodes: []});
+  assert.deepEqual(api.posts, [
+    {path: "/api/session", body: ""},
+    {path: "/api/session/s1", body: '{"id":2,"cmd":"subscribe","events":["nmt"]}\n{"id":1,"cmd":"show","node":"all"}'},
+  ]);
+  assert.deepEqual(events, [["event", 16], ["subscribed", ["nmt"]]]); // events at once; answers a microtask later
+});
+
+test("an answer that comes with a later exchange still finds its request; errors reject", async () => {
+  const stray = [];
+  const api = fakeApi([opened("s1"), lines(), lines({id: 1, ok: false, error: "no node 99"}, {id: 2, ok: true}),
+    {status: 200, text: "error: web session line 3 is longer than 2047 bytes: ignored\n{\"id\":null,\"ok\":false}\n"}]);
+  const session = new Session(api.post, {onStray: (line) => stray.push(line)});
+  const refused = session.request("show", {node: 99});
+  const later = session.request("hello");
+  await session.exchange();
+  await session.exchange();
+  await assert.rejects(refused, {message: "no node 99"});
+  assert.deepEqual(await later, {id: 2, ok: true});
+  await session.exchange();
+  assert.deepEqual(stray, ["error: web session line 3 is longer than 2047 bytes: ignored", '{"id":null,"ok":false}']);
+  assert.deepEqual(api.posts.map((p) => p.body), ["", '{"id":1,"cmd":"show","node":99}\n{"id":2,"cmd":"hello"}', "", ""]);
+});
+
+test("404: the requests posted fail, a new session is opened and onOpen subscribes again", async () => {
+  const subscribed = [];
+  const api = fakeApi([opened("s1"), lines(), {status: 404, text: '{"error":"no such session"}'},
+    opened("s2"), lines({id: 4, ok: true}, {id: 3, ok: true, nodes: [1]})]);
+  const session = new Session(api.post, {
+    onOpen: (s) => subscribed.push(s.request("subscribe", {events: ["nmt"]}).then((a) => a.id, (e) => e.message)),
+  });
+  await session.exchange(); // s1, with its subscribe (id 1, never answered)
+  const lost = session.request("show", {node: "all"}); // id 2
+  await assert.rejects(session.exchange(), {message: "the session expired; opening a new one"});
+  await assert.rejects(lost, {message: "the session ended before it answered"});
+  const again = session.request("show", {node: "all"}); // id 3, goes to s2 behind its subscribe (id 4)
+  await session.exchange();
+  assert.deepEqual(await again, {id: 3, ok: true, nodes: [1]});
+  assert.deepEqual(await Promise.all(subscribed), ["the session ended before it answered", 4]);
+  assert.deepEqual(api.posts.map((p) => [p.path, p.body]), [
+    ["/api/session", ""], ["/api/session/s1", '{"id":1,"cmd":"subscribe","events":["nmt"]}'],
+    ["/api/session/s1", '{"id":2,"cmd":"show","node":"all"}'],
+    ["/api/session", ""], ["/api/session/s2", '{"id":4,"cmd":"subscribe","events":["nmt"]}\n{"id":3,"cmd":"show","node":"all"}'],
+  ]);
+});
+
+test("no answer at all: the requests posted fail (never sent twice), the session is kept", async () => {
+  const api = fakeApi([opened("s1"), new TypeError("Failed to fetch"), lines({id: 2, ok: true})]);
+  const session = new Session(api.post);
+  const lost = session.request("set", {node: 16, object: "0x1017", value: 500});
+  await assert.rejects(session.exchange(), TypeError);
+  await assert.rejects(lost, {message: "no answer: Failed to fetch"});
+  const next = session.request("hello");
+  await session.exchange();
+  assert.deepEqual(await next, {id: 2, ok: true});
+  assert.deepEqual(api.posts.map((p) => p.path), ["/api/session", "/api/session/s1", "/api/session/s1"]);
+  assert.equal(api.posts[2].body, '{"id":2,"cmd":"hello"}');
+});
+
+test("429: the lines were not taken and go again with the next exchange", async () => {
+  const api = fakeApi([opened("s1"), {status: 429, text: '{"error":"earlier requests still wait"}'},
+    lines({id: 1, ok: true, program: "canopen-emu"})]);
+  const session = new Session(api.post);
+  const hello = session.request("hello");
+  await session.exchange();
+  const list = session.request("list");
+  await session.exchange();
+  assert.equal((await hello).program, "canopen-emu");
+  assert.deepEqual(api.posts.slice(1).map((p) => p.body), ['{"id":1,"cmd":"hello"}', '{"id":1,"cmd":"hello"}\n{"id":2,"cmd":"list"}']);
+  const pending = Symbol("pending");
+  assert.equal(await Promise.race([list, Promise.resolve(pending)]), pending); // list (id 2): no answer yet
+});
+
+test("other refusals: the error the emulator gives, and a session that cannot be opened", async () => {
+  const api = fakeApi([{status: 503, text: '{"error":"too many web sessions (at most 8)"}'}, opened("s1"),
+    {status: 403, text: '{"error":"missing or wrong X-Canopen-Emu token: load the page again"}'},
+    {status: 500, text: "not json\n"}]);
+  const session = new Session(api.post);
+  await assert.rejects(session.exchange(), {message: "HTTP 503: too many web sessions (at most 8)"});
+  const refused = session.request("hello");
+  await assert.rejects(session.exchange(), {message: "HTTP 403: missing or wrong X-Canopen-Emu token: load the page again"});
+  await assert.rejects(refused, {message: "HTTP 403: missing or wrong X-Canopen-Emu token: load the page again"});
+  await assert.rejects(session.exchange(), {message: "HTTP 500: not json"});
+  assert.deepEqual(api.posts.map((p) => p.path), ["/api/session", "/api/session", "/api/session/s1", "/api/session/s1"]);
+});

@@ -1,0 +1,107 @@
+// web/nodes.js: the overview's model, from show answers and events, and the emulator's clock behind the ages.
+import {test} from "node:test";
+import assert from "node:assert/strict";
+
+import {COLUMNS, EmuClock, NodeTable} from "../../../web/nodes.js";
+
+// As show answers them (docs/control-protocol.md), the three devices of the README's example.
+function shown(node, device, variant, extra = {}) {
+  return {
+    node, device, variant, started_as: node, state: "PRE-OPERATIONAL", bus: "vcan0", error_register: 0, errors: [],
+    device_type: 0x191, heartbeat_ms: 1000, last_heartbeat_us: 1_000_000, faults: [], last_emcy: null,
+    tx_frames: 1, rx_frames: 0, tx_dropped: 0, ...extra,
+  };
+}
+
+const SHOW = {
+  id: 1, ok: true, time_us: 1_500_000,
+  nodes: [
+    shown(18, "buerkert", null, {device_type: 0, heartbeat_ms: 500}),
+    shown(16, "pro-ionizer", "full", {device_type: 0xF0191, last_heartbeat_us: null}),
+    shown(17, "sds", "N", {heartbeat_ms: 5000, faults: ["sdo-delay"], error_register: 5,
+      last_emcy: {code: 0x3210, register: 5, info: "0000000000", time_us: 200_000}}),
+  ],
+};
+
+function event(kind, node, timeUs, fields = {}) {
+  return {event: kind, time_us: timeUs, bus: "vcan0", node, device: "sds", text: "", ...fields};
+}
+
+test("the clock runs from the last show on the page's clock, and an event's later time moves it on", () => {
+  const clock = new EmuClock();
+  assert.equal(clock.now(5), null);
+  clock.set(1_500_000, 10_000); // the show answer's time_us, and performance.now() when it came
+  assert.equal(clock.now(10_000), 1_500_000);
+  assert.equal(clock.now(10_250), 1_750_000);
+  assert.equal(clock.now(9_000), 1_500_000); // never before the anchor
+  clock.advance(1_600_000, 10_250); // an earlier event: no change
+  assert.equal(clock.now(10_250), 1_750_000);
+  clock.advance(2_000_000, 10_250); // later than the estimate: the estimate lagged
+  assert.equal(clock.now(10_350), 2_100_000);
+});
+
+test("rows: every column, ordered by node-ID, ages against the clock", () => {
+  const table = new NodeTable();
+  table.show(SHOW, 0);
+  const rows = table.rows(500); // 0.5 s after the answer: the clock is at 2.0 s
+  assert.deepEqual(rows.map((r) => r.key), ["vcan0/16", "vcan0/17", "vcan0/18"]);
+  assert.deepEqual(rows.map((r) => Object.keys(r.cells)), rows.map(() => COLUMNS.map((c) => c.field)));
+  assert.deepEqual(rows[0].cells, {
+    "node": "16", "bus": "vcan0", "device": "pro-ionizer (full)", "state": "PRE-OPERATIONAL",
+    "device-type": "0x000F0191", "heartbeat": "1000 ms", "heartbeat-age": "never", "error-register": "0x00",
+    "faults": "", "emcy": "", "emcy-age": "",
+  });
+  assert.deepEqual(rows[1].cells, {
+    "node": "17", "bus": "vcan0", "device": "sds (N)", "state": "PRE-OPERATIONAL", "device-type": "0x00000191",
+    "heartbeat": "5000 ms", "heartbeat-age": "1.0 s ago", "error-register": "0x05", "faults": "sdo-delay",
+    "emcy": "0x3210 reg 0x05 info 0000000000", "emcy-age": "1.8 s ago",
+  });
+  assert.equal(rows[2].cells["device"], "buerkert");
+  assert.equal(rows[2].cells["device-type"], "0x00000000");
+  assert.equal(rows[2].cells["heartbeat"], "500 ms");
+  assert.equal(table.rows(3_000)[1].cells["heartbeat-age"], "3.5 s ago"); // it grows as time goes on
+});
+
+test("nodes of several buses: by bus in the emulator's order, then node-ID; an ID on two buses is two rows", () => {
+  const table = new NodeTable();
+  table.show({time_us: 0, nodes: [shown(20, "sds", "N", {bus: "vcan1"}), shown(5, "sds", "N"),
+    shown(3, "sds", "N", {bus: "vcan1"}), shown(20, "sds", "N")]}, 0);
+  assert.deepEqual(table.rows(0).map((r) => r.key), ["vcan1/3", "vcan1/20", "vcan0/5", "vcan0/20"]);
+});
+
+test("events change their node's row until the next show says otherwise", () => {
+  const table = new NodeTable();
+  table.show(SHOW, 0);
+  table.event(event("nmt", 17, 1_600_000, {from: "PRE-OPERATIONAL", to: "OPERATIONAL"}), 100);
+  table.event(event("emcy", 18, 1_700_000, {code: 0x5000, register: 1, info: "A1B2C3D4E5"}), 200);
+  table.event(event("fault", 16, 1_700_000, {fault: "heartbeat-stop", action: "injected"}), 200);
+  table.event(event("fault", 17, 1_700_000, {fault: "sdo-delay", action: "cleared"}), 200);
+  table.event(event("fault", 16, 1_700_000, {fault: "tpdo-freeze", action: "injected"}), 200);
+  table.event(event("nmt", 99, 1_700_000, {from: "PRE-OPERATIONAL", to: "STOPPED"}), 200); // not shown yet: ignored
+  let rows = table.rows(200);
+  assert.equal(rows.length, 3);
+  assert.deepEqual(rows.map((r) => r.state), ["PRE-OPERATIONAL", "OPERATIONAL", "PRE-OPERATIONAL"]);
+  assert.equal(rows[1].cells["state"], "OPERATIONAL");
+  assert.equal(rows[0].cells["faults"], "heartbeat-stop, tpdo-freeze");
+  assert.equal(rows[1].cells["faults"], "");
+  assert.equal(rows[2].cells["emcy"], "0x5000 reg 0x01 info A1B2C3D4E5");
+  assert.equal(rows[2].cells["error-register"], "0x01");
+  assert.equal(rows[2].cells["emcy-age"], "0.0 s ago"); // the clock moved to the event's time
+  table.event(event("fault", 16, 1_800_000, {fault: "heartbeat-stop", action: "ended"}), 300);
+  table.event(event("boot-up", 17, 1_900_000), 400);
+  rows = table.rows(400);
+  assert.equal(rows[0].cells["faults"], "tpdo-freeze");
+  assert.equal(rows[1].cells["state"], "PRE-OPERATIONAL");
+  assert.equal(rows[1].cells["heartbeat-age"], "0.0 s ago");
+  table.show({time_us: 3_000_000, nodes: [shown(17, "sds", "N")]}, 1_000); // node 16 and 18 gone: their rows too
+  rows = table.rows(1_000);
+  assert.deepEqual(rows.map((r) => [r.key, r.cells["faults"], r.cells["heartbeat-age"]]), [["vcan0/17", "", "2.0 s ago"]]);
+});
+
+test("a show's lists are the table's own: changing them later changes no row", () => {
+  const answer = structuredClone(SHOW);
+  const table = new NodeTable();
+  table.show(answer, 0);
+  table.event(event("fault", 17, 1_600_000, {fault: "reboot", action: "injected"}), 0);
+  assert.deepEqual(answer.nodes[2].faults, ["sdo-delay"]);
+});

@@ -1,0 +1,137 @@
+// The page's control session over HTTP (docs/web.md "HTTP API"): request lines of the control protocol
+// (docs/control-protocol.md) are queued, posted with the next exchange, and answered by a later one, matched by
+// their id; events come with the exchanges too. A session that expired or was dropped (404) is replaced by a new
+// one, and the page's onOpen runs again to subscribe anew. No DOM: tested with node --test (tests/web/js).
+
+/** A POST that resolves to {status, text}; `fetchImpl` is the browser's fetch (a stand-in in the tests). */
+export function poster(token, fetchImpl = globalThis.fetch) {
+  return async (path, body) => {
+    const answer = await fetchImpl(path, {
+      method: "POST",
+      headers: {"X-Canopen-Emu": token, "Content-Type": "application/x-ndjson"},
+      body,
+      cache: "no-store",
+    });
+    return {status: answer.status, text: await answer.text()};
+  };
+}
+
+/** What an /api answer other than 200 says: its JSON "error", else its text. */
+function failure(answer) {
+  let said = answer.text.trim();
+  try {
+    said = JSON.parse(answer.text).error ?? said;
+  } catch {
+    // not JSON: the text as it is
+  }
+  return new Error(`HTTP ${answer.status}: ${said}`);
+}
+
+export class Session {
+  #post;
+  #onOpen;
+  #onEvent;
+  #onStray;
+  #id = null; // the session's id; null: open one with the next exchange
+  #nextId = 1; // request ids go on across sessions, so that a late answer never matches a newer request
+  #queue = []; // {id, line} of the requests not yet posted
+  #waiting = new Map(); // request id -> {resolve, reject} until its answer comes
+
+  /**
+   * post: (path, body) => Promise<{status, text}> (poster()). onOpen(session): after each new session, before its
+   * first exchange: subscribe here. onEvent(event): each event, in order. onStray(line): a line that is neither an
+   * event nor the answer to a request waiting (a refusal of a line the emulator could not read).
+   */
+  constructor(post, {onOpen = () => {}, onEvent = () => {}, onStray = () => {}} = {}) {
+    this.#post = post;
+    this.#onOpen = onOpen;
+    this.#onEvent = onEvent;
+    this.#onStray = onStray;
+  }
+
+  /** Queues a JSON request; resolves to its answer (ok true), rejects with its error (ok false) or when the
+   * session ends before it answered. */
+  request(cmd, fields = {}) {
+    const id = this.#nextId++;
+    this.#queue.push({id, line: JSON.stringify({id, cmd, ...fields})});
+    return new Promise((resolve, reject) => this.#waiting.set(id, {resolve, reject}));
+  }
+
+  /** One round trip: opens a session first if there is none, posts the queued requests, hands out what came back.
+   * Rejects when the emulator cannot be reached or refuses the exchange; the next exchange tries again. */
+  async exchange() {
+    if (this.#id === null) {
+      const opened = await this.#post("/api/session", "");
+      if (opened.status !== 200) {
+        throw failure(opened);
+      }
+      this.#id = JSON.parse(opened.text).session;
+      const queued = this.#queue;
+      this.#queue = [];
+      this.#onOpen(this); // its requests (subscribe) go before those queued while there was no session
+      this.#queue.push(...queued);
+    }
+    const sent = this.#queue;
+    this.#queue = [];
+    let answer;
+    try {
+      answer = await this.#post(`/api/session/${this.#id}`, sent.map((r) => r.line).join("\n"));
+    } catch (error) {
+      this.#endPosted(new Error(`no answer: ${error.message}`)); // they may or may not have run: never sent twice
+      throw error;
+    }
+    if (answer.status === 429) {
+      this.#queue = sent.concat(this.#queue); // not taken (earlier lines still wait): they go with the next one
+      return;
+    }
+    if (answer.status === 404) {
+      this.#id = null;
+      this.#endPosted(new Error("the session ended before it answered"));
+      throw new Error("the session expired; opening a new one");
+    }
+    if (answer.status !== 200) {
+      this.#endPosted(failure(answer));
+      throw failure(answer);
+    }
+    for (const line of answer.text.split("\n")) {
+      if (line !== "") {
+        this.#take(line);
+      }
+    }
+  }
+
+  #take(line) {
+    let message = null;
+    try {
+      message = line.startsWith("{") ? JSON.parse(line) : null;
+    } catch {
+      // not an answer of ours: a stray line
+    }
+    if (message !== null && "event" in message) {
+      this.#onEvent(message);
+      return;
+    }
+    const waiting = message === null ? undefined : this.#waiting.get(message.id);
+    if (waiting === undefined) {
+      this.#onStray(line);
+      return;
+    }
+    this.#waiting.delete(message.id);
+    if (message.ok) {
+      waiting.resolve(message);
+    } else {
+      waiting.reject(new Error(message.error));
+    }
+  }
+
+  /** Every request posted and not answered fails with `error`; those queued since go with the next exchange. */
+  #endPosted(error) {
+    const queued = new Set(this.#queue.map((r) => r.id));
+    for (const [id, {reject}] of this.#waiting) {
+      if (!queued.has(id)) {
+        this.#waiting.delete(id);
+        reject(error);
+      }
+    }
+  }
+}

@@ -1,0 +1,112 @@
+// The overview's model (docs/web.md): every node as the last `show all` gave it, kept up to date between two of them
+// by the events, and the emulator's clock estimated on the page's, for the ages. No DOM: tested with node --test.
+
+import * as format from "./format.js";
+
+/** The columns of the overview, in order: field (the cell's data-field) and title. */
+export const COLUMNS = [
+  ["node", "node"], ["bus", "bus"], ["device", "device"], ["state", "NMT state"], ["device-type", "device type"],
+  ["heartbeat", "heartbeat"], ["heartbeat-age", "last heartbeat"], ["error-register", "error register"],
+  ["faults", "faults"], ["emcy", "last EMCY"], ["emcy-age", "EMCY sent"],
+].map(([field, title]) => ({field, title}));
+
+/**
+ * The emulator's clock (µs since it started: the events' time_us) estimated from the page's own (ms, as
+ * performance.now() gives it): set by each `show` answer's time_us, moved forward by any later event time.
+ */
+export class EmuClock {
+  #us = null;
+  #ms = 0;
+
+  set(us, ms) {
+    this.#us = us;
+    this.#ms = ms;
+  }
+
+  /** An event happened at `us`: the clock is at least there (the estimate lags by the answer's trip). */
+  advance(us, ms) {
+    const now = this.now(ms);
+    if (now === null || us > now) {
+      this.set(us, ms);
+    }
+  }
+
+  now(ms) {
+    return this.#us === null ? null : this.#us + Math.max(0, ms - this.#ms) * 1000;
+  }
+}
+
+/** A node's key: node-IDs are unique per bus only. */
+export function nodeKey(bus, node) {
+  return `${bus}/${node}`;
+}
+
+export class NodeTable {
+  #nodes = new Map(); // key -> the node as `show` gives it, changed in place by events
+  clock = new EmuClock();
+
+  get size() {
+    return this.#nodes.size;
+  }
+
+  /** A `show all` answer (received at `ms`): the nodes it lists, and nothing else, from now on; by bus (in the
+   * emulator's order) and node-ID. */
+  show(answer, ms) {
+    this.clock.set(answer.time_us, ms);
+    const buses = [...new Set(answer.nodes.map((n) => n.bus))];
+    const sorted = [...answer.nodes].sort((a, b) => buses.indexOf(a.bus) - buses.indexOf(b.bus) || a.node - b.node);
+    this.#nodes = new Map(sorted.map((n) => [nodeKey(n.bus, n.node), {...n, faults: [...n.faults]}]));
+  }
+
+  /** An event of the kinds the overview subscribes to (nmt, boot-up, emcy, fault) received at `ms`. */
+  event(ev, ms) {
+    this.clock.advance(ev.time_us, ms);
+    const n = this.#nodes.get(nodeKey(ev.bus, ev.node));
+    if (n === undefined) {
+      return; // a node the next `show` brings (its ID changed by LSS, or the show has not come yet)
+    }
+    switch (ev.event) {
+      case "nmt":
+        n.state = ev.to;
+        break;
+      case "boot-up": // a boot-up counts as the heartbeat (show's last_heartbeat_us does)
+        n.state = "PRE-OPERATIONAL";
+        n.last_heartbeat_us = ev.time_us;
+        break;
+      case "emcy":
+        n.last_emcy = {code: ev.code, register: ev.register, info: ev.info, time_us: ev.time_us};
+        n.error_register = ev.register;
+        break;
+      case "fault":
+        n.faults = n.faults.filter((f) => f !== ev.fault);
+        if (ev.action === "injected") {
+          n.faults.push(ev.fault);
+        }
+        break;
+      default:
+        break;
+    }
+  }
+
+  /** The rows to show at `ms`: {key, state, cells: {field: text}}, in the order of show(). */
+  rows(ms) {
+    const now = this.clock.now(ms);
+    return [...this.#nodes.entries()].map(([key, n]) => ({
+      key,
+      state: n.state,
+      cells: {
+        "node": String(n.node),
+        "bus": n.bus,
+        "device": format.device(n),
+        "state": n.state,
+        "device-type": format.hex(n.device_type, 8),
+        "heartbeat": format.heartbeatPeriod(n.heartbeat_ms),
+        "heartbeat-age": n.last_heartbeat_us === null ? "never" : format.ago(n.last_heartbeat_us, now),
+        "error-register": format.hex(n.error_register, 2),
+        "faults": n.faults.join(", "),
+        "emcy": n.last_emcy === null ? "" : format.emcy(n.last_emcy),
+        "emcy-age": n.last_emcy === null ? "" : format.ago(n.last_emcy.time_us, now),
+      },
+    }));
+  }
+}
