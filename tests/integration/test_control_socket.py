@@ -7,36 +7,16 @@ import re
 import socket
 import stat
 import subprocess
+import sys
 import time
 
 import can
-import jsonschema
 import pytest
 
 from conftest import EMU, IFACE, SRC, Deadline
 
-SCHEMA = json.loads((SRC / "docs/control-protocol.schema.json").read_text())
-KNOWN = ("hello", "list", "show", "get", "set", "objects", "subscribe", "unsubscribe", "quit")
-
-
-def validator(pointer):
-    return jsonschema.Draft202012Validator({**SCHEMA, "$ref": pointer})
-
-
-VALIDATE_REQUEST = validator("#/$defs/request")
-VALIDATE_EVENT = validator("#/$defs/event")
-VALIDATE_ERROR = validator("#/$defs/error_response")
-VALIDATE_RESPONSE = {cmd: validator(f"#/$defs/responses/{cmd}") for cmd in KNOWN + ("command",)}
-
-
-def check_schema(msg, cmd):
-    """Every JSON line the emulator writes is what docs/control-protocol.schema.json says."""
-    if "event" in msg:
-        VALIDATE_EVENT.validate(msg)
-    elif msg.get("ok") is False and "lines" not in msg:
-        VALIDATE_ERROR.validate(msg)
-    else:
-        VALIDATE_RESPONSE[cmd if cmd in KNOWN else "command"].validate(msg)
+sys.path.insert(0, str(SRC / "tests/support"))
+from control_schema import VALIDATE_REQUEST, check_schema  # noqa: E402
 
 
 class Client:

@@ -103,20 +103,25 @@ def download(index, sub, value, size):
     return bytes([0x23 | ((4 - size) << 2), index & 0xFF, index >> 8, sub]) + value.to_bytes(size, "little").ljust(4, b"\0")
 
 
+def start_program(tmp_path, *args):
+    """canopen-emu-fakecan with args (after -i fakecan0 --control -) on a fake bus of its own, under the sanitizers'
+    options of the ASan+UBSan build: (bus, process). The caller lets the bus accept it."""
+    if not EMU:
+        pytest.fail("CO_EMU_FAKECAN is not set (the test is run by ctest: tests/native/CMakeLists.txt)", pytrace=False)
+    bus = FakeBus(tmp_path / f"bus-{time.monotonic_ns()}")
+    env = dict(os.environ, CO_FAKECAN_SOCKET=bus.listener.getsockname(),
+               ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1",
+               UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1")
+    proc = subprocess.Popen([EMU, "-i", "fakecan0", "--control", "-", *args], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    bus.proc = proc
+    return bus, proc
+
+
 class Emulator:
     def __init__(self, tmp_path, nvm):
-        if not EMU:
-            pytest.fail("CO_EMU_FAKECAN is not set (the test is run by ctest: tests/native/CMakeLists.txt)",
-                        pytrace=False)
-        self.bus = FakeBus(tmp_path / f"bus-{time.monotonic_ns()}")
-        env = dict(os.environ, CO_FAKECAN_SOCKET=self.bus.listener.getsockname(),
-                   ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1",
-                   UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1")
-        self.proc = subprocess.Popen([EMU, "-i", "fakecan0", "--nvm-dir", str(nvm), "--control", "-"]
-                                     + [f"{d}:{n}" for n, d in NODES.items()],
-                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     text=True, env=env)
-        self.bus.proc = self.proc
+        self.bus, self.proc = start_program(tmp_path, "--nvm-dir", str(nvm),
+                                            *[f"{d}:{n}" for n, d in NODES.items()])
         self.bus.accept()
 
     def command(self, line):

@@ -8,18 +8,20 @@ Environment (tests/native/CMakeLists.txt): CO_SOURCE_DIR, CO_EMU_FAKECAN (the pr
 
 import http.client
 import json
-import os
 import re
 import socket
 import struct
 import subprocess
+import sys
 import threading
 import time
 
-import jsonschema
 import pytest
 
-from test_emulator_native import EMU, SANITIZER_MARKS, SRC, FakeBus, upload
+from test_emulator_native import EMU, SANITIZER_MARKS, SRC, start_program, upload
+
+sys.path.insert(0, str(SRC / "tests/support"))
+from control_schema import check_schema  # noqa: E402
 
 NODES = ("pro-ionizer:16", "sds:17")
 CSP = "default-src 'self'; frame-ancestors 'none'"
@@ -28,29 +30,6 @@ REFUSED_QUIT = "quit is refused in a web session: it stops the emulator"
 REFUSED_EXIT = "exit is refused in a web session: it stops the emulator"
 REFUSED_EXPORT = "export-dcf is refused in a web session: it writes a file"
 NO_SESSION = {"error": "no such session (expired or dropped): open a new one"}
-
-SCHEMA = json.loads((SRC / "docs/control-protocol.schema.json").read_text())
-KNOWN = ("hello", "list", "show", "get", "set", "objects", "subscribe", "unsubscribe", "quit")
-
-
-def validator(pointer):
-    return jsonschema.Draft202012Validator({**SCHEMA, "$ref": pointer})
-
-
-VALIDATE_EVENT = validator("#/$defs/event")
-VALIDATE_ERROR = validator("#/$defs/error_response")
-VALIDATE_RESPONSE = {cmd: validator(f"#/$defs/responses/{cmd}") for cmd in KNOWN + ("command",)}
-
-
-def check_schema(msg, cmd):
-    """A web session's JSON lines are the control protocol's (docs/control-protocol.schema.json)."""
-    if "event" in msg:
-        VALIDATE_EVENT.validate(msg)
-    elif msg.get("ok") is False and "lines" not in msg:
-        VALIDATE_ERROR.validate(msg)
-    else:
-        VALIDATE_RESPONSE[cmd if cmd in KNOWN else "command"].validate(msg)
-
 
 class Answer:
     def __init__(self, status, headers, body):
@@ -71,18 +50,7 @@ class WebEmulator:
     it; requests with a Host header and token of the test's choosing."""
 
     def __init__(self, tmp_path, web="127.0.0.1:0", nodes=NODES):
-        if not EMU:
-            pytest.fail("CO_EMU_FAKECAN is not set (the test is run by ctest: tests/native/CMakeLists.txt)",
-                        pytrace=False)
-        self.bus = FakeBus(tmp_path / f"bus-{time.monotonic_ns()}")
-        env = dict(os.environ, CO_FAKECAN_SOCKET=self.bus.listener.getsockname(),
-                   ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1",
-                   UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1")
-        self.proc = subprocess.Popen([EMU, "-i", "fakecan0", "--nvm-dir", str(tmp_path / "nvm"), "--control", "-",
-                                      "--web", web, *nodes],
-                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                     env=env)
-        self.bus.proc = self.proc
+        self.bus, self.proc = start_program(tmp_path, "--nvm-dir", str(tmp_path / "nvm"), "--web", web, *nodes)
         self.err_lines, self.out_lines = [], []
         for stream, lines in ((self.proc.stderr, self.err_lines), (self.proc.stdout, self.out_lines)):
             threading.Thread(target=lambda s=stream, l=lines: l.extend(s), daemon=True).start()
