@@ -141,7 +141,9 @@ int runtime_loop(emu_t *emu)
         nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
         const nfds_t web_index = nfds;
         now = socketcan_now_us();
-        nfds += web_poll_fds(&emu->web, &pfd[nfds], now, &next);
+        if (emu->web.daemon != NULL) { /* without --web a pass pays for neither call */
+            nfds += web_poll_fds(&emu->web, &pfd[nfds], now, &next);
+        }
         struct timespec ts;
         struct timespec *timeout = NULL;
         if (next != CO_NEVER) {
@@ -171,7 +173,9 @@ int runtime_loop(emu_t *emu)
             control_read(emu);
         }
         sockets_service(emu, &emu->sockets, &pfd[sockets_index], web_index - sockets_index);
-        web_service(emu, &emu->web, &pfd[web_index], nfds - web_index, now);
+        if (emu->web.daemon != NULL) {
+            web_service(emu, &emu->web, &pfd[web_index], nfds - web_index, now);
+        }
     }
     return 0;
 }
