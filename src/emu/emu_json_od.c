@@ -141,6 +141,14 @@ static void answer_value(const request_t *q, emu_node_t *n, uint16_t index, uint
     send_response(q->s, r);
 }
 
+/* Why a value cannot be read, as an SDO upload of it would be answered: "no data available (0x08000024)". */
+static json_t *abort_json(uint32_t abort_code)
+{
+    char text[160];
+    (void)snprintf(text, sizeof text, "%s (0x%08lX)", co_abort_text(abort_code), (unsigned long)abort_code);
+    return json_string(text);
+}
+
 /* get with "objects": the values of up to GET_OBJECTS_MAX objects of one node in one answer (what a view that plots
  * or refreshes several values asks for at every turn), each {object, value, type} or {object, error}. */
 #define GET_OBJECTS_MAX 64U
@@ -180,9 +188,7 @@ static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
             (void)json_object_set_new(v, "value", value_json(e, buf, len));
             (void)json_object_set_new(v, "type", json_string(device_type_name(e->type)));
         } else {
-            char text[160];
-            (void)snprintf(text, sizeof text, "%s (0x%08lX)", co_abort_text(abort_code), (unsigned long)abort_code);
-            (void)json_object_set_new(v, "error", json_string(text));
+            (void)json_object_set_new(v, "error", abort_json(abort_code));
         }
         (void)json_array_append_new(values, v);
     }
@@ -329,9 +335,7 @@ static json_t *object_row(emu_node_t *n, const co_od_entry_t *e, bool values)
         if (abort_code == 0U) {
             (void)json_object_set_new(o, "value", value_json(e, buf, len));
         } else {
-            char text[160];
-            (void)snprintf(text, sizeof text, "%s (0x%08lX)", co_abort_text(abort_code), (unsigned long)abort_code);
-            (void)json_object_set_new(o, "error", json_string(text));
+            (void)json_object_set_new(o, "error", abort_json(abort_code));
         }
     }
     return o;
