@@ -45,10 +45,22 @@ def test_interface_down_and_up_is_reported_once_and_survived(emulator):
 
 @pytest.mark.skipif(not have_vcan1(), reason="needs a second virtual interface (tools/vcan-run makes vcan1)")
 def test_interface_gone_and_back(tmp_path):
+    # The interface goes only once the emulator has its socket on it (its boot-up is seen): deleted earlier, as a
+    # fixed sleep did on a loaded CI host, the emulator finds no vcan1 at start and ends, which is another case.
+    watch = can.Bus(channel="vcan1", interface="socketcan")
     emu = subprocess.Popen([EMU, "-i", "vcan1", "--nvm-dir", str(tmp_path), "sds:0x61"], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
     try:
-        time.sleep(0.5)
+        try:
+            deadline = Deadline(5)
+            boot = None
+            while boot is None and not deadline.expired():
+                msg = watch.recv(deadline.slice())
+                if msg is not None and msg.arbitration_id == 0x761:
+                    boot = msg
+            assert boot is not None and bytes(boot.data) == b"\x00", "no boot-up of node 0x61 on vcan1"
+        finally:
+            watch.shutdown()
         ip("delete", "vcan1")
         time.sleep(1.0)
         subprocess.run(["ip", "link", "add", "dev", "vcan1", "type", "vcan"], check=True, timeout=10)
@@ -68,7 +80,11 @@ def test_interface_gone_and_back(tmp_path):
                     bus.send(can.Message(arbitration_id=0x661, data=bytes([0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0]),
                                          is_extended_id=False))
                     sent = time.monotonic()
-            assert answer is not None and bytes(answer.data)[:4] == bytes([0x43, 0x00, 0x10, 0x00])
+            if answer is None:
+                emu.terminate()
+                pytest.fail("no SDO answer after the interface came back; emulator's log: "
+                            + emu.communicate(timeout=5)[1][-2000:])
+            assert bytes(answer.data)[:4] == bytes([0x43, 0x00, 0x10, 0x00])
         finally:
             bus.shutdown()
         assert emu.poll() is None
