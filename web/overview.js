@@ -1,6 +1,6 @@
-// The overview table (docs/web.md): one row per node, its cells from NodeTable.rows(). Everything an exchange
-// brought is drawn in one animation frame, and only the cells whose text changed are touched, so that 127 nodes
-// redrawn four times a second cost little.
+// The overview table (docs/web.md): one row per node, its cells from NodeTable.rows(). The page draws everything an
+// exchange brought in one animation frame (web/app.js), and only the cells whose text changed are touched here, so
+// that 127 nodes redrawn four times a second cost little. A click on a row opens that node.
 
 import {COLUMNS} from "./nodes.js";
 
@@ -8,9 +8,11 @@ export class Overview {
   #body;
   #status;
   #rows = new Map(); // key -> {tr, cells: {field: td}}
-  #frame = null; // the animation frame asked for, null: none
+  #onPick;
 
-  constructor(table, status) {
+  /** onPick(key): a row was clicked (or Enter pressed on it): the page shows that node. */
+  constructor(table, status, onPick = () => {}) {
+    this.#onPick = onPick;
     const head = table.createTHead().insertRow();
     for (const {field, title} of COLUMNS) {
       const th = document.createElement("th");
@@ -23,18 +25,8 @@ export class Overview {
     this.#status = status;
   }
 
-  /** Draws at the next animation frame what draw() returns then ({rows, problem}): once, however often asked. */
-  schedule(draw) {
-    if (this.#frame === null) {
-      this.#frame = requestAnimationFrame(() => {
-        this.#frame = null;
-        const {rows, problem} = draw();
-        this.#render(rows, problem);
-      });
-    }
-  }
-
-  #render(rows, problem) {
+  /** Shows `rows` (NodeTable.rows()) and in the status line `problem`, or the count of nodes when it is null. */
+  render(rows, problem) {
     const keys = new Set(rows.map((r) => r.key));
     for (const [key, {tr}] of this.#rows) {
       if (!keys.has(key)) {
@@ -71,6 +63,14 @@ export class Overview {
   #add(key) {
     const tr = document.createElement("tr");
     tr.dataset.key = key;
+    tr.tabIndex = 0; // reachable by keyboard: Enter opens the node as a click does
+    tr.title = "open this node";
+    tr.addEventListener("click", () => this.#onPick(key));
+    tr.addEventListener("keydown", (e) => {
+      if (e.key === "Enter") {
+        this.#onPick(key);
+      }
+    });
     const cells = {};
     for (const {field} of COLUMNS) {
       const td = tr.insertCell();
