@@ -105,7 +105,11 @@ const page = {
 };
 
 const overview = new Overview(document.getElementById("nodes"), document.getElementById("status"),
-  (key) => page.select(key));
+  (key) => {
+    if (!nodes.isHeard(key)) {
+      page.select(key);
+    }
+  });
 page.tabs = new Tabs(document.getElementById("tabs"), (name, previous) => {
   for (const p of panels) {
     if (p.view === previous) {

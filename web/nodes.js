@@ -53,9 +53,17 @@ export class NodeTable {
    * emulator's order) and node-ID. */
   show(answer, ms) {
     this.clock.set(answer.time_us, ms);
-    const buses = [...new Set(answer.nodes.map((n) => n.bus))];
-    const sorted = [...answer.nodes].sort((a, b) => buses.indexOf(a.bus) - buses.indexOf(b.bus) || a.node - b.node);
+    // The nodes heard on the bus that the emulator does not emulate (show all's "heard"): rows of their own
+    const heard = (answer.heard ?? []).map((h) => ({...h, heard: true, faults: []}));
+    const all = [...answer.nodes, ...heard];
+    const buses = [...new Set(all.map((n) => n.bus))];
+    const sorted = all.sort((a, b) => buses.indexOf(a.bus) - buses.indexOf(b.bus) || a.node - b.node);
     this.#nodes = new Map(sorted.map((n) => [nodeKey(n.bus, n.node), {...n, faults: [...n.faults]}]));
+  }
+
+  /** Whether `key` is a node heard on the bus rather than an emulated one (nothing to open of it). */
+  isHeard(key) {
+    return this.#nodes.get(key)?.heard === true;
   }
 
   /** An event of the kinds the overview subscribes to (nmt, boot-up, emcy, fault) received at `ms`. */
@@ -88,12 +96,13 @@ export class NodeTable {
     }
   }
 
-  /** The rows to show at `ms`: {key, state, cells: {field: text}}, in the order of show(). */
+  /** The rows to show at `ms`: {key, state, heard, cells: {field: text}}, in the order of show(). */
   rows(ms) {
     const now = this.clock.now(ms);
-    return [...this.#nodes.entries()].map(([key, n]) => ({
+    return [...this.#nodes.entries()].map(([key, n]) => n.heard ? heardRow(key, n, now) : ({
       key,
       state: n.state,
+      heard: false,
       cells: {
         "node": String(n.node),
         "bus": n.bus,
@@ -109,4 +118,22 @@ export class NodeTable {
       },
     }));
   }
+}
+
+/** A node heard on the bus: what its heartbeats tell (its state and their age), nothing the emulator knows of it. */
+function heardRow(key, n, now) {
+  const cells = Object.fromEntries(COLUMNS.map(({field}) => [field, ""]));
+  return {
+    key,
+    state: n.state,
+    heard: true,
+    cells: {
+      ...cells,
+      "node": String(n.node),
+      "bus": n.bus,
+      "device": n.boot_up ? "heard on the bus (boot-up)" : "heard on the bus",
+      "state": n.state,
+      "heartbeat-age": format.ago(n.last_heartbeat_us, now),
+    },
+  };
 }

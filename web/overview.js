@@ -42,6 +42,10 @@ export class Overview {
           cells[field].textContent = text; // text, never markup: nothing the emulator says becomes HTML
         }
       }
+      if (tr.dataset.heard !== String(row.heard)) {
+        tr.dataset.heard = String(row.heard); // a node heard on the bus: not emulated, nothing to open
+        tr.title = row.heard ? "a node heard on the bus (not emulated here)" : "open this node";
+      }
       if (tr.dataset.state !== row.state) {
         tr.dataset.state = row.state; // style.css colours the state by it
       }
@@ -64,7 +68,6 @@ export class Overview {
     const tr = document.createElement("tr");
     tr.dataset.key = key;
     tr.tabIndex = 0; // reachable by keyboard: Enter opens the node as a click does
-    tr.title = "open this node";
     tr.addEventListener("click", () => this.#onPick(key));
     tr.addEventListener("keydown", (e) => {
       if (e.key === "Enter") {

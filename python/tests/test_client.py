@@ -7,6 +7,7 @@ import threading
 import time
 from pathlib import Path
 
+import can
 import pytest
 
 from canopen_emu import __version__ as PACKAGE_VERSION
@@ -154,6 +155,21 @@ def test_hello_nodes_and_show(canopen_emu):
     # od/sds.eds: device type 0x191 (CiA 401), heartbeat 5000 ms; its boot-up counts as its last heartbeat
     assert (sds.device_type, sds.heartbeat_ms, sds.faults, sds.last_emcy) == (0x191, 5000, (), None)
     assert sds.last_heartbeat_us is not None
+
+
+def test_heard_lists_the_other_nodes_on_the_bus(canopen_emu, can_bus):
+    c = canopen_emu.client
+    assert c.heard() == []
+    bus = can_bus("vcan0")
+    bus.send(can.Message(arbitration_id=0x705, data=b"\x05", is_extended_id=False))  # another device: Operational
+    deadline = time.monotonic() + 5.0
+    heard = c.heard()
+    while not heard and time.monotonic() < deadline:
+        time.sleep(0.05)
+        heard = c.heard()
+    assert [(h.node, h.bus, h.state, h.boot_up) for h in heard] == [(5, "vcan0", "OPERATIONAL", False)]
+    assert 0 < heard[0].last_heartbeat_us
+    assert c.heard("vcan0") == heard
 
 
 def test_show_tells_the_faults_in_force_and_when_the_last_heartbeat_went(canopen_emu):

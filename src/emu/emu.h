@@ -75,6 +75,13 @@ typedef struct local_frame {
     size_t sender;
 } local_frame_t;
 
+/* A node-ID heard on the bus from outside the program (another emulator, a real device): its last heartbeat,
+ * boot-up or node-guarding answer, for the overview (show all: "heard"). */
+typedef struct heard_node {
+    co_time_us_t at; /* when it was read; 0: never heard */
+    uint8_t state;   /* the state byte without the guarding toggle bit: 0x00 boot-up, 0x04, 0x05, 0x7F */
+} heard_node_t;
+
 typedef struct emu_bus {
     struct emu *emu;
     socketcan_t can;
@@ -86,6 +93,7 @@ typedef struct emu_bus {
     unsigned long local_lost;
     int log_level;
     uint64_t takes[0x800][2]; /* bit i (word i / 64): node i takes frames on this CAN-ID (co_node_rx_ids) */
+    heard_node_t heard[128];  /* by node-ID; frames of this program's own nodes never come back to its socket */
 } emu_bus_t;
 
 typedef struct emu {

@@ -149,6 +149,11 @@ void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
             logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
         }
         events_frame(b, NULL, &f, now);
+        if ((f.id & 0x780U) == 0x700U && f.id != 0x700U && f.len >= 1U &&
+            (f.flags & (CO_FRAME_RTR | CO_FRAME_EFF | CO_FRAME_ERR)) == 0U) {
+            /* another node's heartbeat, boot-up or guarding answer: the overview lists the nodes heard */
+            b->heard[f.id & 0x7FU] = (heard_node_t){now, (uint8_t)(f.data[0] & 0x7FU)};
+        }
         deliver(b, &f, MAX_NODES, now);
         /* Clients that send a request as soon as an answer is out keep the socket from running dry: without this a
          * flood could hold every heartbeat back until 1024 frames were read (a 350 ms gap failed test_bus_faults'

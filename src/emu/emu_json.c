@@ -317,6 +317,44 @@ static void show_overview(const emu_t *emu, emu_node_t *n, json_t *o)
     (void)json_object_set_new(o, "last_emcy", emcy);
 }
 
+/* The nodes heard on the buses named by `word` ("all", "all@BUS") that this program does not emulate there: what
+ * the overview shows of the rest of the network. NULL for any other word (one node, a list). */
+static json_t *heard_nodes(const emu_t *emu, const char *word)
+{
+    const char *bus_name = strncmp(word, "all@", 4U) == 0 ? word + 4 : NULL;
+    if (bus_name == NULL && strcmp(word, "all") != 0) {
+        return NULL;
+    }
+    json_t *list = json_array();
+    for (size_t k = 0U; k < emu->n_buses; k++) {
+        const emu_bus_t *b = emu->buses[k];
+        if (bus_name != NULL && strcmp(bus_name, b->can.ifname) != 0) {
+            continue;
+        }
+        bool ours[128] = {false};
+        for (size_t i = 0U; i < b->n_nodes; i++) {
+            ours[b->nodes[i]->dev.node.node_id & 0x7FU] = true;
+        }
+        for (unsigned id = 1U; id < 128U; id++) {
+            const heard_node_t *h = &b->heard[id];
+            if (h->at == 0U || ours[id]) {
+                continue;
+            }
+            json_t *o = json_object();
+            (void)json_object_set_new(o, "node", json_integer(id));
+            (void)json_object_set_new(o, "bus", json_string(b->can.ifname));
+            /* a boot-up (0x00) means it is now PRE-OPERATIONAL */
+            (void)json_object_set_new(o, "state", json_string(h->state == 0U ? "PRE-OPERATIONAL"
+                                                                             : co_nmt_state_name((co_nmt_state_t)h->state)));
+            (void)json_object_set_new(o, "boot_up", json_boolean(h->state == 0U));
+            (void)json_object_set_new(o, "last_heartbeat_us",
+                                      json_integer((json_int_t)(h->at > emu->start ? h->at - emu->start : 0U)));
+            (void)json_array_append_new(list, o);
+        }
+    }
+    return list;
+}
+
 static void cmd_show(const request_t *q)
 {
     static const char *const fields[] = {"node", NULL};
@@ -324,10 +362,12 @@ static void cmd_show(const request_t *q)
     if (!only_fields(q, fields) || !node_word(q, word, sizeof word, true)) {
         return;
     }
+    json_t *heard = heard_nodes(q->emu, word); /* before select_nodes, which may change the word */
     emu_node_t *sel[MAX_NODES_ALL];
     capture_t c;
     const int n = select_captured(q->emu, word, sel, MAX_NODES_ALL, &c);
     if (n <= 0) {
+        json_decref(heard);
         fail(q->s, q->id, "%s", n < 0 ? c.error : "no such node");
         return;
     }
@@ -354,6 +394,9 @@ static void cmd_show(const request_t *q)
     }
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "nodes", nodes);
+    if (heard != NULL) {
+        (void)json_object_set_new(r, "heard", heard);
+    }
     /* The events' clock now: a view tells how long ago the times above were without an event to compare with. */
     const co_time_us_t now = socketcan_now_us();
     (void)json_object_set_new(r, "time_us", json_integer((json_int_t)(now > q->emu->start ? now - q->emu->start : 0U)));

@@ -354,6 +354,44 @@ def test_show_answers_with_the_events_clock(emu):
     assert 500_000 <= second["time_us"] - first["time_us"] <= span * 1e6 + 100_000, (first["time_us"], second, span)
 
 
+def test_show_all_lists_the_nodes_heard_on_the_bus(emu):
+    """show all has the other node-IDs heard on the bus (heartbeat, boot-up, guarding answer), not the emulated ones
+    and not guard requests (RTR) or extended frames; one node's show has no list."""
+    session = emu.open_session()
+    emu.bus.send(0x705, b"\x05")  # node 5: heartbeat, Operational
+    emu.bus.send(0x709, b"\x00")  # node 9: boot-up
+    emu.bus.send(0x70A, b"\x84")  # node 10: guarding answer, toggle bit set, Stopped
+    emu.bus.send(0x40000000 | 0x70B, b"")  # a guard request (RTR) to node 11: nothing heard from 11
+    emu.bus.send(0x80000000 | 0x70C, b"\x05")  # an extended frame: not CANopen's heartbeat of node 12
+    emu.bus.send(0x711, b"\x7f")  # node 17 is emulated here (a duplicate node-ID on the bus): not "heard"
+    emu.bus.send(0x70D, b"\x03")  # node 13: a state byte no state has
+    deadline = time.monotonic() + 5
+    while True:
+        answer = emu.exchange(session, '{"id":1,"cmd":"show","node":"all"}').lines()[0]
+        if len(answer["heard"]) == 4 or time.monotonic() > deadline:
+            break
+        time.sleep(0.05)
+    check_schema(answer, "show")
+    heard = [(h["node"], h["bus"], h["state"], h["boot_up"]) for h in answer["heard"]]
+    assert heard == [(5, "fakecan0", "OPERATIONAL", False), (9, "fakecan0", "PRE-OPERATIONAL", True),
+                     (10, "fakecan0", "STOPPED", False), (13, "fakecan0", "UNKNOWN", False)], answer["heard"]
+    assert all(0 < h["last_heartbeat_us"] <= answer["time_us"] for h in answer["heard"]), answer
+    assert [n["node"] for n in answer["nodes"]] == [16, 17]
+    emu.bus.send(0x709, b"\x05")  # node 9 started by its master: its state follows
+    deadline = time.monotonic() + 5
+    while True:
+        later = emu.exchange(session, '{"id":2,"cmd":"show","node":"all@fakecan0"}').lines()[0]
+        if later["heard"][1]["state"] == "OPERATIONAL" or time.monotonic() > deadline:
+            break
+        time.sleep(0.05)
+    assert later["heard"][1] == {"node": 9, "bus": "fakecan0", "state": "OPERATIONAL", "boot_up": False,
+                                 "last_heartbeat_us": later["heard"][1]["last_heartbeat_us"]}, later["heard"]
+    assert later["heard"][1]["last_heartbeat_us"] > answer["heard"][1]["last_heartbeat_us"]
+    one = emu.exchange(session, '{"id":3,"cmd":"show","node":16}').lines()[0]
+    check_schema(one, "show")
+    assert "heard" not in one
+
+
 def test_quit_exit_and_export_dcf_are_refused_in_both_framings(emu, tmp_path):
     session = emu.open_session()
     dcf = tmp_path / "node16.dcf"

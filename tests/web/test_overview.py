@@ -210,3 +210,25 @@ def test_the_page_comes_back_after_its_session_expired(page, start_emulator):
     assert shot["status"] == "3 nodes"
     command(emu, "emcy 16 0x3210 0x05")  # and its events come again
     wait_for(driver, "the EMCY of node 16", lambda s: s["rows"]["16"]["emcy"] == "0x3210 reg 0x05 info 0000000000", 2.0)
+
+
+def test_nodes_heard_on_the_bus_get_a_row_that_does_not_open(page, start_emulator):
+    """A node that is not emulated shows by its heartbeats: its state and their age; a click does not open it."""
+    emu = start_emulator(*NODES)
+    driver = loaded(page, emu, 3)
+    emu.bus.send(0x705, b"\x05")  # node 5 elsewhere on the bus: Operational
+    shot = wait_for(driver, "a row for node 5", lambda s: s["order"] == [5, 16, 17, 18], 3.0)
+    row = shot["rows"]["5"]
+    assert {k: v for k, v in row.items() if k != "heartbeat-age"} == {
+        "node": "5", "bus": "fakecan0", "device": "heard on the bus", "state": "OPERATIONAL", "device-type": "",
+        "heartbeat": "", "error-register": "", "faults": "", "emcy": "", "emcy-age": ""}
+    assert age(row["heartbeat-age"]) < 3.0
+    emu.bus.send(0x705, b"\x00")  # its boot-up: it was reset
+    wait_for(driver, "node 5 booted", lambda s: s["rows"]["5"]["device"] == "heard on the bus (boot-up)"
+             and s["rows"]["5"]["state"] == "PRE-OPERATIONAL", 3.0)
+    driver.find_element("css selector", '#nodes tr[data-key="fakecan0/5"]').click()
+    assert driver.execute_script("return document.getElementById('tab-node').disabled") is True
+    assert driver.execute_script("return document.getElementById('view-network').hidden") is False
+    driver.find_element("css selector", '#nodes tr[data-key="fakecan0/17"]').click()
+    assert driver.execute_script("return document.getElementById('view-node').hidden") is False
+    assert driver.execute_script("return location.hash") == "#node"

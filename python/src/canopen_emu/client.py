@@ -102,6 +102,17 @@ class NodeStatus(NodeInfo):
     last_emcy: Optional[LastEmcy] = None
 
 
+@dataclass(frozen=True)
+class HeardNode:
+    """A node-ID heard on a bus that the emulator does not emulate there (``show all``'s ``heard``): its state from
+    its last heartbeat, boot-up or guarding answer, whether that was a boot-up, and when (µs, the events' clock)."""
+    node: int
+    bus: str
+    state: str
+    boot_up: bool
+    last_heartbeat_us: int
+
+
 class _Addressed:
     """``index`` and ``sub`` of an answer's ``object`` (``"0x1017:00"``)."""
     object: str
@@ -375,6 +386,13 @@ class Client:
         """``show``: each node's state, error register, active errors and frame counters (one entry for one
         node, several for ``"all"``)."""
         return [_node_status(n) for n in self.request("show", node=node)["nodes"]]
+
+    def heard(self, bus: Optional[str] = None) -> List[HeardNode]:
+        """The other nodes heard on the buses (or on ``bus``) by their heartbeats: a real device or another
+        emulator beside the emulated nodes."""
+        answer = self.request("show", node="all" if bus is None else f"all@{bus}")
+        return [HeardNode(h["node"], h["bus"], h["state"], h["boot_up"], h["last_heartbeat_us"])
+                for h in answer.get("heard", [])]
 
     def get(self, node: NodeRef, obj: ObjectRef, sub: Optional[int] = None, *,
             timeout: Optional[float] = None) -> Value:

@@ -105,3 +105,24 @@ test("a show's lists are the table's own: changing them later changes no row", (
   table.event(event("fault", 17, 1_600_000, {fault: "reboot", action: "injected"}), 0);
   assert.deepEqual(answer.nodes[2].faults, ["sdo-delay"]);
 });
+
+test("nodes heard on the bus get rows of their own, in node-ID order among the emulated ones", () => {
+  const table = new NodeTable();
+  table.show({...SHOW, heard: [
+    {node: 5, bus: "vcan0", state: "OPERATIONAL", boot_up: false, last_heartbeat_us: 1_200_000},
+    {node: 20, bus: "vcan0", state: "PRE-OPERATIONAL", boot_up: true, last_heartbeat_us: 1_400_000},
+  ]}, 0);
+  const rows = table.rows(0);
+  assert.deepEqual(rows.map((r) => r.key), ["vcan0/5", "vcan0/16", "vcan0/17", "vcan0/18", "vcan0/20"]);
+  const blank = Object.fromEntries(COLUMNS.map(({field}) => [field, ""]));
+  assert.deepEqual(rows[0], {key: "vcan0/5", state: "OPERATIONAL", heard: true, cells: {
+    ...blank, "node": "5", "bus": "vcan0", "device": "heard on the bus", "state": "OPERATIONAL",
+    "heartbeat-age": "0.3 s ago"}});
+  assert.equal(rows[4].cells.device, "heard on the bus (boot-up)");
+  assert.equal(rows[1].heard, false);
+  assert.equal(table.isHeard("vcan0/5"), true);
+  assert.equal(table.isHeard("vcan0/16"), false);
+  assert.equal(table.isHeard("vcan0/99"), false);
+  table.show(SHOW, 0); // no longer heard (a later show without it): gone
+  assert.equal(table.rows(0).length, 3);
+});
