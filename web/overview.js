@@ -59,7 +59,9 @@ export class Overview {
       }
       previous = tr;
     }
-    const count = `${rows.length} ${rows.length === 1 ? "node" : "nodes"}`;
+    const heard = rows.filter((r) => r.heard).length;
+    const emulated = rows.length - heard;
+    const count = `${emulated} ${emulated === 1 ? "node" : "nodes"}` + (heard > 0 ? `, ${heard} heard on the bus` : "");
     this.#status.textContent = problem ?? count;
     this.#status.classList.toggle("problem", problem !== null);
   }

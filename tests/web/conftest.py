@@ -9,7 +9,6 @@ Without the browser or its driver the run ends with status 77, which ctest repor
 
 import os
 import re
-import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -19,22 +18,14 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "native"))
 from test_web_native import WebEmulator  # noqa: E402  (the emulator as tests/native/test_web_native.py starts it)
 
-# Selenium Manager would look for a browser and a driver to download: never (both are given; a test run fetches
-# nothing).
-os.environ["SE_OFFLINE"] = "true"
+from browser import missing, start_browser  # noqa: E402
 
-from selenium import webdriver  # noqa: E402
-from selenium.webdriver.chrome.service import Service  # noqa: E402
-
-CHROMIUM = os.environ.get("CO_CHROMIUM") or shutil.which("chromium") or "/usr/lib/chromium/chromium"
-CHROMEDRIVER = os.environ.get("CO_CHROMEDRIVER") or shutil.which("chromedriver") or "/usr/bin/chromedriver"
 ARTIFACTS = Path(os.environ.get("CO_WEB_ARTIFACTS") or tempfile.gettempdir()) / "web-test-failures"
 
 
 def pytest_configure(config):
-    missing = [path for path in (CHROMIUM, CHROMEDRIVER) if not os.access(path, os.X_OK)]
-    if missing:
-        pytest.exit(f"skipped: no {' or '.join(missing)} (Debian: apt-get install --no-install-recommends chromium "
+    if missing():
+        pytest.exit(f"skipped: no {' or '.join(missing())} (Debian: apt-get install --no-install-recommends chromium "
                     "chromium-driver; tools/run-tests installs them)", returncode=77)
 
 
@@ -49,16 +40,7 @@ def pytest_runtest_makereport(item, call):
 @pytest.fixture(scope="session")
 def driver():
     """One headless Chromium for all tests (starting one takes a second or more); each test loads its own page."""
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    # --no-sandbox: Chromium's sandbox refuses to run as root (CI) and needs user namespaces a container may lack;
-    # the pages it loads are the emulator's own. A fixed window: the same layout on every machine.
-    for arg in ("--headless=new", "--no-sandbox", "--window-size=1280,800", "--disable-dev-shm-usage",
-                "--no-first-run", "--disable-background-networking", "--disable-extensions"):
-        options.add_argument(arg)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})  # the page's console, for failures
-    browser = webdriver.Chrome(options=options, service=Service(executable_path=CHROMEDRIVER))
-    browser.set_page_load_timeout(60)
+    browser = start_browser()
     yield browser
     browser.quit()
 

@@ -223,6 +223,7 @@ def test_nodes_heard_on_the_bus_get_a_row_that_does_not_open(page, start_emulato
         "node": "5", "bus": "fakecan0", "device": "heard on the bus", "state": "OPERATIONAL", "device-type": "",
         "heartbeat": "", "error-register": "", "faults": "", "emcy": "", "emcy-age": ""}
     assert age(row["heartbeat-age"]) < 3.0
+    assert shot["status"] == "3 nodes, 1 heard on the bus"
     emu.bus.send(0x705, b"\x00")  # its boot-up: it was reset
     wait_for(driver, "node 5 booted", lambda s: s["rows"]["5"]["device"] == "heard on the bus (boot-up)"
              and s["rows"]["5"]["state"] == "PRE-OPERATIONAL", 3.0)
