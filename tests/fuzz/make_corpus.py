@@ -907,6 +907,13 @@ def control_seeds():
                             '{"id":1,"cmd":"fault","node":17,"args":["sdo-delay",20]}\n{"id":2,"cmd":"faults","node":17}\n'),
         ("json-exit-in-blanks", ' \t {"cmd":"exit","id":null}  \nlist\n'),
         ("json-long-line", '{"cmd":"list","x":"' + "y" * 2100 + '"}\n{"cmd":"quit"}\n'),
+        # a restricted (web) session: the first byte 0x01 (target_control.c); quit, exit, export-dcf refused
+        ("restricted-refusals", "\x01show 16\nquit\nexit # bye\nexport-dcf 16 x.dcf\n\"quit\" 16\nlist\n"
+                                '{"id":1,"cmd":"quit"}\n{"id":2,"cmd":"exit","id":3}\n'
+                                '{"id":4,"cmd":"export-dcf","node":16,"args":["x.dcf"]}\n{"id":5,"cmd":"list"}\n'),
+        ("restricted-commands", "\x01set 16 0x1017 500\nfault 17 heartbeat-stop\npower-cycle 18\nhelp 16\n"
+                                '{"id":1,"cmd":"subscribe","events":"all"}\n{"id":2,"cmd":"objects","node":17}\n'
+                                "quit " + " ".join(["a"] * 16) + "\nquit"),
     ])
 
 

@@ -29,6 +29,10 @@
  *    integer or null besides), and no line after that one is run or answered;
  *  - every JSON line (first byte '{' after blanks) is answered by exactly one JSON object with "ok" true or false;
  *    event lines ("event ..." or {"event":...}) may come at any time;
+ *  - an input whose first byte is 0x01 runs (without that byte) in a restricted session, as a web session's: then
+ *    nothing stops the emulator, a line whose first word is quit, exit or export-dcf (and a JSON quit) is answered
+ *    with the web session's refusal, export-dcf's writer is never called; a session that is not restricted never
+ *    answers with that refusal;
  *  - replies and device lines are NUL-terminated, device lines shorter than 512 bytes; every node's NMT state is
  *    a legal one; no crash, leak or undefined behaviour.
  */
@@ -65,6 +69,7 @@ typedef struct ref_line {
     size_t len;
     bool quits;
     bool json;        /* a JSON request (what a refusal kept of it starts with '{') */
+    bool refused;     /* restricted session: must be answered "... is refused in a web session: ..." */
 } ref_line_t;
 
 static const struct {
@@ -91,6 +96,28 @@ static reply_sink_fn g_sink;
 static void *g_sink_ctx;
 static char g_tmp[COMMAND_LINE_MAX + 1];
 static char g_out[1U << 20]; /* one line written to stdout (a JSON answer with a device's help is long) */
+static bool g_restricted;    /* the input began with RESTRICTED_MARK: the session is a web session's kind */
+static bool g_refusal_seen;  /* the line being run was answered with a web session's refusal */
+
+/* An input whose first byte is this runs in a restricted session (emu_session_t.restricted, as a web session),
+ * the byte itself not fed. */
+#define RESTRICTED_MARK '\x01'
+
+/* The refusals of a restricted session (emu_commands.c command_restriction), as the command language replies them
+ * and as a JSON answer's "error" gives them (without "error: "). */
+static bool is_refusal(const char *text)
+{
+    static const char *const refusals[] = {"quit is refused in a web session: it stops the emulator",
+                                           "exit is refused in a web session: it stops the emulator",
+                                           "export-dcf is refused in a web session: it writes a file"};
+    const char *bare = strncmp(text, "error: ", 7U) == 0 ? text + 7 : text;
+    for (size_t i = 0U; i < sizeof refusals / sizeof refusals[0]; i++) {
+        if (strcmp(bare, refusals[i]) == 0) {
+            return true;
+        }
+    }
+    return false;
+}
 
 #if defined(__GNUC__)
 __attribute__((noreturn, format(printf, 1, 2)))
@@ -105,14 +132,14 @@ static void fail(const char *fmt, ...)
 
 static bool ws(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
 
-/* True when a line would stop the emulator: its first word, as the command language splits words (blanks skipped,
- * '#' before a word starts a comment, a word in double quotes runs to the next quote), is `quit` or its alias
- * `exit`, and it has at most MAX_ARGS words (a longer line is refused whole). */
-static bool quits(const char *l, size_t len)
+/* True when a line's first word, as the command language splits words (blanks skipped, '#' before a word starts a
+ * comment, a word in double quotes runs to the next quote), is one of `words` (NULL-terminated) and it has at most
+ * MAX_ARGS words (a longer line is refused whole). */
+static bool first_word_is(const char *l, size_t len, const char *const *words)
 {
     size_t p = 0U;
     size_t count = 0U;
-    bool first_quits = false;
+    bool matched = false;
     for (;;) {
         while (p < len && ws(l[p])) {
             p++;
@@ -138,11 +165,27 @@ static bool quits(const char *l, size_t len)
         end = p;
         p += p < len ? 1U : 0U; /* the quote or blank that ended the word */
         if (count == 0U) {
-            first_quits = (end - start == 4U && (memcmp(l + start, "quit", 4U) == 0 || memcmp(l + start, "exit", 4U) == 0));
+            for (const char *const *w = words; *w != NULL; w++) {
+                matched = matched || (end - start == strlen(*w) && memcmp(l + start, *w, end - start) == 0);
+            }
         }
         count++;
     }
-    return first_quits;
+    return matched;
+}
+
+/* A line that would stop the emulator: `quit` or its alias `exit`. */
+static bool quits(const char *l, size_t len)
+{
+    static const char *const words[] = {"quit", "exit", NULL};
+    return first_word_is(l, len, words);
+}
+
+/* A line a restricted (web) session refuses: what stops the emulator or writes a file (command_restriction). */
+static bool restricted_word(const char *l, size_t len)
+{
+    static const char *const words[] = {"quit", "exit", "export-dcf", NULL};
+    return first_word_is(l, len, words);
 }
 
 /* A JSON request line that stops the emulator: one object, "cmd" "quit" or "exit", nothing else but an "id" that
@@ -203,6 +246,11 @@ static void reference(const char *d, size_t n)
                                                      : r->len;
         r->json = is_json(r->text, kept);
         r->quits = r->verdict == L_RUN && (r->json ? json_quits(r->text, r->len) : quits(r->text, r->len));
+        /* A JSON export-dcf may fail its field checks first, so only the quits are sure to meet the refusal. */
+        r->refused = g_restricted && r->verdict == L_RUN && (r->json ? r->quits : restricted_word(r->text, r->len));
+        if (g_restricted) {
+            r->quits = false; /* refused: nothing stops the emulator */
+        }
         if (r->quits && g_quit_at == SIZE_MAX) {
             g_quit_at = g_ref_n;
         }
@@ -259,6 +307,9 @@ void reply(const char *fmt, ...)
     if (g_in_command == 0) {
         fail("reply '%s' from the command language outside a line's run", g_tmp);
     }
+    if (is_refusal(g_tmp)) {
+        g_refusal_seen = true;
+    }
     if (g_sink != NULL) {
         g_sink(g_sink_ctx, g_tmp, strlen(g_tmp)); /* as emu_output.c: to the session, or captured for JSON */
     }
@@ -286,6 +337,10 @@ void output_reply_line(const char *line, size_t len)
             json_t *answer = json_loads(g_out, 0, &err);
             if (!json_is_object(answer) || !json_is_boolean(json_object_get(answer, "ok"))) {
                 fail("the JSON answer '%.80s' is not an object with \"ok\" true or false", g_out);
+            }
+            const char *error = json_string_value(json_object_get(answer, "error"));
+            if (error != NULL && is_refusal(error)) {
+                g_refusal_seen = true;
             }
             json_decref(answer);
             g_json_answers++;
@@ -339,14 +394,36 @@ void __wrap_session_run_line(emu_t *emu, emu_session_t *s, char *line)
     g_next++;
     g_in_command++;
     g_json_answers = 0;
+    g_refusal_seen = false;
+    if (s->restricted != g_restricted) {
+        fail("line %zu runs in a session restricted=%d, the input asks %d", g_next, (int)s->restricted, (int)g_restricted);
+    }
     __real_session_run_line(emu, s, line);
     g_in_command--;
+    if (r->refused && !g_refusal_seen) {
+        fail("line %zu ('%.60s') was not refused in a restricted session", g_next, r->text);
+    }
+    if (g_refusal_seen && !g_restricted) {
+        fail("line %zu ('%.60s') was refused as in a web session, but the session is not one", g_next, r->text);
+    }
     if (r->json && g_json_answers != 1) {
         fail("the JSON line %zu got %d answers, not one ('%.60s')", g_next, g_json_answers, r->text);
     }
     if (g_sink != NULL) {
         fail("the reply sink is still set after line %zu", g_next);
     }
+}
+
+bool __real_eds_class_export(device_t *dev, const char *path, char *why, size_t why_len);
+bool __wrap_eds_class_export(device_t *dev, const char *path, char *why, size_t why_len);
+
+/* export-dcf's writer: never reached from a restricted session (it writes a file at any path). */
+bool __wrap_eds_class_export(device_t *dev, const char *path, char *why, size_t why_len)
+{
+    if (g_restricted) {
+        fail("export-dcf wrote '%.60s' from a restricted session", path);
+    }
+    return __real_eds_class_export(dev, path, why, why_len);
 }
 
 static void device_print(void *ctx, const device_t *dev, const char *line)
@@ -477,6 +554,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
+    g_restricted = size > 0U && data[0] == (uint8_t)RESTRICTED_MARK;
+    if (g_restricted) {
+        data++;
+        size--;
+    }
     const char *in = (const char *)data;
     g_ref = malloc((size + 1U) * sizeof *g_ref);
     if (g_ref == NULL) {
@@ -495,6 +577,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     nodes_start();
     g_emu.n_sessions = 0U;
     control_start(&g_emu); /* finds O_NONBLOCK set: leaves the flag alone */
+    g_emu.control.session.restricted = g_restricted;
     nodes_process();
 
     uint32_t h = 2166136261U;
