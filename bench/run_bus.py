@@ -18,6 +18,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 IFACE = "vcan0"
@@ -315,10 +316,101 @@ def callgrind(r, sz):
     return res
 
 
+WEB_PORT = 18080  # the web view of the 127-node run (inside the vcan-run guest: nothing else listens there)
+
+
+class PageLoad:
+    """What the web view's page asks of the emulator, as a thread: one web session (docs/web.md "HTTP API"), an
+    exchange every 250 ms, `show all` once a second, the overview's events, and the trace's subscription to every
+    frame; plus a batched `get` of 8 process values of one node per exchange (a plot). Counts exchanges, their bytes
+    and their round-trip times, and the frame events received."""
+
+    def __init__(self, port):
+        import http.client  # only this section talks HTTP
+        self.http = http.client
+        self.port = port
+        self.stop = False
+        self.exchanges, self.sizes, self.rtts, self.frames, self.errors = 0, [], [], 0, []
+        conn = self.http.HTTPConnection("127.0.0.1", port, timeout=10)
+        conn.request("GET", "/")
+        page = conn.getresponse().read().decode()
+        self.token = re.search(r'name="canopen-emu-token" content="([0-9a-f]+)"', page).group(1)
+        self.conn = conn
+        self.session = self.post("/api/session", "")["session"]
+
+    def post(self, path, body):
+        self.conn.request("POST", path, body=body.encode(), headers={"X-Canopen-Emu": self.token})
+        answer = self.conn.getresponse()
+        data = answer.read()
+        if answer.status != 200:
+            raise BenchError(f"web: {path}: HTTP {answer.status}: {data[:200]!r}")
+        return json.loads(data) if path == "/api/session" else data
+
+    def run(self):
+        lines = ['{"id":1,"cmd":"subscribe","events":["nmt","boot-up","emcy","fault"]}',
+                 '{"id":2,"cmd":"subscribe","events":["frame"],"frames":"0x000/0x000"}']
+        plot = json.dumps({"id": 3, "cmd": "get", "node": 1, "objects": ["0x2500:01", "0x2500:02", "0x2500:03",
+                           "0x2500:04", "0x2500:05", "0x2500:06", "0x2500:07", "0x1001"]})
+        last_show = 0.0
+        next_at = time.monotonic()
+        try:
+            while not self.stop:
+                now = time.monotonic()
+                if now - last_show >= 1.0:
+                    lines.append('{"id":4,"cmd":"show","node":"all"}')
+                    last_show = now
+                lines.append(plot)
+                t0 = time.monotonic()
+                data = self.post(f"/api/session/{self.session}", "\n".join(lines))
+                self.rtts.append(time.monotonic() - t0)
+                lines = []
+                self.exchanges += 1
+                self.sizes.append(len(data))
+                self.frames += data.count(b'"event":"frame"')
+                next_at += 0.25
+                time.sleep(max(0.0, next_at - time.monotonic()))
+        except (OSError, BenchError, ValueError) as e:
+            self.errors.append(str(e))
+
+    def restart_counts(self):
+        """The window starts: what came before (the subscriptions settling) is not counted."""
+        self.exchanges, self.sizes, self.rtts, self.frames = 0, [], [], 0
+
+    def figures(self, seconds):
+        rtts = sorted(self.rtts)
+        return {"exchanges": self.exchanges, "errors": self.errors, "frame_events_per_s": self.frames / seconds,
+                "bytes_mean": statistics.mean(self.sizes) if self.sizes else 0, "bytes_max": max(self.sizes, default=0),
+                "rtt_ms_p50": 1000 * rtts[len(rtts) // 2] if rtts else None,
+                "rtt_ms_p99": 1000 * rtts[min(len(rtts) - 1, int(len(rtts) * 0.99))] if rtts else None}
+
+
+def scale_round(r, emu, w):
+    """One window of the 127-node run: the streams recorded beside the ideal generator, the emulator's CPU share."""
+    tck = os.sysconf("SC_CLK_TCK")
+    rec = r.start("scale", [r.prog("bench-record"), "-i", IFACE, "-b", str(RECORD_BATCH_MS), "-p", "100000",
+                            "-d", str(w), "heartbeat=0x701-0x77F", "tpdo=0x181-0x1FF", "ideal=0x7F0"])
+    gen = r.start("scale", [r.prog("bench-gen"), "-i", IFACE, "-p", "100000", "-d", str(w + 1), "0x7F0"])
+    u0, s0 = cpu_ticks(emu.pid)
+    t0, wall0 = time.monotonic(), time.time()
+    rec_out, rec_err = rec.communicate(timeout=w + 120)
+    u1, s1 = cpu_ticks(emu.pid)
+    dt, wall1 = time.monotonic() - t0, time.time()
+    gen_out, gen_err = gen.communicate(timeout=w + 60)
+    if rec.returncode != 0 or gen.returncode != 0:
+        raise BenchError(f"bench-record/bench-gen: {rec_err}{gen_err}")
+    rd = {"wall": [wall0, wall1],  # realtime: tools/bench matches it with the host's steal time
+          "window_s": dt, "cpu_user": (u1 - u0) / tck / dt, "cpu_sys": (s1 - s0) / tck / dt,
+          "loadavg_window": loadavg(), "record": json.loads(rec_out)}
+    rd["cpu_share"] = rd["cpu_user"] + rd["cpu_sys"]
+    g = rd["record"]["groups"]
+    rd["missing"] = g["heartbeat"]["missing"] + g["tpdo"]["missing"]
+    return rd
+
+
 def scale(r, sz):
     """127 Bürkert nodes in one canopen-emu: heartbeat 100 ms and TPDO1 every 100 ms each."""
     nodes = range(1, 128)
-    emu = r.emu("scale", [f"buerkert:{n}" for n in nodes])
+    emu = r.emu("scale", [f"buerkert:{n}" for n in nodes], extra=("--web", f"127.0.0.1:{WEB_PORT}"))
     res = {"nodes": len(nodes)}
     try:
         cmds = ["ready", "1-127", "300"]
@@ -334,31 +426,25 @@ def scale(r, sz):
         # of ten from minute to minute; the document shows every round and takes the median one.
         rounds = sz["scale_rounds"]
         w = max(1, sz["scale_window_s"] // rounds)
-        tck = os.sysconf("SC_CLK_TCK")
-        res["rounds"] = []
-        for _ in range(rounds):
-            rec = r.start("scale", [r.prog("bench-record"), "-i", IFACE, "-b", str(RECORD_BATCH_MS), "-p", "100000",
-                                    "-d", str(w), "heartbeat=0x701-0x77F", "tpdo=0x181-0x1FF", "ideal=0x7F0"])
-            gen = r.start("scale", [r.prog("bench-gen"), "-i", IFACE, "-p", "100000", "-d", str(w + 1), "0x7F0"])
-            u0, s0 = cpu_ticks(emu.pid)
-            t0, wall0 = time.monotonic(), time.time()
-            rec_out, rec_err = rec.communicate(timeout=w + 120)
-            u1, s1 = cpu_ticks(emu.pid)
-            dt, wall1 = time.monotonic() - t0, time.time()
-            gen_out, gen_err = gen.communicate(timeout=w + 60)
-            if rec.returncode != 0 or gen.returncode != 0:
-                raise BenchError(f"bench-record/bench-gen: {rec_err}{gen_err}")
-            rd = {"wall": [wall0, wall1],  # realtime: tools/bench matches it with the host's steal time
-                  "window_s": dt, "cpu_user": (u1 - u0) / tck / dt, "cpu_sys": (s1 - s0) / tck / dt,
-                  "loadavg_window": loadavg(), "record": json.loads(rec_out)}
-            rd["cpu_share"] = rd["cpu_user"] + rd["cpu_sys"]
-            g = rd["record"]["groups"]
-            rd["missing"] = g["heartbeat"]["missing"] + g["tpdo"]["missing"]
-            res["rounds"].append(rd)
+        res["rounds"] = [scale_round(r, emu, w) for _ in range(rounds)]
         median = sorted(res["rounds"], key=lambda x: x["missing"])[len(res["rounds"]) // 2]
         for k in ("window_s", "cpu_user", "cpu_sys", "cpu_share", "loadavg_window", "record"):
             res[k] = median[k]
         res["median_round"] = res["rounds"].index(median)
+        # The same window with the web view's page open on it (overview, trace of every frame, one plot): what a
+        # browser beside a test run costs the emulator, and whether the streams keep their periods meanwhile.
+        page = PageLoad(WEB_PORT)
+        thread = threading.Thread(target=page.run, daemon=True)
+        thread.start()
+        time.sleep(1.0)  # its subscriptions are in place
+        page.restart_counts()
+        t0 = time.monotonic()
+        res["web"] = scale_round(r, emu, w)
+        page.stop = True
+        thread.join(timeout=15)
+        res["web"]["page"] = page.figures(time.monotonic() - t0)
+        if page.errors:
+            raise BenchError(f"web: {page.errors[0]}")
         res["rate"] = r.run_json("scale", [r.prog("bench-rate"), "-i", IFACE, "--pid", str(emu.pid), "--step-ms",
                                            str(sz["rate_step_ms"]), "--nodes", "1-127"] + [str(x) for x in sz["rates"]],
                                  timeout=1200)
