@@ -72,7 +72,10 @@ def main():
     # Removed when the program ends (its finalizer runs at exit): each demo run starts from factory defaults.
     nvm_dir = tempfile.TemporaryDirectory(prefix="canopen-emu-demo-")
     nvm = nvm_dir.name
-    emu_args = [args.emu, "-i", args.iface, "--nvm-dir", nvm, "--control", "-"] + [f"{d}:{n}" for d, n, _ in NODES]
+    # --web on a port the kernel picks (a fixed one may be taken): the log line says which; the page is there for as
+    # long as the demo runs (docs/web.md).
+    emu_args = [args.emu, "-i", args.iface, "--nvm-dir", nvm, "--control", "-", "--web", "127.0.0.1:0"] + \
+        [f"{d}:{n}" for d, n, _ in NODES]
     step("Start the emulator: " + " ".join(["canopen-emu"] + emu_args[1:]))
     network = canopen.Network()
     network.connect(interface="socketcan", channel=args.iface)
@@ -97,7 +100,9 @@ def main():
             emu.terminate()
         emu.wait(timeout=5)
         network.disconnect()
-    step("Done. The same emulator runs as long as you like with: build/canopen-emu pro-ionizer:16 sds:17 buerkert:18")
+    step("Done. The same emulator runs as long as you like with: build/canopen-emu --web 127.0.0.1:8080 "
+         "pro-ionizer:16 sds:17 buerkert:18\n    and its live view is then at http://127.0.0.1:8080/ in a browser "
+         "(docs/web.md)")
     return 0
 
 

@@ -122,7 +122,8 @@ def test_readme_demo_session_runs(tmp_path):
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
     out = r.stdout
     for text in ("boot-up from node 16", "name \"ES61\"", "name \"SDS\"", "NMT start", "l/min",
-                 "EMCY 0x3210", "EMCY 0x0000 (error reset)", "NMT state from its heartbeat: STOPPED"):
+                 "EMCY 0x3210", "EMCY 0x0000 (error reset)", "NMT state from its heartbeat: STOPPED",
+                 "web: listening on http://127.0.0.1:", "http://127.0.0.1:8080/"):
         assert text in out, f"{text!r} missing from the demo output"
 
 
