@@ -1,9 +1,11 @@
 """The launcher: it returns once every node has booted, stops with status 0 (or by signals when quit is not
 possible), reports a failed start with the log, finds its program, runs several buses, keeps nvm_dir."""
 import os
+import re
 import signal
 import struct
 import time
+import urllib.request
 
 import pytest
 
@@ -147,3 +149,16 @@ def test_nvm_dir_keeps_what_was_stored(canopen_emu_factory, network, tmp_path):
     assert second.client.get(16, "0x1017") == 1200
     fresh = canopen_emu_factory("sds:18")  # no nvm_dir: a fresh one
     assert fresh.client.get(18, "0x1017") == 5000
+
+
+def test_the_web_view_is_served_where_web_url_says():
+    with Emulator(nodes=["sds:16"], web="127.0.0.1:0") as emu:
+        url = emu.web_url()
+        assert re.fullmatch(r"http://127\.0\.0\.1:\d+/", url), url
+        assert url != "http://127.0.0.1:0/"
+        with urllib.request.urlopen(url, timeout=5) as page:
+            html = page.read().decode()
+        assert page.status == 200 and "<title>canopen-emu</title>" in html
+        assert re.search(r'name="canopen-emu-token" content="[0-9a-f]{32}"', html), html[:500]
+    with Emulator(nodes=["sds:16"]) as plain, pytest.raises(ValueError, match="without the web view"):
+        plain.web_url()

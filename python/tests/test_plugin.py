@@ -167,3 +167,20 @@ def test_an_emulator_that_dies_fails_the_teardown(pytester):
     result.assert_outcomes(passed=2, errors=1)
     result.stdout.fnmatch_lines(["*ERROR at teardown of test_killed*",
                                  "*canopen-emu (sds:16) ended by itself with status -9:*"])
+
+
+def test_canopen_emu_web_serves_each_emulators_live_view_and_says_where(pytester):
+    pytester.makepyfile("""
+        import urllib.request
+
+        import pytest
+
+        @pytest.mark.canopen_emu_nodes("sds:16")
+        def test_page(canopen_emu):
+            with urllib.request.urlopen(canopen_emu.web_url(), timeout=5) as page:
+                assert b"<title>canopen-emu</title>" in page.read()
+    """)
+    result = run(pytester, "--canopen-emu-web", "127.0.0.1:0", "-v")
+    result.stdout.fnmatch_lines(["*canopen-emu (sds:16): live view at http://127.0.0.1:*/*", "*1 passed*"])
+    assert "http://127.0.0.1:0/" not in result.stdout.str()
+    assert result.ret == 0

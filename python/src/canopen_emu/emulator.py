@@ -56,7 +56,9 @@ class Emulator:
     ``interface``: one CAN interface or several (``["vcan0", "vcan1"]``; nodes go to the first unless named
     ``DEVICE:ID@IFACE``). ``nodes``: the emulator's device arguments (``"sds:16"``, ``"pro-ionizer/efield:0x20"``).
     ``nvm_dir``: where stored parameters live (default: a fresh directory, removed by stop()). ``executable``:
-    default ``$CANOPEN_EMU``, else ``canopen-emu`` on PATH. ``extra_args``: more options (``["-v"]``).
+    default ``$CANOPEN_EMU``, else ``canopen-emu`` on PATH. ``extra_args``: more options (``["-v"]``). ``web``:
+    ``HOST:PORT`` of the live view in the browser (``--web``; ``"127.0.0.1:0"`` takes a free port), its address then
+    from ``web_url()``.
 
     The constructor returns once the control socket answers ``hello`` with protocol 1 and ``list`` shows every node
     out of INITIALISING (the boot-up sent); it raises EmulatorError, with the log, when that does not happen
@@ -65,7 +67,7 @@ class Emulator:
     def __init__(self, interface: Union[str, Sequence[str]] = "vcan0", nodes: Sequence[str] = DEFAULT_NODES,
                  nvm_dir: Optional[PathLike] = None, executable: Optional[PathLike] = None,
                  extra_args: Sequence[str] = (), *, start_timeout: float = 10.0, client_timeout: float = 5.0,
-                 wait_boot: bool = True) -> None:
+                 wait_boot: bool = True, web: Optional[str] = None) -> None:
         self.interfaces: List[str] = [interface] if isinstance(interface, str) else list(interface)
         self.node_args: List[str] = [nodes] if isinstance(nodes, str) else list(nodes)
         if not self.interfaces:
@@ -84,7 +86,7 @@ class Emulator:
         for name in self.interfaces:
             self.args += ["-i", name]
         self.args += ["--nvm-dir", str(self.nvm_dir), "--control-socket", str(self.socket_path),
-                      *extra_args, *self.node_args]
+                      *(["--web", web] if web is not None else []), *extra_args, *self.node_args]
         self.stop_requested = False  # stop() was called (by the test, not found dead at the end)
         self._clients: List[Client] = []
         self._status: Optional[int] = None
@@ -231,6 +233,14 @@ class Emulator:
             raise ValueError("this emulator was started without --control-tcp HOST:PORT")
         line = self.wait_log("control: listening on tcp ", timeout)
         return line.split("control: listening on tcp ", 1)[1].strip()
+
+    def web_url(self, timeout: float = 5.0) -> str:
+        """The address of the live view (``http://127.0.0.1:8080/``) as the log says it (``--web``, from ``web=``
+        or extra_args; port 0 replaced by the port it got)."""
+        if "--web" not in self.args:
+            raise ValueError("this emulator was started without the web view (web=\"127.0.0.1:8080\")")
+        line = self.wait_log("web: listening on ", timeout)
+        return line.split("web: listening on ", 1)[1].strip()
 
     @property
     def recent_events(self) -> List[Event]:

@@ -7,6 +7,9 @@ Options (command line, or the ini file):
   PATH);
 - ``--canopen-emu-interface IFACE`` (repeatable) / ini ``canopen_emu_interface``: the CAN interface(s), default
   ``vcan0``;
+- ``--canopen-emu-web HOST:PORT`` / ini ``canopen_emu_web``: every emulator the fixtures start serves the live view
+  in the browser there (``127.0.0.1:0``: a free port each); its address is written to the terminal and into a
+  failed test's report;
 - ini ``canopen_emu_session_nodes``: the nodes of ``canopen_emu_session``; ini ``canopen_emu_log_lines`` /
   ``canopen_emu_event_lines``: how much of the log and of the events a failed test's report shows.
 
@@ -36,6 +39,7 @@ class Settings:
     """The plugin's options, resolved once per run."""
     executable: Optional[str]   # None: $CANOPEN_EMU, else canopen-emu on PATH (looked up at each start)
     interfaces: List[str]
+    web: Optional[str]          # HOST:PORT of the emulators' web view; None: none
     log_lines: int
     event_lines: int
 
@@ -52,7 +56,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group.addoption("--canopen-emu-interface", dest="canopen_emu_interface", metavar="IFACE", action="append",
                     default=None, help="CAN interface of the emulators (default: ini canopen_emu_interface, else "
                                        "vcan0); give it again for more buses")
+    group.addoption("--canopen-emu-web", dest="canopen_emu_web", metavar="HOST:PORT", default=None,
+                    help="serve each emulator's live view in the browser there (127.0.0.1:0: a free port each; "
+                         "default: ini canopen_emu_web, else none)")
     parser.addini("canopen_emu", "the canopen-emu program (relative to the ini file's directory)", default="")
+    parser.addini("canopen_emu_web", "HOST:PORT of the emulators' live view in the browser (none when empty)",
+                  default="")
     parser.addini("canopen_emu_interface", "CAN interface(s) of the emulators, separated by blanks", type="args",
                   default=["vcan0"])
     parser.addini("canopen_emu_session_nodes", "nodes of the canopen_emu_session fixture (\"sds:16 buerkert:17\")",
@@ -72,7 +81,8 @@ def pytest_configure(config: pytest.Config) -> None:
             ini = str(config.inipath.parent / ini)
         executable = ini or None
     interfaces = config.getoption("canopen_emu_interface") or list(config.getini("canopen_emu_interface"))
-    config.stash[SETTINGS] = Settings(executable=executable, interfaces=list(interfaces) or ["vcan0"],
+    web = config.getoption("canopen_emu_web") or str(config.getini("canopen_emu_web")) or None
+    config.stash[SETTINGS] = Settings(executable=executable, interfaces=list(interfaces) or ["vcan0"], web=web,
                                       log_lines=int(config.getini("canopen_emu_log_lines")),
                                       event_lines=int(config.getini("canopen_emu_event_lines")))
 
@@ -90,8 +100,9 @@ class EmulatorFactory:
     """What ``canopen_emu_factory`` gives: call it with nodes to start an emulator on the plugin's interface(s);
     keyword arguments as Emulator's. Every emulator it started is stopped at the end of the test."""
 
-    def __init__(self, settings: Settings, started: List[Emulator]) -> None:
-        self.settings = settings
+    def __init__(self, config: pytest.Config, started: List[Emulator]) -> None:
+        self.config = config
+        self.settings = config.stash[SETTINGS]
         self.started = started
 
     def __call__(self, *nodes: str, interface: Union[None, str, Sequence[str]] = None,
@@ -101,8 +112,9 @@ class EmulatorFactory:
             raise ValueError("canopen_emu_factory needs the nodes: canopen_emu_factory(\"sds:16\", ...)")
         emu = Emulator(interface if interface is not None else self.settings.interfaces, list(nodes), nvm_dir,
                        executable if executable is not None else self.settings.executable, extra_args,
-                       start_timeout=start_timeout)
+                       start_timeout=start_timeout, web=self.settings.web)
         self.started.append(emu)
+        announce_web(self.config, emu)
         return emu
 
     def stop_all(self) -> List[str]:
@@ -122,7 +134,7 @@ def canopen_emu_factory(request: pytest.FixtureRequest) -> Iterator[EmulatorFact
     """Starts emulators: ``emu = canopen_emu_factory("sds:16", "buerkert:17")``. All are stopped at the end of
     the test; one that ended by itself with a status other than 0 makes the teardown fail."""
     started = request.node.stash.setdefault(EMULATORS, [])
-    factory = EmulatorFactory(request.config.stash[SETTINGS], started)
+    factory = EmulatorFactory(request.config, started)
     yield factory
     problems = factory.stop_all()
     if problems:
@@ -155,8 +167,9 @@ def canopen_emu_session_nodes(pytestconfig: pytest.Config) -> List[str]:
 def canopen_emu_session(request: pytest.FixtureRequest, canopen_emu_session_nodes: List[str]) -> Iterator[Emulator]:
     """One emulator for the whole session, shared by the tests that use it (they see each other's changes)."""
     settings = request.config.stash[SETTINGS]
-    emu = Emulator(settings.interfaces, canopen_emu_session_nodes, executable=settings.executable)
+    emu = Emulator(settings.interfaces, canopen_emu_session_nodes, executable=settings.executable, web=settings.web)
     request.config.stash[SESSION_EMULATOR] = emu
+    announce_web(request.config, emu)
     yield emu
     asked = emu.stop_requested
     status = emu.stop()
@@ -164,6 +177,22 @@ def canopen_emu_session(request: pytest.FixtureRequest, canopen_emu_session_node
     if status != 0 and not asked:
         pytest.fail(f"canopen-emu ({' '.join(emu.node_args)}) of the session ended by itself with status "
                     f"{status}:\n{emu.describe(settings.log_lines)}", pytrace=False)
+
+
+def announce_web(config: pytest.Config, emu: Emulator) -> None:
+    """With --canopen-emu-web: the address of the emulator's live view on the terminal, as it starts."""
+    if "--web" not in emu.args:
+        return
+    line = f"canopen-emu ({' '.join(emu.node_args)}): live view at {emu.web_url()}"
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    capture = config.pluginmanager.get_plugin("capturemanager")
+    if reporter is None:
+        return
+    if capture is None:
+        reporter.write_line(line)
+        return
+    with capture.global_and_fixture_disabled():  # a fixture's output is captured: this line is for the user now
+        reporter.write_line(line)
 
 
 def format_events(events: List[Event]) -> str:
