@@ -146,6 +146,9 @@ def test_a_row_click_opens_the_node_with_its_dictionary_and_live_values(page, st
                                "clear-error", "mode", "status"]
     assert "0x1018" in shown["groups"] and "0x1018:01" not in shown["rows"]  # objects of several: collapsed
     assert shown["rows"]["0x1017:00"]["object"] == "0x1017"  # an object of one sub-index is one row
+    # numeric rows have a plot button (shown when a plots view takes it: page.plot), strings none
+    assert shown["rows"]["0x1017:00"]["actions"] == "plot"
+    assert shown["rows"]["0x1008:00"]["actions"] == ""
     expand(driver, "0x1018")
     shown = wait_for(driver, "the identity's values",
                      lambda v: all(v["rows"].get(f"0x1018:0{s}", {}).get("value") for s in range(5)), 5.0)
