@@ -6,6 +6,7 @@
 import {Session, poster} from "./api.js";
 import {NodeTable} from "./nodes.js";
 import {Overview} from "./overview.js";
+import {makePlots} from "./plots.js";
 import {Tabs} from "./tabs.js";
 import {makeNodePanel} from "./node.js";
 
@@ -25,7 +26,7 @@ const EVENTS = ["nmt", "boot-up", "emcy", "fault"];
  *   view             the name of its view (a tab of index.html), for shown()
  * A panel module exports a function that takes the page (below) and returns its panel.
  */
-const panelMakers = [makeNodePanel];
+const panelMakers = [makeNodePanel, makePlots];
 
 const token = document.querySelector('meta[name="canopen-emu-token"]').content;
 const nodes = new NodeTable();

@@ -150,7 +150,8 @@ static json_t *abort_json(uint32_t abort_code)
 }
 
 /* get with "objects": the values of up to GET_OBJECTS_MAX objects of one node in one answer (what a view that plots
- * or refreshes several values asks for at every turn), each {object, value, type} or {object, error}. */
+ * or refreshes several values asks for at every turn), each {object, value, type} or {object, error}, and the time
+ * they were read. */
 #define GET_OBJECTS_MAX 64U
 
 static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
@@ -172,7 +173,8 @@ static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
         }
     }
     json_t *values = json_array();
-    n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
+    const co_time_us_t now = socketcan_now_us();
+    n->dev.now = now; /* a model's read hook brings the value up to now */
     q->emu->in_command = true;
     for (size_t i = 0U; i < json_array_size(list); i++) {
         json_t *v = json_object();
@@ -197,6 +199,8 @@ static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
     (void)json_object_set_new(r, "values", values);
+    /* When they were read, on the events' clock: a plot puts the values at their time, whenever the answer comes. */
+    (void)json_object_set_new(r, "time_us", json_integer((json_int_t)(now > q->emu->start ? now - q->emu->start : 0U)));
     send_response(q->s, r);
 }
 

@@ -392,6 +392,26 @@ def test_show_all_lists_the_nodes_heard_on_the_bus(emu):
     assert "heard" not in one
 
 
+def test_get_of_several_objects_answers_with_the_time_they_were_read(emu):
+    """get with "objects" answers with time_us, the events' clock when it read them: after an event that came before
+    it, advancing as the host's clock does (the plots put each sample at that time, whenever its answer arrives)."""
+    session = emu.open_session()
+    assert emu.exchange(session, '{"id":1,"cmd":"subscribe","events":["nmt"]}').lines()[0]["ok"] is True
+    emu.bus.send(0x000, bytes([0x01, 16]))  # NMT start node 16
+    emu.bus.expect(lambda i, d: i == 0x710 and d == b"\x05", 5.0, "heartbeat of node 16 in Operational")
+    (event,) = emu.exchange(session).lines()
+    ask = '{"id":%d,"cmd":"get","node":16,"objects":["0x6401:01","0x1017"]}'
+    first = emu.exchange(session, ask % 2).lines()[0]
+    asked = time.monotonic()
+    check_schema(first, "get")
+    assert [v["object"] for v in first["values"]] == ["0x6401:01", "0x1017:00"], first
+    assert event["time_us"] <= first["time_us"] < event["time_us"] + 5_000_000, (event, first)
+    time.sleep(0.5)
+    second = emu.exchange(session, ask % 3).lines()[0]
+    span = time.monotonic() - asked
+    assert 500_000 <= second["time_us"] - first["time_us"] <= span * 1e6 + 100_000, (first["time_us"], second, span)
+
+
 def test_quit_exit_and_export_dcf_are_refused_in_both_framings(emu, tmp_path):
     session = emu.open_session()
     dcf = tmp_path / "node16.dcf"
