@@ -146,7 +146,7 @@ class NodePanel {
     if (!this.#visible) {
       return;
     }
-    const rows = this.#page.nodes.rows(ms);
+    const rows = this.#page.nodes.rows(ms).filter((r) => !r.heard); // a node only heard has no dictionary here
     this.#drawPicker(rows);
     const row = rows.find((r) => r.key === this.#key);
     for (const [field, dd] of this.#summary) {

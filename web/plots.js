@@ -146,7 +146,7 @@ class PlotsView {
 
   /** The node select: the nodes of the last show, refilled when they change; the choice kept. */
   #fillNodes(ms) {
-    const rows = this.#page.nodes.rows(ms);
+    const rows = this.#page.nodes.rows(ms).filter((r) => !r.heard); // a node only heard has nothing to read
     const keys = rows.map((r) => r.key).join(" ");
     if (keys === this.#nodeKeys) {
       return;

@@ -178,7 +178,7 @@ export class Plotting {
   }
 
   #firstNode(ms) {
-    return this.#nodes.size === 0 ? null : this.#nodes.rows(ms)[0].key;
+    return this.#nodes.rows(ms).find((r) => !r.heard)?.key ?? null; // an emulated one: a heard one has no values
   }
 
   #has(key, object) {

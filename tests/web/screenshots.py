@@ -55,6 +55,7 @@ def scene(emu):
     emu.bus.send(0x000, bytes([0x01, 0x00]))  # NMT start, all nodes
     command(emu, "emcy 17 0x5000 0x01 0xA1 0xB2 0xC3 0xD4 0xE5")
     command(emu, "fault 18 heartbeat-jitter 200")
+    command(emu, "setpoint 18 40")  # the flow controller's values move towards it: the plot has a curve
     for node in (16, 17, 18):
         sdo_upload(emu, node, 0x1018, 1)
 
@@ -100,18 +101,34 @@ def main():
                     "OPERATIONAL") && text("fakecan0/17", "emcy") !== "" && text("fakecan0/18", "faults") !== "";
             """)
             shoot(driver, args.out, "network")
-            driver.find_element("css selector", '#nodes tr[data-key="fakecan0/16"]').click()
-            wait(driver, "the node view", "return !document.getElementById('view-node').hidden")
-            time.sleep(1.5)  # its first values
+            driver.find_element("css selector", '#nodes tr[data-key="fakecan0/18"]').click()
+            wait(driver, "the node view's dictionary", """
+                return !document.getElementById('view-node').hidden &&
+                    document.querySelector('#view-node tr.group[data-index="0x1018"] button.toggle') !== null;
+            """)
+            driver.find_element("css selector", '#view-node tr.group[data-index="0x1018"] button.toggle').click()
+            wait(driver, "the identity's values", """
+                const cells = [...document.querySelectorAll('#view-node tr.entry td[data-field="value"]')];
+                return cells.filter((td) => td.textContent !== "").length >= 8;
+            """)
             shoot(driver, args.out, "node")
-            for view in ("plots", "trace"):
-                driver.find_element("id", f"tab-{view}").click()
-                wait(driver, f"the {view} view", f"return !document.getElementById('view-{view}').hidden")
-                if view == "trace":
-                    for node in (16, 17, 18):
-                        sdo_upload(emu, node, 0x1000, 0)
-                time.sleep(3.0)  # points, frames
-                shoot(driver, args.out, view)
+            driver.find_element("id", "tab-plots").click()
+            # steps of the set-point (the flow follows), an over-temperature and its end (EMCYs: marks on the axis)
+            for line in ("setpoint 18 75", "temperature 18 80", "setpoint 18 20", "temperature 18 25",
+                         "setpoint 18 55"):
+                time.sleep(1.5)
+                command(emu, line)
+            wait(driver, "the plots: 40 samples of node 18", """
+                const charts = [...document.querySelectorAll('#view-plots [data-points]')];
+                return charts.length > 0 && charts.every((c) => Number(c.dataset.points) >= 40);
+            """, timeout=40.0)
+            shoot(driver, args.out, "plots")
+            driver.find_element("id", "tab-trace").click()
+            wait(driver, "the trace view", "return !document.getElementById('view-trace').hidden")
+            for node in (16, 17, 18):
+                sdo_upload(emu, node, 0x1000, 0)
+            time.sleep(3.0)  # frames
+            shoot(driver, args.out, "trace")
             errors = [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]
             if errors:
                 raise SystemExit(f"screenshots: the page logged errors: {errors}")

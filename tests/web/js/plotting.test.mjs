@@ -73,11 +73,14 @@ class FakeSession {
 
 const settle = () => new Promise((resolve) => setImmediate(resolve));
 
+function shown(...ids) {
+  return ids.map((node) => ({node, bus: "vcan0", device: "sds", variant: null, state: "PRE-OPERATIONAL", faults: [],
+    last_emcy: null, last_heartbeat_us: null, error_register: 0, device_type: 0, heartbeat_ms: 0}));
+}
+
 function table(...ids) {
   const nodes = new NodeTable();
-  nodes.show({time_us: 1_000_000, nodes: ids.map((node) => ({node, bus: "vcan0", device: "sds", variant: null,
-    state: "PRE-OPERATIONAL", faults: [], last_emcy: null, last_heartbeat_us: null, error_register: 0,
-    device_type: 0, heartbeat_ms: 0}))}, 0);
+  nodes.show({time_us: 1_000_000, nodes: shown(...ids)}, 0);
   return nodes;
 }
 
@@ -108,6 +111,17 @@ test("by default the first node's TPDO-mapped objects are plotted, found from it
   assert.deepEqual(p.charts().map((c) => [c.id, c.series.map((s) => s.object)]),
     [["vcan0/16 ", ["0x6000:01"]], ["vcan0/16 V", ["0x6401:01"]]]);
   assert.equal(p.problem, null);
+});
+
+test("a node only heard on the bus is never the default: the first emulated one is", async () => {
+  const session = new FakeSession();
+  const nodes = new NodeTable();
+  nodes.show({time_us: 1_000_000, nodes: shown(16, 17),
+    heard: [{node: 5, bus: "vcan0", state: "OPERATIONAL", boot_up: false, last_heartbeat_us: 900_000}]}, 0);
+  assert.equal(nodes.rows(0)[0].key, "vcan0/5"); // first in the overview
+  const p = new Plotting(session, nodes);
+  p.tick(0);
+  assert.deepEqual(session.asked.map((a) => [a.cmd, a.fields]), [["objects", {node: "16@vcan0"}]]);
 });
 
 test("a plot gains points: each answer of the sampling get is a sample at its time_us", async () => {
