@@ -7,6 +7,7 @@ import {Session, poster} from "./api.js";
 import {NodeTable} from "./nodes.js";
 import {Overview} from "./overview.js";
 import {Tabs} from "./tabs.js";
+import {makeTracePanel} from "./trace.js";
 
 const EXCHANGE_MS = 250;
 const SHOW_MS = 1000;
@@ -24,7 +25,7 @@ const EVENTS = ["nmt", "boot-up", "emcy", "fault"];
  *   view             the name of its view (a tab of index.html), for shown()
  * A panel module exports a function that takes the page (below) and returns its panel.
  */
-const panelMakers = [];
+const panelMakers = [makeTracePanel];
 
 const token = document.querySelector('meta[name="canopen-emu-token"]').content;
 const nodes = new NodeTable();
