@@ -33,7 +33,9 @@ class TracePanel {
   });
   #session = null; // the session opened last; null: none yet
   #recording = false; // subscribed to frames (asked)
-  #subscribed = false; // and the subscription answered: from now on every frame comes
+  #since = null; // the emulator's time when the subscription was made (null: not answered yet)
+  #held = []; // frame events that came before #since was known: the subscription's, or from one before it
+  #subscriptions = 0; // the subscriptions asked: the answer of an earlier one's hello is not this one's
   #visible = false;
   #paused = false;
   #follow = true; // the table is scrolled to its bottom: it follows new frames
@@ -82,6 +84,7 @@ class TracePanel {
 
     for (const control of [ui.text, ui.kind, ui.node]) {
       control.addEventListener("input", () => this.#filterChanged());
+      control.addEventListener("change", () => this.#filterChanged()); // a select changed by a script has no input
     }
     ui.time.addEventListener("change", () => this.#changed());
     ui.pause.addEventListener("click", () => {
@@ -114,10 +117,7 @@ class TracePanel {
   open(session) {
     this.#session = session;
     this.#recording = false; // a new session has no subscription
-    this.#subscribed = false;
     this.#reader.reset();
-    session.request("hello").then((answer) => { this.#clock = answer.clock; })
-      .catch((error) => { this.#problem = `hello: ${error.message}`; });
     if (this.#visible || this.#ui.background.checked) {
       this.#subscribe();
     }
@@ -137,17 +137,46 @@ class TracePanel {
     }
   }
 
+  /**
+   * Subscribes to every frame, and asks hello right after: its clock dates the log, and its time_us is when the
+   * subscription was made. Frames of an earlier subscription may still come with the exchange that answers (the view
+   * left and shown again at once): those are older and are not taken. An answer is handed out once its exchange's
+   * lines are all read, so the frames of that exchange are held until then.
+   */
   #subscribe() {
     this.#recording = true;
+    this.#since = null;
+    this.#held = [];
+    const subscription = ++this.#subscriptions;
     this.#session.request("subscribe", {events: ["frame"], frames: ALL_FRAMES})
-      .then(() => { this.#subscribed = this.#recording; })
       .catch((error) => { this.#problem = `subscribe to frames: ${error.message}`; });
+    this.#session.request("hello").then((answer) => {
+      this.#clock = answer.clock;
+      this.#start(subscription, answer.clock.time_us);
+    }).catch((error) => {
+      this.#problem = `hello: ${error.message}`;
+      this.#start(subscription, -Infinity);
+    });
+  }
+
+  #start(subscription, since) {
+    if (subscription !== this.#subscriptions || !this.#recording || this.#since !== null) {
+      return;
+    }
+    this.#since = since;
+    for (const ev of this.#held) {
+      if (ev.time_us >= since) {
+        this.#record(ev);
+      }
+    }
+    this.#held = [];
+    this.#page.redraw();
   }
 
   #unsubscribe() {
     if (this.#recording) {
       this.#recording = false;
-      this.#subscribed = false;
+      this.#held = [];
       this.#session.request("unsubscribe", {events: ["frame"]})
         .catch((error) => { this.#problem = `unsubscribe from frames: ${error.message}`; });
     }
@@ -165,6 +194,14 @@ class TracePanel {
     if (ev.event !== "frame" || !this.#recording) {
       return;
     }
+    if (this.#since === null) {
+      this.#held.push(ev);
+    } else {
+      this.#record(ev);
+    }
+  }
+
+  #record(ev) {
     const entry = this.#log.add(ev);
     if (entry.kind === "PDO" && entry.about !== null) {
       this.#reader.want(entry.bus, entry.about);
@@ -249,7 +286,7 @@ class TracePanel {
     let count = `${ring.length} frames kept, ${ring.dropped} dropped (at most ${ring.capacity})`;
     if (!this.#recording) {
       count += "; not recording";
-    } else if (!this.#subscribed) {
+    } else if (this.#since === null) {
       count += "; subscribing";
     } else if (this.#paused) {
       count += `; paused: ${waiting} new not shown`;

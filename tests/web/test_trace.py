@@ -131,3 +131,170 @@ def test_the_trace_shows_decoded_frames(page, start_emulator):
     # Newest at the bottom: the times never go back.
     times = [float(r["time"]) for r in shot["rows"]]
     assert times == sorted(times)
+
+
+def rows_of(shot, field):
+    return [r[field] for r in shot["rows"]]
+
+
+def test_the_filter_narrows_the_rows(page, start_emulator):
+    emu = start_emulator(*NODES)
+    driver = open_trace(page, emu)
+    emu.bus.send(0x611, upload(0x1018, 1))
+    emu.bus.send(0x610, upload(0x1017, 0))
+    wait_for(driver, "both SDO answers", lambda s: {"591", "590"} <= set(rows_of(s, "id")), 5.0)
+    wait_for(driver, "heartbeats of nodes 16 and 18", lambda s: {"710", "712"} <= set(rows_of(s, "id")), 5.0)
+
+    Select(driver.find_element(By.ID, "trace-kind")).select_by_visible_text("SDO")
+    shot = wait_for(driver, "only SDO rows", lambda s: set(rows_of(s, "kind")) == {"SDO"}, 2.0)
+    assert rows_of(shot, "id") == ["611", "591", "610", "590"]
+
+    node = driver.find_element(By.ID, "trace-node")
+    node.send_keys("17")
+    shot = wait_for(driver, "node 17's SDO rows", lambda s: rows_of(s, "id") == ["611", "591"], 2.0)
+    assert rows_of(shot, "text")[0] == "SDO upload request 0x1018:01"
+
+    node.clear()
+    wait_for(driver, "the SDO rows of all nodes again", lambda s: rows_of(s, "id") == ["611", "591", "610", "590"], 2.0)
+    node.send_keys("x")  # not a node-ID: said so, the rows stay as they were
+    shot = wait_for(driver, "the error of the node field",
+                    lambda s: s["problem"] == 'node: "x" is not a node-ID (1 to 127)', 2.0)
+    assert rows_of(shot, "id") == ["611", "591", "610", "590"]
+    assert driver.execute_script("return document.getElementById('trace-node').validity.valid") is False
+    node.send_keys("\b")
+    wait_for(driver, "the error gone", lambda s: s["problem"] == "", 2.0)
+
+    Select(driver.find_element(By.ID, "trace-kind")).select_by_visible_text("all")
+    text = driver.find_element(By.ID, "trace-text")
+    text.send_keys("0x1017")  # free text over the decoded line
+    shot = wait_for(driver, "the rows about 0x1017", lambda s: rows_of(s, "id") == ["610", "590"] and s["problem"] == "",
+                    2.0)
+    assert shot["rows"][1]["text"] == "SDO upload response 0x1017:00 expedited 2 bytes = 1000 (0x03E8)"
+    text.clear()
+    text.send_keys("712#05")  # COB-ID#data as candump writes it: node 18's heartbeats only
+    emu.bus.send(0x000, bytes([0x01, 0x00]))  # operational: its heartbeat says 05 from now on
+    wait_for(driver, "node 18's operational heartbeats only",  # typed key by key: the filter of "712#05" at last
+             lambda s: len(s["rows"]) > 0 and {(r["id"], r["text"]) for r in s["rows"]} == {("712", "heartbeat: operational")},
+             5.0)
+    text.clear()
+    text.send_keys(" ")  # nothing but blanks: every row again
+    wait_for(driver, "all kinds again", lambda s: {"SDO", "NMT", "heartbeat", "PDO"} <= set(rows_of(s, "kind")), 5.0)
+
+
+def test_pause_stops_new_rows_and_resume_catches_up(page, start_emulator):
+    emu = start_emulator(*NODES)
+    driver = open_trace(page, emu)
+    wait_for(driver, "a heartbeat", lambda s: "712" in rows_of(s, "id"), 5.0)
+    driver.find_element(By.ID, "trace-pause").click()
+    before = wait_for(driver, "paused", lambda s: s["count"].endswith("; paused: 0 new not shown"), 2.0)
+    emu.bus.send(0x611, upload(0x1018, 1))
+    emu.bus.expect(lambda i, d: i == 0x591, 5.0, "the SDO answer of node 17")
+    # Received meanwhile (the count goes on), not drawn.
+    shot = wait_for(driver, "the frames counted while paused",
+                    lambda s: int(re.search(r"paused: (\d+) new", s["count"]).group(1)) >= 2, 5.0)
+    assert shot["rows"] == before["rows"]
+    assert "611" not in rows_of(shot, "id")
+    assert driver.find_element(By.ID, "trace-pause").text == "Resume"
+    driver.find_element(By.ID, "trace-pause").click()
+    shot = wait_for(driver, "the SDO rows after resuming", lambda s: {"611", "591"} <= set(rows_of(s, "id")), 2.0)
+    assert recording(shot), shot["count"]
+    assert shot["rows"][:len(before["rows"])] == before["rows"]  # appended after what was shown
+
+
+def test_frames_are_recorded_while_the_trace_is_shown_or_asked_to_record(page, start_emulator):
+    emu = start_emulator(*NODES)
+    driver = open_trace(page, emu)
+    driver.find_element(By.ID, "tab-network").click()
+    emu.bus.send(0x611, upload(0x1018, 1))  # not recorded: the view was left (unsubscribed, and dropped meanwhile)
+    emu.bus.expect(lambda i, d: i == 0x591, 5.0, "the SDO answer of node 17")
+    driver.find_element(By.ID, "tab-trace").click()
+    shot = wait_for(driver, "recording again", recording, 5.0)
+    assert "611" not in rows_of(shot, "id")
+
+    driver.find_element(By.ID, "trace-background").click()  # record while hidden
+    driver.find_element(By.ID, "tab-network").click()
+    emu.bus.send(0x610, upload(0x1018, 1))
+    emu.bus.expect(lambda i, d: i == 0x590, 5.0, "the SDO answer of node 16")
+    time.sleep(0.5)  # two exchanges while hidden
+    driver.find_element(By.ID, "tab-trace").click()
+    shot = wait_for(driver, "the SDO of node 16 recorded while hidden", lambda s: "610" in rows_of(s, "id"), 5.0)
+    assert "611" not in rows_of(shot, "id")
+
+
+def test_clear_empties_the_trace(page, start_emulator):
+    emu = start_emulator(*NODES)
+    driver = open_trace(page, emu)
+    wait_for(driver, "a heartbeat", lambda s: "712" in rows_of(s, "id"), 5.0)
+    driver.find_element(By.ID, "trace-clear").click()
+    # Empty, but for a heartbeat that may come at once; the count says what the rows show.
+    wait_for(driver, "the trace cleared",
+             lambda s: len(s["rows"]) <= 2 and int(COUNT.fullmatch(s["count"]).group(1)) == len(s["rows"]) and
+             all(r["id"] in ("710", "712") for r in s["rows"]), 2.0)
+    emu.bus.send(0x611, upload(0x1018, 1))
+    wait_for(driver, "the SDO after clearing", lambda s: "591" in rows_of(s, "id"), 5.0)
+
+
+def candump_lines(path):
+    """(seconds, interface, frame) of each line of a candump -l log."""
+    lines = []
+    for line in path.read_text().splitlines():
+        match = re.fullmatch(r"\((\d+\.\d{6})\) (\S+) (\S+)", line)
+        assert match, line
+        lines.append((float(match.group(1)), match.group(2), match.group(3)))
+    return lines
+
+
+def frame_text(can_id, data, rtr=False):
+    return f"{can_id:03X}#" + ("R" if rtr else data.hex().upper())
+
+
+def test_download_saves_the_frames_as_a_candump_log(page, start_emulator, tmp_path, driver):
+    """Node 18 (the Bürkert device: it has node guarding) alone, its heartbeat off: the only frames are those the test
+    sends and the node's answers, each waited for before the next, so the log must hold exactly them, in order."""
+    emu = start_emulator("buerkert:18")
+    command(emu, "set 18 0x1017 0")
+    end = time.monotonic() + 10.0  # its answer on stdout: no heartbeat from now on
+    while not any("0x1017" in line for line in list(emu.out_lines)):
+        assert time.monotonic() < end, emu.out_lines
+        time.sleep(0.02)
+    downloads = tmp_path / "downloads"
+    downloads.mkdir()
+    driver.execute_cdp_cmd("Browser.setDownloadBehavior",
+                           {"behavior": "allow", "downloadPath": str(downloads), "eventsEnabled": True})
+    browser = open_trace(page, emu, count=1)
+    drain(emu.bus)
+    browser.find_element(By.ID, "trace-clear").click()
+    expected = []
+    started = time.time()
+    for request in (upload(0x1018, 1), upload(0x1017, 0), upload(0x5FFF, 0),
+                    bytes([0x2B, 0x17, 0x10, 0x00, 0x00, 0x00, 0x00, 0x00])):
+        emu.bus.send(0x612, request)
+        _, can_id, data = emu.bus.expect(lambda i, d: i == 0x592, 5.0, "the SDO answer")
+        expected += [frame_text(0x612, request), frame_text(can_id, data)]
+    emu.bus.send(0x123, bytes.fromhex("DEADBEEF"))  # not CANopen: in the log all the same
+    expected.append("123#DEADBEEF")
+    for _ in range(2):  # node guarding: a remote request, answered with the state and the toggle bit
+        emu.bus.send(0x712 | CAN_RTR_FLAG, b"")
+        _, can_id, data = emu.bus.expect(lambda i, d: i == 0x712, 5.0, "the node guarding answer")
+        expected += ["712#R", frame_text(can_id, data)]
+    emu.bus.send(0x080, b"")
+    expected.append("080#")
+    shot = wait_for(browser, "every frame in the trace", lambda s: len(s["rows"]) == len(expected), 5.0)
+    assert drain(emu.bus) == []  # the bus saw nothing else
+    assert [r["text"] for r in shot["rows"]][-6:] == [
+        "", "node guarding request", "node guarding answer: pre-operational, toggle 0", "node guarding request",
+        "node guarding answer: pre-operational, toggle 1", "SYNC"]
+    browser.find_element(By.ID, "trace-download").click()
+    end = time.monotonic() + 10.0
+    while time.monotonic() < end and not [p for p in downloads.iterdir() if p.suffix == ".log"]:
+        time.sleep(0.05)
+    saved = [p for p in downloads.iterdir() if p.suffix == ".log"]
+    assert len(saved) == 1, list(downloads.iterdir())
+    assert re.fullmatch(r"canopen-emu-\d{8}-\d{6}\.log", saved[0].name), saved[0].name
+    lines = candump_lines(saved[0])
+    assert [frame for _, _, frame in lines] == expected
+    assert {iface for _, iface, _ in lines} == {"fakecan0"}
+    stamps = [t for t, _, _ in lines]
+    assert stamps == sorted(stamps)
+    assert started - 60 < stamps[0] <= stamps[-1] < time.time() + 60  # the wall clock, not the emulator's
+    assert browser.execute_script("return document.getElementById('trace-problem').textContent") == ""
