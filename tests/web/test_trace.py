@@ -298,3 +298,58 @@ def test_download_saves_the_frames_as_a_candump_log(page, start_emulator, tmp_pa
     assert stamps == sorted(stamps)
     assert started - 60 < stamps[0] <= stamps[-1] < time.time() + 60  # the wall clock, not the emulator's
     assert browser.execute_script("return document.getElementById('trace-problem').textContent") == ""
+
+
+def download(browser, driver, directory):
+    """Clicks Download and returns the path of the log saved in `directory` (the browser told to save there)."""
+    driver.execute_cdp_cmd("Browser.setDownloadBehavior",
+                           {"behavior": "allow", "downloadPath": str(directory), "eventsEnabled": True})
+    before = set(directory.iterdir())
+    browser.find_element(By.ID, "trace-download").click()
+    end = time.monotonic() + 20.0
+    while time.monotonic() < end:
+        saved = [p for p in set(directory.iterdir()) - before if p.suffix == ".log"]
+        if saved:
+            return saved[0]
+        time.sleep(0.05)
+    raise AssertionError(f"no log saved in {directory}: {list(directory.iterdir())}")
+
+
+def test_127_nodes_with_100_ms_heartbeats_the_trace_keeps_up(page, start_emulator, tmp_path, driver):
+    """sds:1 ... sds:127 operational, heartbeats every 100 ms and their TPDOs: some 1,800 frames a second. The trace
+    takes every one (its log between two marker frames sent 4 s apart is exactly the run of frames the bus got),
+    keeps 500 rows, and reads the mapping of all 127."""
+    emu = start_emulator(*[f"sds:{n}" for n in range(1, 128)])
+    browser = open_trace(page, emu, count=127)
+    command(emu, "set all 0x1017 100")
+    emu.bus.send(0x000, bytes([0x01, 0x00]))
+    text = browser.find_element(By.ID, "trace-text")
+    text.send_keys("123#")  # the rows of the markers only (the trace keeps every frame all the same)
+    browser.find_element(By.ID, "trace-clear").click()
+    emu.bus.send(0x123, bytes([0xAA]))  # the first marker
+    wait_for(browser, "the first marker", lambda s: rows_of(s, "data") == ["AA"], 10.0)
+    time.sleep(4.0)
+    emu.bus.send(0x123, bytes([0xBB]))
+    shot = wait_for(browser, "the second marker", lambda s: rows_of(s, "data") == ["AA", "BB"], 10.0)
+    kept, dropped = map(int, COUNT.fullmatch(shot["count"]).group(1, 2))
+    assert dropped == 0 and kept > 127 * 10 * 4, shot["count"]
+    text.clear()
+    text.send_keys(" ")
+    shot = wait_for(browser, "every frame's row again", lambda s: len(s["rows"]) > 1, 5.0)
+    assert len(shot["rows"]) == 500  # the newest 500: the DOM is bounded
+    lines = candump_lines(download(browser, driver, tmp_path))
+    frames = [f for _, _, f in lines]
+    first, last = frames.index("123#AA"), frames.index("123#BB")
+    stamps = [t for t, _, _ in lines]
+    assert stamps == sorted(stamps)
+    between = frames[first + 1:last]  # what the nodes sent: the bus got exactly these, in this order, none left out
+    assert {f[:3] for f in between} >= {f"{0x700 + n:03X}" for n in range(1, 128)}
+    sent = [frame_text(can_id, data) for _, can_id, data in drain(emu.bus)]
+    assert any(sent[i:i + len(between)] == between for i, f in enumerate(sent) if f == between[0]), \
+        f"the log's {len(between)} frames between the markers are not a run of the bus's {len(sent)}"
+    # The mapping of all 127 read: the TPDO1 of each by name (the last 500 such rows: two seconds of them).
+    text.clear()
+    text.send_keys("TPDO1 Read System Status=")
+    wait_for(browser, "the TPDO1 of nodes 1 to 127 by their mapping",
+             lambda s: {r["node"] for r in s["rows"]} == {str(n) for n in range(1, 128)} and
+             all(r["text"].startswith("TPDO1 Read System Status=") for r in s["rows"]), 30.0)
