@@ -152,6 +152,7 @@ class TracePanel {
       .catch((error) => { this.#problem = `subscribe to frames: ${error.message}`; });
     this.#session.request("hello").then((answer) => {
       this.#clock = answer.clock;
+      this.#problem = null;
       this.#start(subscription, answer.clock.time_us);
     }).catch((error) => {
       this.#problem = `hello: ${error.message}`;

@@ -215,10 +215,21 @@ def test_frames_are_recorded_while_the_trace_is_shown_or_asked_to_record(page, s
     driver.find_element(By.ID, "tab-network").click()
     emu.bus.send(0x610, upload(0x1018, 1))
     emu.bus.expect(lambda i, d: i == 0x590, 5.0, "the SDO answer of node 16")
-    time.sleep(0.5)  # two exchanges while hidden
     driver.find_element(By.ID, "tab-trace").click()
     shot = wait_for(driver, "the SDO of node 16 recorded while hidden", lambda s: "610" in rows_of(s, "id"), 5.0)
     assert "611" not in rows_of(shot, "id")
+
+
+def test_a_page_opened_on_the_trace_records_at_once(page, start_emulator):
+    """The address names the view (#trace): the page starts on it, and subscribes with its first session."""
+    emu = start_emulator(*NODES)
+    driver = page(emu)
+    driver.get(f"http://127.0.0.1:{emu.port}/#trace")  # the fragment only: the same page
+    driver.refresh()  # loaded anew on the trace
+    assert driver.find_element(By.ID, "view-trace").is_displayed()
+    wait_for(driver, "the frames subscribed", recording, 10.0)
+    emu.bus.send(0x611, upload(0x1018, 1))
+    wait_for(driver, "the SDO request", row_with("SDO upload request 0x1018:01", id="611"), 5.0)
 
 
 def test_clear_empties_the_trace(page, start_emulator):
