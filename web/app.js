@@ -9,6 +9,7 @@ import {Overview} from "./overview.js";
 import {makePlots} from "./plots.js";
 import {Tabs} from "./tabs.js";
 import {makeNodePanel} from "./node.js";
+import {makeTracePanel} from "./trace.js";
 
 const EXCHANGE_MS = 250;
 const SHOW_MS = 1000;
@@ -26,7 +27,7 @@ const EVENTS = ["nmt", "boot-up", "emcy", "fault"];
  *   view             the name of its view (a tab of index.html), for shown()
  * A panel module exports a function that takes the page (below) and returns its panel.
  */
-const panelMakers = [makeNodePanel, makePlots];
+const panelMakers = [makeNodePanel, makePlots, makeTracePanel];
 
 const token = document.querySelector('meta[name="canopen-emu-token"]').content;
 const nodes = new NodeTable();
