@@ -125,9 +125,20 @@ def main():
             shoot(driver, args.out, "plots")
             driver.find_element("id", "tab-trace").click()
             wait(driver, "the trace view", "return !document.getElementById('view-trace').hidden")
+            time.sleep(1.0)  # its subscription is in place
             for node in (16, 17, 18):
                 sdo_upload(emu, node, 0x1000, 0)
-            time.sleep(3.0)  # frames
+            command(emu, "emcy 16 0x4210 0x09 1 2 3 4 5")
+            wait(driver, "the trace: SDO, EMCY, PDO and heartbeat rows", """
+                const kinds = new Set([...document.querySelectorAll('#view-trace tr[data-kind]')]
+                    .map((tr) => tr.dataset.kind));
+                // and every PDO by its mapping (read lazily, node by node: "TPDO1 Sensor Value=55 l/min")
+                const pdos = [...document.querySelectorAll('#view-trace tr[data-kind="PDO"] td[data-field="text"]')];
+                return ["SDO", "EMCY", "PDO", "heartbeat"].every((k) => [...kinds].some((s) => s.startsWith(k))) &&
+                    pdos.length > 0 && pdos.every((td) => td.textContent.includes("="));
+            """)
+            # held where the SDO and EMCY rows are still in sight (the PDOs of three nodes move the table on)
+            driver.find_element("xpath", "//section[@id='view-trace']//button[text()='Pause']").click()
             shoot(driver, args.out, "trace")
             errors = [e["message"] for e in driver.get_log("browser") if e["level"] == "SEVERE"]
             if errors:
