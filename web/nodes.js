@@ -137,3 +137,25 @@ function heardRow(key, n, now) {
     },
   };
 }
+
+/**
+ * The overview's rows with a heading before each bus's first row when there are several buses (one table, a part
+ * per interface): [{key: "bus:vcan1", heading: "vcan1: 2 nodes, 1 heard on the bus"}, row, ...]. With one bus, the
+ * rows as they are.
+ */
+export function withBusHeadings(rows) {
+  const buses = [...new Set(rows.map((r) => r.cells.bus))];
+  if (buses.length < 2) {
+    return rows;
+  }
+  const items = [];
+  for (const bus of buses) {
+    const own = rows.filter((r) => r.cells.bus === bus);
+    const heard = own.filter((r) => r.heard).length;
+    const emulated = own.length - heard;
+    items.push({key: `bus:${bus}`, heading: `${bus}: ${emulated} ${emulated === 1 ? "node" : "nodes"}` +
+      (heard > 0 ? `, ${heard} heard on the bus` : "")});
+    items.push(...own);
+  }
+  return items;
+}

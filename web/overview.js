@@ -2,7 +2,7 @@
 // exchange brought in one animation frame (web/app.js), and only the cells whose text changed are touched here, so
 // that 127 nodes redrawn four times a second cost little. A click on a row opens that node.
 
-import {COLUMNS} from "./nodes.js";
+import {COLUMNS, withBusHeadings} from "./nodes.js";
 
 export class Overview {
   #body;
@@ -27,7 +27,8 @@ export class Overview {
 
   /** Shows `rows` (NodeTable.rows()) and in the status line `problem`, or the count of nodes when it is null. */
   render(rows, problem) {
-    const keys = new Set(rows.map((r) => r.key));
+    const items = withBusHeadings(rows);
+    const keys = new Set(items.map((r) => r.key));
     for (const [key, {tr}] of this.#rows) {
       if (!keys.has(key)) {
         tr.remove();
@@ -35,7 +36,11 @@ export class Overview {
       }
     }
     let previous = null;
-    for (const row of rows) {
+    for (const row of items) {
+      if (row.heading !== undefined) {
+        previous = this.#place(this.#headingRow(row), previous);
+        continue;
+      }
       const {tr, cells} = this.#rows.get(row.key) ?? this.#add(row.key);
       for (const [field, text] of Object.entries(row.cells)) {
         if (cells[field].textContent !== text) {
@@ -49,21 +54,46 @@ export class Overview {
       if (tr.dataset.state !== row.state) {
         tr.dataset.state = row.state; // style.css colours the state by it
       }
-      const expected = previous === null ? this.#body.firstElementChild : previous.nextElementSibling;
-      if (expected !== tr) {
-        if (previous === null) {
-          this.#body.prepend(tr);
-        } else {
-          previous.after(tr);
-        }
-      }
-      previous = tr;
+      previous = this.#place(tr, previous);
     }
     const heard = rows.filter((r) => r.heard).length;
     const emulated = rows.length - heard;
     const count = `${emulated} ${emulated === 1 ? "node" : "nodes"}` + (heard > 0 ? `, ${heard} heard on the bus` : "");
     this.#status.textContent = problem ?? count;
     this.#status.classList.toggle("problem", problem !== null);
+  }
+
+  /** Puts tr right after `previous` (first when null) unless it is there already; returns tr. */
+  #place(tr, previous) {
+    const expected = previous === null ? this.#body.firstElementChild : previous.nextElementSibling;
+    if (expected !== tr) {
+      if (previous === null) {
+        this.#body.prepend(tr);
+      } else {
+        previous.after(tr);
+      }
+    }
+    return tr;
+  }
+
+  /** The heading row of a bus (several buses: withBusHeadings), made once, its text kept up to date. */
+  #headingRow({key, heading}) {
+    let entry = this.#rows.get(key);
+    if (entry === undefined) {
+      const tr = document.createElement("tr");
+      tr.dataset.key = key;
+      tr.className = "bus-heading";
+      const th = document.createElement("th");
+      th.scope = "rowgroup";
+      th.colSpan = COLUMNS.length;
+      tr.append(th);
+      entry = {tr, cells: {heading: th}};
+      this.#rows.set(key, entry);
+    }
+    if (entry.cells.heading.textContent !== heading) {
+      entry.cells.heading.textContent = heading;
+    }
+    return entry.tr;
   }
 
   #add(key) {

@@ -2,7 +2,7 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {COLUMNS, EmuClock, NodeTable} from "../../../web/nodes.js";
+import {COLUMNS, EmuClock, NodeTable, withBusHeadings} from "../../../web/nodes.js";
 
 // As show answers them (docs/control-protocol.md), the three devices of the README's example.
 function shown(node, device, variant, extra = {}) {
@@ -125,4 +125,18 @@ test("nodes heard on the bus get rows of their own, in node-ID order among the e
   assert.equal(table.isHeard("vcan0/99"), false);
   table.show(SHOW, 0); // no longer heard (a later show without it): gone
   assert.equal(table.rows(0).length, 3);
+});
+
+test("several buses: a heading before each bus's rows, with its counts; one bus: no heading", () => {
+  const table = new NodeTable();
+  table.show({...SHOW, nodes: [...SHOW.nodes, shown(16, "sds", "N", {bus: "vcan1"})],
+    heard: [{node: 5, bus: "vcan1", state: "OPERATIONAL", boot_up: false, last_heartbeat_us: 1_200_000}]}, 0);
+  const items = withBusHeadings(table.rows(0));
+  assert.deepEqual(items.map((r) => r.heading ?? r.key), [
+    "vcan0: 3 nodes", "vcan0/16", "vcan0/17", "vcan0/18",
+    "vcan1: 1 node, 1 heard on the bus", "vcan1/5", "vcan1/16"]);
+  assert.equal(items[0].key, "bus:vcan0");
+  const one = new NodeTable();
+  one.show(SHOW, 0);
+  assert.deepEqual(withBusHeadings(one.rows(0)), one.rows(0));
 });
