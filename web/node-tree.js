@@ -2,6 +2,7 @@
 // of several under it when it is expanded, the values of the rows in sight (an IntersectionObserver says which:
 // only those are read), a writable value edited in place. The panel (web/node.js) reads and writes; this draws.
 
+import {tableHead} from "./dom.js";
 import * as dictionary from "./dictionary.js";
 
 /** The columns, in order: field (the cell's data-field) and title. */
@@ -31,14 +32,7 @@ export class DictionaryTree {
   constructor(table, {onEdit, onPlot}) {
     this.#onEdit = onEdit;
     this.#onPlot = onPlot;
-    const head = table.createTHead().insertRow();
-    for (const {field, title} of TREE_COLUMNS) {
-      const th = document.createElement("th");
-      th.textContent = title;
-      th.dataset.field = field;
-      th.scope = "col";
-      head.append(th);
-    }
+    tableHead(table, TREE_COLUMNS);
     this.#body = table.createTBody();
     this.#observer = new IntersectionObserver((changes) => {
       for (const change of changes) {

@@ -3,32 +3,17 @@
 // writable ones edited in place (`set`, as the command language's), and its commands as controls. A panel of the
 // page (web/app.js): everything goes through the page's control session.
 
+import {element} from "./dom.js";
 import {DictionaryTree} from "./node-tree.js";
 import {NodeControls} from "./node-controls.js";
 import {faultsInForce} from "./commands.js";
 import {ValuePoll, groupObjects, parseInput} from "./dictionary.js";
+import {nodeRef} from "./nodes.js";
 
 /** The summary's fields: the overview's cells (web/nodes.js) of the node and their titles. */
 const SUMMARY = [["device", "device"], ["state", "NMT state"], ["heartbeat", "heartbeat"],
   ["heartbeat-age", "last heartbeat"], ["error-register", "error register"], ["faults", "protocol faults"],
   ["emcy", "last EMCY"], ["emcy-age", "EMCY sent"]];
-
-function element(tag, className, text) {
-  const e = document.createElement(tag);
-  if (className) {
-    e.className = className;
-  }
-  if (text !== undefined) {
-    e.textContent = text;
-  }
-  return e;
-}
-
-/** The node of a key (nodes.js nodeKey "bus/node") as requests name it: "16@vcan0" (node-IDs are per bus). */
-function nodeOf(key) {
-  const slash = key.lastIndexOf("/");
-  return `${key.slice(slash + 1)}@${key.slice(0, slash)}`;
-}
 
 class NodePanel {
   view = "node";
@@ -52,42 +37,42 @@ class NodePanel {
   constructor(page) {
     this.#page = page;
     this.#root = document.getElementById("view-node");
-    const head = element("div", "node-head");
-    const label = element("label", "node-picker", "node ");
+    const head = element("div", {className: "node-head"});
+    const label = element("label", {className: "node-picker", textContent: "node "});
     this.#picker = element("select");
     this.#picker.addEventListener("change", () => this.#page.select(this.#picker.value));
     label.append(this.#picker);
-    const summary = element("dl", "node-summary");
+    const summary = element("dl", {className: "node-summary"});
     for (const [field, title] of SUMMARY) {
       const item = element("div");
       const dd = element("dd");
       dd.dataset.field = field;
-      item.append(element("dt", "", title), dd);
+      item.append(element("dt", {textContent: title}), dd);
       summary.append(item);
       this.#summary.set(field, dd);
     }
     head.append(label, summary);
 
-    const dictionary = element("section", "node-dictionary");
-    const tools = element("div", "toolbar");
-    const expand = element("button", "", "expand all");
-    const collapse = element("button", "", "collapse all");
+    const dictionary = element("section", {className: "node-dictionary"});
+    const tools = element("div", {className: "toolbar"});
+    const expand = element("button", {textContent: "expand all"});
+    const collapse = element("button", {textContent: "collapse all"});
     expand.type = collapse.type = "button";
     expand.addEventListener("click", () => this.#tree.expandAll(true));
     collapse.addEventListener("click", () => this.#tree.expandAll(false));
-    this.#dictionaryNote = element("span", "note");
-    tools.append(element("h2", "", "Object dictionary"), expand, collapse, this.#dictionaryNote);
-    const table = element("table", "dictionary");
+    this.#dictionaryNote = element("span", {className: "note"});
+    tools.append(element("h2", {textContent: "Object dictionary"}), expand, collapse, this.#dictionaryNote);
+    const table = element("table", {className: "dictionary"});
     dictionary.append(tools, table);
     this.#tree = new DictionaryTree(table, {
       onEdit: (entry, text) => this.#write(entry, text),
       onPlot: (entry) => this.#page.plot?.(this.#key, entry.object),
     });
 
-    const controls = element("section", "node-controls");
-    controls.append(element("h2", "", "Commands"));
+    const controls = element("section", {className: "node-controls"});
+    controls.append(element("h2", {textContent: "Commands"}));
     this.#controls = new NodeControls(controls, (cmd, args) => this.#command(cmd, args));
-    const body = element("div", "node-body");
+    const body = element("div", {className: "node-body"});
     body.append(dictionary, controls);
     this.#root.append(head, body);
   }
@@ -126,7 +111,7 @@ class NodePanel {
       return;
     }
     const key = this.#key;
-    Promise.allSettled(rounds.map((objects) => session.request("get", {node: nodeOf(key), objects})
+    Promise.allSettled(rounds.map((objects) => session.request("get", {node: nodeRef(key), objects})
       .then((answer) => {
         if (key === this.#key) {
           this.#tree.setValues(answer.values);
@@ -188,7 +173,7 @@ class NodePanel {
     }
     this.#loading = key;
     this.#dictionaryNote.textContent = "reading the dictionary…";
-    this.#page.session.request("objects", {node: nodeOf(key)})
+    this.#page.session.request("objects", {node: nodeRef(key)})
       .then((answer) => {
         this.#dictionaries.set(key, groupObjects(answer.objects));
         if (key === this.#key) {
@@ -216,7 +201,7 @@ class NodePanel {
       return;
     }
     this.#helpLoading = key;
-    this.#page.session.request("help", {node: nodeOf(key)})
+    this.#page.session.request("help", {node: nodeRef(key)})
       .then((answer) => {
         this.#commands.set(key, answer.commands);
         if (key === this.#key) {
@@ -242,7 +227,7 @@ class NodePanel {
     if (parsed.error !== undefined) {
       return parsed;
     }
-    const answer = this.#page.session.request("set", {node: nodeOf(this.#key), object: entry.object,
+    const answer = this.#page.session.request("set", {node: nodeRef(this.#key), object: entry.object,
       value: parsed.value});
     this.#page.exchangeSoon();
     try {
@@ -256,7 +241,7 @@ class NodePanel {
 
   /** A command of the controls for the node shown; resolves to its answer, rejects with its error. */
   async #command(cmd, args) {
-    const fields = {node: nodeOf(this.#key)};
+    const fields = {node: nodeRef(this.#key)};
     if (args.length > 0) {
       fields.args = args;
     }

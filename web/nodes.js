@@ -41,6 +41,13 @@ export function nodeKey(bus, node) {
   return `${bus}/${node}`;
 }
 
+/** The control protocol's node of a key: "vcan0/16" -> "16@vcan0" (right with several buses; a bus name may hold
+ * a slash, a node-ID not). */
+export function nodeRef(key) {
+  const slash = key.lastIndexOf("/");
+  return `${key.slice(slash + 1)}@${key.slice(0, slash)}`;
+}
+
 export class NodeTable {
   #nodes = new Map(); // key -> the node as `show` gives it, changed in place by events
   clock = new EmuClock();

@@ -2,6 +2,7 @@
 // exchange brought in one animation frame (web/app.js), and only the cells whose text changed are touched here, so
 // that 127 nodes redrawn four times a second cost little. A click on a row opens that node.
 
+import {tableHead} from "./dom.js";
 import {COLUMNS, withBusHeadings} from "./nodes.js";
 
 export class Overview {
@@ -13,14 +14,7 @@ export class Overview {
   /** onPick(key): a row was clicked (or Enter pressed on it): the page shows that node. */
   constructor(table, status, onPick = () => {}) {
     this.#onPick = onPick;
-    const head = table.createTHead().insertRow();
-    for (const {field, title} of COLUMNS) {
-      const th = document.createElement("th");
-      th.textContent = title;
-      th.dataset.field = field;
-      th.scope = "col";
-      head.append(th);
-    }
+    tableHead(table, COLUMNS);
     this.#body = table.createTBody();
     this.#status = status;
   }

@@ -4,7 +4,9 @@
 // web/plotchart.js. Samples are taken at every exchange whether the view is shown or not (a plot has its history
 // when the user comes to it); the charts are drawn only while it is shown, once per exchange.
 
-import {Plotting, nodeRef} from "./plotting.js";
+import {element} from "./dom.js";
+import {nodeRef} from "./nodes.js";
+import {Plotting} from "./plotting.js";
 import {PlotChart} from "./plotchart.js";
 
 /** The time spans the charts can show (s), and the one they show first. */
@@ -25,12 +27,6 @@ export function makePlots(page) {
     shown: (visible) => view.shown(visible),
     draw: (ms) => view.draw(ms),
   };
-}
-
-function element(tag, properties = {}, ...children) {
-  const e = Object.assign(document.createElement(tag), properties);
-  e.append(...children);
-  return e;
 }
 
 class PlotsView {

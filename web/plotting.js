@@ -4,6 +4,7 @@
 // and the marks of its EMCYs and NMT changes. web/plots.js draws it.
 
 import {Marks} from "./marks.js";
+import {nodeRef} from "./nodes.js";
 import {SampleBuffer} from "./samples.js";
 import {chunks, mappedObjects, mappingCounts, mappingEntries, objectName, parseObject} from "./tpdo.js";
 
@@ -17,12 +18,6 @@ const NUMERIC = /^(BOOLEAN|INTEGER\d+|UNSIGNED\d+|REAL32|REAL64)$/;
 /** Whether a row of `objects` can be plotted: a number (or BOOLEAN) that can be read. */
 export function plottableRow(row) {
   return NUMERIC.test(row.type) && row.access !== "wo";
-}
-
-/** The control protocol's node of a node key (nodes.js nodeKey "vcan0/16"): "16@vcan0", right with several buses. */
-export function nodeRef(key) {
-  const slash = key.lastIndexOf("/");
-  return `${key.slice(slash + 1)}@${key.slice(0, slash)}`;
 }
 
 function seriesOf(key, row) {

@@ -4,6 +4,7 @@
 // an exchange, with at most the last ROWS matching rows in the DOM. Pause and scrolling up stop the table, not the
 // recording. The PDOs' values come from their nodes' mapping, read as PDOs appear (web/pdoreader.js).
 
+import {element, tableHead} from "./dom.js";
 import * as candump from "./candump.js";
 import {KINDS} from "./decode.js";
 import {PdoMaps} from "./pdomap.js";
@@ -13,12 +14,6 @@ import {COLUMNS, TraceLog, cells, parseFilter} from "./tracelog.js";
 /** Rows in the DOM at most: the newest that match. */
 export const ROWS = 500;
 const ALL_FRAMES = "0x000/0x000"; // mask 0: every COB-ID matches
-
-function element(tag, props = {}, ...children) {
-  const el = Object.assign(document.createElement(tag), props);
-  el.append(...children);
-  return el;
-}
 
 class TracePanel {
   view = "trace";
@@ -73,11 +68,7 @@ class TracePanel {
       ui.pause, ui.clear, ui.download, element("label", {}, ui.background, " record while hidden")),
     element("p", {className: "trace-status"}, ui.count, " ", ui.problem));
     const table = element("table", {id: "trace"});
-    const head = table.createTHead().insertRow();
-    for (const {field, title} of COLUMNS) {
-      head.append(element("th", {scope: "col", textContent: title}));
-      head.lastChild.dataset.field = field;
-    }
+    tableHead(table, COLUMNS);
     ui.body = table.createTBody();
     ui.scroller = element("div", {className: "trace-scroll"}, table);
     section.append(ui.scroller);

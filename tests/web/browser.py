@@ -36,3 +36,21 @@ def start_browser(window=WINDOW):
     browser = webdriver.Chrome(options=options, service=Service(executable_path=CHROMEDRIVER))
     browser.set_page_load_timeout(60)
     return browser
+
+
+def wait_until(driver, what, read, check, timeout, describe=repr):
+    """The first read(driver) (one script: the page at one moment) for which check() holds, polled every 50 ms; on
+    timeout an AssertionError with `what` and describe(the last one read)."""
+    from selenium.common.exceptions import TimeoutException
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    seen = {}
+
+    def holds(d):
+        seen["last"] = read(d)
+        return seen["last"] if check(seen["last"]) else False
+
+    try:
+        return WebDriverWait(driver, timeout, poll_frequency=0.05).until(holds)
+    except TimeoutException:
+        raise AssertionError(f"not within {timeout} s: {what}; {describe(seen.get('last'))}") from None

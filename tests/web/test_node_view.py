@@ -7,11 +7,11 @@ import statistics
 import time
 
 import canopen
-from selenium.common.exceptions import TimeoutException
 from selenium.webdriver.common.by import By
 from selenium.webdriver.common.keys import Keys
 from selenium.webdriver.support.ui import Select, WebDriverWait
 
+from browser import wait_until
 from python_can_bus import FakeCanBus
 from test_emulator_native import vendor_id
 
@@ -54,20 +54,12 @@ def view(driver):
 
 def wait_for(driver, what, check, timeout):
     """The first view for which check(view) holds, polled every 50 ms; fails with the last one seen."""
-    seen = {}
-
-    def holds(d):
-        seen["last"] = view(d)
-        return seen["last"] if check(seen["last"]) else False
-
-    try:
-        return WebDriverWait(driver, timeout, poll_frequency=0.05).until(holds)
-    except TimeoutException:
-        last = seen.get("last") or {}
+    def describe(last):
+        last = last or {}
         shown = {k: v for k, v in last.items() if k != "rows"}  # the rows of a whole dictionary would bury it
         rows = {o: r for o, r in last.get("rows", {}).items() if r["value"] or r["note"] or r["editor"]}
-        raise AssertionError(f"not within {timeout} s: {what}; the page showed {shown}, rows with a value, "
-                             f"note or editor {rows}") from None
+        return f"the page showed {shown}, rows with a value, note or editor {rows}"
+    return wait_until(driver, what, view, check, timeout, describe)
 
 
 def command(emu, line):

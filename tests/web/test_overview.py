@@ -7,8 +7,7 @@ import re
 import statistics
 import time
 
-from selenium.common.exceptions import TimeoutException
-from selenium.webdriver.support.ui import WebDriverWait
+from browser import wait_until
 
 NODES = ("pro-ionizer:16", "sds:17", "buerkert:18")
 FIELDS = ("node", "bus", "device", "state", "device-type", "heartbeat", "heartbeat-age", "error-register", "faults",
@@ -37,16 +36,7 @@ def snapshot(driver):
 
 def wait_for(driver, what, check, timeout):
     """The first snapshot for which check(snapshot) holds, polled every 50 ms; fails with the last one seen."""
-    seen = {}
-
-    def holds(d):
-        seen["last"] = snapshot(d)
-        return seen["last"] if check(seen["last"]) else False
-
-    try:
-        return WebDriverWait(driver, timeout, poll_frequency=0.05).until(holds)
-    except TimeoutException:
-        raise AssertionError(f"not within {timeout} s: {what}; the page showed {seen.get('last')}") from None
+    return wait_until(driver, what, snapshot, check, timeout, lambda last: f"the page showed {last}")
 
 
 def age(text):

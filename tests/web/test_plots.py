@@ -5,9 +5,9 @@ and the marks' labels each chart element carries (data-points, data-marks), and 
 
 import time
 
-from selenium.common.exceptions import TimeoutException
 from selenium.webdriver.support.ui import Select, WebDriverWait
 
+from browser import wait_until
 from test_overview import command, loaded, wait_for
 
 # The objects the TPDOs of a PRO IONIZER and of an SDS map (od/*.eds 0x1A00..: what their mapping parameters hold),
@@ -80,16 +80,7 @@ def plots(driver):
 
 def wait_plots(driver, what, check, timeout):
     """The first view of the plots for which check() holds, polled every 50 ms; fails with the last one seen."""
-    seen = {}
-
-    def holds(d):
-        seen["last"] = plots(d)
-        return seen["last"] if check(seen["last"]) else False
-
-    try:
-        return WebDriverWait(driver, timeout, poll_frequency=0.05).until(holds)
-    except TimeoutException:
-        raise AssertionError(f"not within {timeout} s: {what}; the plots view showed {seen.get('last')}") from None
+    return wait_until(driver, what, plots, check, timeout, lambda last: f"the plots view showed {last}")
 
 
 def legends(view):

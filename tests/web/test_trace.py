@@ -7,10 +7,10 @@ import re
 import time
 from pathlib import Path
 
-from selenium.common.exceptions import TimeoutException
 from selenium.webdriver.common.by import By
-from selenium.webdriver.support.ui import Select, WebDriverWait
+from selenium.webdriver.support.ui import Select
 
+from browser import wait_until
 from test_overview import command, drain, loaded
 
 NODES = ("pro-ionizer:16", "sds:17", "buerkert:18")
@@ -35,18 +35,11 @@ def snapshot(driver):
 
 def wait_for(driver, what, check, timeout):
     """The first snapshot for which check(snapshot) holds, polled every 50 ms; fails with the last one seen."""
-    seen = {}
-
-    def holds(d):
-        seen["last"] = snapshot(d)
-        return seen["last"] if check(seen["last"]) else False
-
-    try:
-        return WebDriverWait(driver, timeout, poll_frequency=0.05).until(holds)
-    except TimeoutException:
-        last = seen.get("last") or {}
-        raise AssertionError(f"not within {timeout} s: {what}; the trace showed {last.get('count')!r} "
-                             f"{last.get('problem')!r}, last rows {(last.get('rows') or [])[-12:]}") from None
+    def describe(last):
+        last = last or {}
+        return (f"the trace showed {last.get('count')!r} {last.get('problem')!r}, last rows "
+                f"{(last.get('rows') or [])[-12:]}")
+    return wait_until(driver, what, snapshot, check, timeout, describe)
 
 
 def row_with(text, **cells):

@@ -4,8 +4,8 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {MAX_SERIES, Plotting, RETRY_MS, nodeRef, plottableRow} from "../../../web/plotting.js";
-import {NodeTable} from "../../../web/nodes.js";
+import {MAX_SERIES, Plotting, RETRY_MS, plottableRow} from "../../../web/plotting.js";
+import {NodeTable, nodeRef} from "../../../web/nodes.js";
 
 const row = (object, name, type, unit = null, access = "ro") => ({object, name, type, unit, access});
 
