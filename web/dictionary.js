@@ -1,8 +1,7 @@
 // The node view's object dictionary as a tree (docs/web.md "The node view"): the `objects` answer grouped by index,
 // the values' texts, what a user typed made into the value a `set` takes. No DOM: tested with node --test.
 
-/** At most this many objects in one `get` (docs/control-protocol.md: `objects`, 1 to 64). */
-export const GET_BATCH = 64;
+import {chunks} from "./objects.js";
 
 /**
  * The entries of an `objects` answer ([{object: "0x1018:01", name, object_name, type, access, unit, low, high}], in
@@ -96,15 +95,6 @@ export function parseInput(text, type) {
   return {value: word};
 }
 
-/** `list` cut into pieces of at most `size` (the `get` requests of one round). */
-export function batches(list, size = GET_BATCH) {
-  const pieces = [];
-  for (let i = 0; i < list.length; i += size) {
-    pieces.push(list.slice(i, i + size));
-  }
-  return pieces;
-}
-
 /**
  * When to read the values shown: a round (one `get` per 64 objects) about once a second, at once when something
  * shown has never been read (a group just expanded), and never a round while the last one is unanswered, however
@@ -131,7 +121,7 @@ export class ValuePoll {
     }
     this.#busy = true;
     this.#last = ms;
-    return batches(shown);
+    return chunks(shown);
   }
 
   done() {

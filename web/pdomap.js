@@ -2,8 +2,7 @@
 // entries), the PDOs those values give, and a PDO's payload as "name=value unit" of its mapped objects. The names,
 // types and units come from the node's dictionary (`objects`). No DOM: tested with node --test (tests/web/js).
 
-/** At most this many objects in one `get` (docs/control-protocol.md). */
-export const GET_LIMIT = 64;
+import {chunks, objectName, parseObject} from "./objects.js";
 
 /** The communication and mapping parameters of the PDOs: the first index of each range, and how a PDO is named. */
 const RANGES = [
@@ -14,16 +13,6 @@ const PDO_COUNT = 512; // CiA 301: 0x1400-0x15FF and the rest, 512 PDOs of each 
 
 function key(index, sub) {
   return index * 256 + sub;
-}
-
-function objectName(index, sub) {
-  return `0x${index.toString(16).toUpperCase().padStart(4, "0")}:${sub.toString(16).toUpperCase().padStart(2, "0")}`;
-}
-
-/** "0x1A00:01" -> [0x1A00, 1]. */
-function parseObject(text) {
-  const [index, sub] = text.split(":");
-  return [parseInt(index, 16), parseInt(sub ?? "0", 16)];
 }
 
 /** The bits of a type, by its name (UNSIGNED24: 24); null: a type without a fixed size. */
@@ -50,7 +39,7 @@ export class Dictionary {
       counts.set(o.name, (counts.get(o.name) ?? 0) + 1);
     }
     for (const o of objects) {
-      const [index, sub] = parseObject(o.object);
+      const {index, sub} = parseObject(o.object);
       let label = o.name ?? o.object_name ?? o.object;
       if (o.name !== null && o.name !== undefined && counts.get(o.name) > 1 && o.object_name) {
         label = o.object_name.toLowerCase().endsWith(o.name.toLowerCase()) ? o.object_name :
@@ -69,7 +58,7 @@ export class Dictionary {
     return this.#entries.get(key(index, sub)) ?? null;
   }
 
-  /** The `get` lists (at most GET_LIMIT objects each) that read every PDO's COB-ID and mapping the node has. */
+  /** The `get` lists (at most GET_MAX objects each) that read every PDO's COB-ID and mapping the node has. */
   mappingObjects() {
     const wanted = [];
     for (const {comm, mapping} of RANGES) {
@@ -84,11 +73,7 @@ export class Dictionary {
         }
       }
     }
-    const lists = [];
-    for (let i = 0; i < wanted.length; i += GET_LIMIT) {
-      lists.push(wanted.slice(i, i + GET_LIMIT));
-    }
-    return lists;
+    return chunks(wanted);
   }
 }
 
@@ -102,7 +87,7 @@ export function pdosOf(values, dictionary) {
   const read = new Map();
   for (const v of values) {
     if (!("error" in v)) {
-      const [index, sub] = parseObject(v.object);
+      const {index, sub} = parseObject(v.object);
       read.set(key(index, sub), Number(v.value));
     }
   }

@@ -6,7 +6,8 @@
 import {Marks} from "./marks.js";
 import {nodeRef} from "./nodes.js";
 import {SampleBuffer} from "./samples.js";
-import {chunks, mappedObjects, mappingCounts, mappingEntries, objectName, parseObject} from "./tpdo.js";
+import {chunks, objectName, parseObject} from "./objects.js";
+import {mappedObjects, mappingCounts, mappingEntries} from "./tpdo.js";
 
 /** At most this many series in all (each node's then fits in one get of at most 64 objects). */
 export const MAX_SERIES = 64;

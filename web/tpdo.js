@@ -2,28 +2,7 @@
 // (0x1A00..0x1BFF) as `get` reads them: what the node sends now, also after a master remapped it. The `objects`
 // list's `tpdo` flag says only what MAY be mapped. No DOM: tested with node --test.
 
-/** At most this many objects in one `get` (the control protocol's limit). */
-export const GET_MAX = 64;
-
-/** "0xIIII:SS" as the control protocol writes an object. */
-export function objectName(index, sub) {
-  return `0x${index.toString(16).toUpperCase().padStart(4, "0")}:${sub.toString(16).toUpperCase().padStart(2, "0")}`;
-}
-
-/** The index and sub of "0xIIII:SS" (or "IIII", "6401:1", "0x1017"); null when it is not one. */
-export function parseObject(text) {
-  const m = /^(?:0x)?([0-9a-f]{1,4})(?::(?:0x)?([0-9a-f]{1,2}))?$/i.exec(String(text).trim());
-  return m === null ? null : {index: parseInt(m[1], 16), sub: m[2] === undefined ? 0 : parseInt(m[2], 16)};
-}
-
-/** `list` in pieces of at most `size`. */
-export function chunks(list, size = GET_MAX) {
-  const pieces = [];
-  for (let i = 0; i < list.length; i += size) {
-    pieces.push(list.slice(i, i + size));
-  }
-  return pieces;
-}
+import {objectName, parseObject} from "./objects.js";
 
 /** The count sub-indices (sub 0) of the TPDO mapping parameters a node has, from its `objects` rows. */
 export function mappingCounts(rows) {

@@ -3,6 +3,7 @@ import {test} from "node:test";
 import assert from "node:assert/strict";
 
 import * as dictionary from "../../../web/dictionary.js";
+import {chunks} from "../../../web/objects.js";
 
 // As `objects` answers them (docs/control-protocol.md), a few of the PRO IONIZER's.
 const OBJECTS = [
@@ -95,11 +96,11 @@ test("parseInput: numbers as numbers, strings for VISIBLE_STRING and what the em
 
 test("batches: at most 64 objects a request", () => {
   const objects = Array.from({length: 130}, (_, i) => `0x2000:${i}`);
-  const pieces = dictionary.batches(objects);
+  const pieces = chunks(objects);
   assert.deepEqual(pieces.map((p) => p.length), [64, 64, 2]);
   assert.deepEqual(pieces.flat(), objects);
-  assert.deepEqual(dictionary.batches([]), []);
-  assert.deepEqual(dictionary.batches(["a", "b", "c"], 2), [["a", "b"], ["c"]]);
+  assert.deepEqual(chunks([]), []);
+  assert.deepEqual(chunks(["a", "b", "c"], 2), [["a", "b"], ["c"]]);
 });
 
 test("ValuePoll: once a second, at once for something unread, never while a round is unanswered", () => {

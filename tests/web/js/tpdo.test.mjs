@@ -2,7 +2,8 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {chunks, mappedObjects, mappingCounts, mappingEntries, objectName, parseObject} from "../../../web/tpdo.js";
+import {chunks, objectName, parseObject} from "../../../web/objects.js";
+import {mappedObjects, mappingCounts, mappingEntries} from "../../../web/tpdo.js";
 
 test("objects are written 0xIIII:SS and read in the command language's forms", () => {
   assert.equal(objectName(0x6401, 1), "0x6401:01");
