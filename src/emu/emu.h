@@ -114,4 +114,10 @@ typedef struct emu {
     bool quit;
 } emu_t;
 
+/** A time of the monotonic clock on the events' clock: µs since the emulator started (0 for a time before it). */
+static inline co_time_us_t emu_since_start(const emu_t *emu, co_time_us_t at)
+{
+    return at > emu->start ? at - emu->start : 0U;
+}
+
 #endif /* EMU_H */

@@ -202,22 +202,6 @@ static void free_class(eds_class_t *c)
     free(c);
 }
 
-/* The file's name of the object index (its objects are sorted by index), or NULL. */
-static const char *object_name(const eds_file_t *f, uint16_t index)
-{
-    uint32_t lo = 0U;
-    uint32_t hi = f->n_objects;
-    while (lo < hi) {
-        const uint32_t mid = (lo + hi) / 2U;
-        if (f->objects[mid].index < index) {
-            lo = mid + 1U;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo < f->n_objects && f->objects[lo].index == index ? f->objects[lo].name : NULL;
-}
-
 /* Builds the table of a file read without errors. */
 static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet)
 {
@@ -290,7 +274,8 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
         if (i == 0U || c->rows[i - 1U].index != c->rows[i].index) { /* the reader's entries are in (index, sub) order */
             c->objects[c->od.n_objects].index = c->rows[i].index;
             c->objects[c->od.n_objects].first = (uint16_t)i;
-            c->object_names[c->od.n_objects] = object_name(f, c->rows[i].index);
+            const eds_object_t *object = eds_find_object(f, c->rows[i].index);
+            c->object_names[c->od.n_objects] = object != NULL ? object->name : NULL;
             c->od.n_objects++;
         }
     }

@@ -48,7 +48,7 @@ static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const em
     size_t json_len = 0U;
     char text_line[1024];
     size_t text_len = 0U;
-    const co_time_us_t t = at > emu->start ? at - emu->start : 0U;
+    const co_time_us_t t = emu_since_start(emu, at);
     for (size_t i = 0U; i < emu->n_sessions; i++) {
         emu_session_t *s = emu->sessions[i];
         if (!session_wants(s, kind, id, bus, cob_id)) {

@@ -266,7 +266,7 @@ static void cmd_hello(const request_t *q)
     const co_time_us_t now = socketcan_now_us();
     json_t *clock = json_object();
     (void)json_object_set_new(clock, "time_us",
-                              json_integer((json_int_t)(now > q->emu->start ? now - q->emu->start : 0U)));
+                              json_integer((json_int_t)emu_since_start(q->emu, now)));
     (void)json_object_set_new(clock, "unix_us",
                               json_integer((json_int_t)wall.tv_sec * 1000000 + (json_int_t)(wall.tv_nsec / 1000)));
     (void)json_object_set_new(r, "clock", clock);
@@ -311,8 +311,7 @@ static void show_overview(const emu_t *emu, emu_node_t *n, json_t *o)
         (void)json_object_set_new(emcy, "code", json_integer(n->last_emcy.code));
         (void)json_object_set_new(emcy, "register", json_integer(n->last_emcy.reg));
         (void)json_object_set_new(emcy, "info", hex_string(n->last_emcy.info, sizeof n->last_emcy.info));
-        (void)json_object_set_new(emcy, "time_us", json_integer((json_int_t)(n->last_emcy.at > emu->start
-                                                                                ? n->last_emcy.at - emu->start : 0U)));
+        (void)json_object_set_new(emcy, "time_us", json_integer((json_int_t)emu_since_start(emu, n->last_emcy.at)));
     }
     (void)json_object_set_new(o, "last_emcy", emcy);
 }
@@ -348,7 +347,7 @@ static json_t *heard_nodes(const emu_t *emu, const char *word)
                                                                              : co_nmt_state_name((co_nmt_state_t)h->state)));
             (void)json_object_set_new(o, "boot_up", json_boolean(h->state == 0U));
             (void)json_object_set_new(o, "last_heartbeat_us",
-                                      json_integer((json_int_t)(h->at > emu->start ? h->at - emu->start : 0U)));
+                                      json_integer((json_int_t)emu_since_start(emu, h->at)));
             (void)json_array_append_new(list, o);
         }
     }
@@ -399,7 +398,7 @@ static void cmd_show(const request_t *q)
     }
     /* The events' clock now: a view tells how long ago the times above were without an event to compare with. */
     const co_time_us_t now = socketcan_now_us();
-    (void)json_object_set_new(r, "time_us", json_integer((json_int_t)(now > q->emu->start ? now - q->emu->start : 0U)));
+    (void)json_object_set_new(r, "time_us", json_integer((json_int_t)emu_since_start(q->emu, now)));
     send_response(q->s, r);
 }
 

@@ -200,7 +200,7 @@ static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
     (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
     (void)json_object_set_new(r, "values", values);
     /* When they were read, on the events' clock: a plot puts the values at their time, whenever the answer comes. */
-    (void)json_object_set_new(r, "time_us", json_integer((json_int_t)(now > q->emu->start ? now - q->emu->start : 0U)));
+    (void)json_object_set_new(r, "time_us", json_integer((json_int_t)emu_since_start(q->emu, now)));
     send_response(q->s, r);
 }
 
