@@ -32,11 +32,6 @@ export function isWritable(entry) {
   return entry.access === "rw" || entry.access === "wo";
 }
 
-/** Whether it is a number that can be plotted. */
-export function isNumeric(entry) {
-  return /^(INTEGER|UNSIGNED|REAL)\d+$/.test(entry.type);
-}
-
 /** The limits column: "0..60000", "≥ 100", "≤ 8", or "" (the EDS has none). */
 export function limits(entry) {
   const low = entry.low ?? null;

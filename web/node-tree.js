@@ -4,6 +4,7 @@
 
 import {tableHead} from "./dom.js";
 import * as dictionary from "./dictionary.js";
+import {plottableRow} from "./objects.js";
 
 /** The columns, in order: field (the cell's data-field) and title. */
 export const TREE_COLUMNS = [
@@ -194,7 +195,7 @@ export class DictionaryTree {
         }
       });
     }
-    if (dictionary.isNumeric(entry)) {
+    if (plottableRow(entry)) {
       const plot = document.createElement("button");
       plot.type = "button";
       plot.className = "plot";

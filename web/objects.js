@@ -23,3 +23,11 @@ export function chunks(list, size = GET_MAX) {
   }
   return pieces;
 }
+
+const PLOTTABLE_TYPE = /^(BOOLEAN|INTEGER\d+|UNSIGNED\d+|REAL32|REAL64)$/;
+
+/** Whether a row of `objects` can be plotted: a number (or BOOLEAN) that can be read. The node view's plot button
+ * and the plots' picker both ask this, so they offer the same objects. */
+export function plottableRow(row) {
+  return PLOTTABLE_TYPE.test(row.type) && row.access !== "wo";
+}

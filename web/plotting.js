@@ -6,7 +6,7 @@
 import {Marks} from "./marks.js";
 import {nodeRef} from "./nodes.js";
 import {SampleBuffer} from "./samples.js";
-import {chunks, objectName, parseObject} from "./objects.js";
+import {chunks, objectName, parseObject, plottableRow} from "./objects.js";
 import {mappedObjects, mappingCounts, mappingEntries} from "./tpdo.js";
 
 /** At most this many series in all (each node's then fits in one get of at most 64 objects). */
@@ -14,12 +14,7 @@ export const MAX_SERIES = 64;
 /** A default that could not be loaded (the node did not answer) is tried again after this long. */
 export const RETRY_MS = 2000;
 
-const NUMERIC = /^(BOOLEAN|INTEGER\d+|UNSIGNED\d+|REAL32|REAL64)$/;
-
-/** Whether a row of `objects` can be plotted: a number (or BOOLEAN) that can be read. */
-export function plottableRow(row) {
-  return NUMERIC.test(row.type) && row.access !== "wo";
-}
+export {plottableRow};
 
 function seriesOf(key, row) {
   const name = row.name ?? row.object_name ?? "";

@@ -40,13 +40,6 @@ test("isWritable: rw and wo; ro and const are not edited", () => {
     [true, true, false, false]);
 });
 
-test("isNumeric: integers and reals, not strings or domains", () => {
-  const types = ["UNSIGNED8", "UNSIGNED64", "INTEGER16", "REAL32", "REAL64", "BOOLEAN", "VISIBLE_STRING",
-    "OCTET_STRING", "DOMAIN"];
-  assert.deepEqual(types.map((type) => dictionary.isNumeric({type})),
-    [true, true, true, true, true, false, false, false, false]);
-});
-
 test("limits: both, one, none", () => {
   assert.equal(dictionary.limits({low: 0, high: 60000}), "0..60000");
   assert.equal(dictionary.limits({low: -5.5, high: 2.25}), "-5.5..2.25");
