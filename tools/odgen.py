@@ -363,8 +363,13 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
     firsts = [i for i, run in enumerate(runs) if i == 0 or runs[i - 1][0].index != run[0].index]  # object table
     # The values whose default is not 0 first: the defaults image holds just them (co_od_t.defaults_size). A run's
     # values stay together (its row gives the first one's offset): a run with any default but 0 goes first whole.
-    nonzero = [r for run in runs if not all(zero_default(x) for x in run) for r in run]
-    layout = nonzero + [r for run in runs if all(zero_default(x) for x in run) for r in run]
+    # Within each part, the widest members first (8, 4, 2 bytes, then bytes and byte arrays; table order among alike):
+    # no padding between them, in the defaults image as in the values block.
+    def by_alignment(part: list) -> list:
+        width = lambda run: 1 if run[0].dtype in STRING_TYPES + BYTE_INTEGERS else TYPES[run[0].dtype][2]  # noqa: E731
+        return [r for run in sorted(part, key=lambda run: -width(run)) for r in run]
+    nonzero = by_alignment([run for run in runs if not all(zero_default(x) for x in run)])
+    layout = nonzero + by_alignment([run for run in runs if all(zero_default(x) for x in run)])
     n_defaults = max(1, len(nonzero))
 
     def member(r: Row) -> str:
