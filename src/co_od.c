@@ -119,6 +119,11 @@ uint16_t co_od_first_row(const co_od_t *od, uint16_t index)
 
 bool co_od_has_index(const co_od_t *od, uint16_t index) { return co_od_first_row(od, index) < od->count; }
 
+uint32_t co_od_missing(const co_od_t *od, uint16_t index)
+{
+    return co_od_has_index(od, index) ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NO_OBJECT;
+}
+
 uint8_t co_od_sub_count(const co_od_t *od, uint16_t index)
 {
     unsigned end;
