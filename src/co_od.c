@@ -575,16 +575,17 @@ uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *d
 }
 
 /* The value's checks after those of access and length: limits (but for the application's writes), the protocol rules
- * of a communication object (CO_HANDLED: an action, nothing to store; for a value being loaded, CO_ORIGIN_NVM, the
- * rules of its value alone and never an action), then the device's write hook. */
+ * of a communication object (CO_HANDLED: an action, nothing to store), then the device's write hook. stored: a value
+ * being loaded (co_od_check_stored, origin CO_ORIGIN_NVM), checked by the rules of its value alone, and where the
+ * owner module has handled it, still by the hook. */
 static uint32_t check_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len,
-                            co_od_origin_t origin)
+                            co_od_origin_t origin, bool stored)
 {
     uint32_t r = origin != CO_ORIGIN_LOCAL ? co_od_check_limits(node->od, e, data, len) : CO_ABORT_NONE;
     if (r == CO_ABORT_NONE && e->index < 0x2000U) {
-        r = comm_check_write(node, e, data, len, origin == CO_ORIGIN_NVM);
+        r = comm_check_write(node, e, data, len, stored);
         if (r == CO_HANDLED) {
-            if (origin != CO_ORIGIN_NVM) {
+            if (!stored) {
                 return CO_HANDLED;
             }
             r = CO_ABORT_NONE;
@@ -612,7 +613,7 @@ uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *
     if (len < e->size && !is_bytes(e)) {
         return CO_ABORT_LENGTH_LOW; /* a string or domain may be shorter than its capacity, a number not */
     }
-    const uint32_t r = check_value(node, e, bytes, len, origin);
+    const uint32_t r = check_value(node, e, bytes, len, origin, false);
     if (r != CO_ABORT_NONE) {
         return r == CO_HANDLED ? CO_ABORT_NONE : r;
     }
@@ -638,7 +639,7 @@ void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub)
 
 uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
-    return check_value(node, e, data, len, CO_ORIGIN_NVM);
+    return check_value(node, e, data, len, CO_ORIGIN_NVM, true);
 }
 
 void *co_od_value(co_node_t *node, uint16_t index, uint8_t sub)
