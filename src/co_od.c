@@ -27,12 +27,6 @@ static uint16_t lower_bound_key(const co_od_t *od, uint32_t key)
     return (uint16_t)lo;
 }
 
-/* Index of the first row with key >= (index, sub). */
-static uint16_t lower_bound(const co_od_t *od, uint16_t index, uint8_t sub)
-{
-    return lower_bound_key(od, entry_key(index, sub));
-}
-
 /* The object table's entry of index, or NULL (od->objects != NULL). */
 static const co_od_object_t *find_object(const co_od_t *od, uint16_t index)
 {
@@ -50,6 +44,23 @@ static const co_od_object_t *find_object(const co_od_t *od, uint16_t index)
     return (lo < od->n_objects && objects[lo].index == index) ? &objects[lo] : NULL;
 }
 
+/* The rows of object index: [first, *end), empty when the dictionary lacks it. The one search of the table that
+ * every look-up by index shares. */
+static inline unsigned object_rows(const co_od_t *od, uint16_t index, unsigned *end)
+{
+    if (od->objects != NULL) {
+        const co_od_object_t *o = find_object(od, index);
+        if (o == NULL) {
+            *end = 0U;
+            return 0U;
+        }
+        *end = o + 1 < od->objects + od->n_objects ? o[1].first : od->count;
+        return o->first;
+    }
+    *end = lower_bound_key(od, entry_key(index, 0U) + 0x100U);
+    return lower_bound_key(od, entry_key(index, 0U));
+}
+
 const co_od_entry_t *co_od_entry_at(const co_od_entry_t *row, uint8_t k, co_od_entry_t *one)
 {
     if (k == 0U) {
@@ -62,24 +73,13 @@ const co_od_entry_t *co_od_entry_at(const co_od_entry_t *row, uint8_t k, co_od_e
     return one;
 }
 
-/* The row that holds (index, sub), or NULL. Called from co_od_find() alone, which has it inline where the compiler
- * optimises for speed: every SDO request and RPDO passes there. */
-static const co_od_entry_t *find_row(const co_od_t *od, uint16_t index, uint8_t sub)
+/* The row that holds (index, sub), or NULL: co_od_find_row() and, inline where the compiler optimises for speed (every
+ * SDO request and RPDO passes there), co_od_find(). */
+static inline const co_od_entry_t *find_row(const co_od_t *od, uint16_t index, uint8_t sub)
 {
     const co_od_entry_t *rows = od->entries;
-    unsigned first;
     unsigned end;
-    if (od->objects != NULL) {
-        const co_od_object_t *o = find_object(od, index);
-        if (o == NULL) {
-            return NULL;
-        }
-        first = o->first;
-        end = o + 1 < od->objects + od->n_objects ? o[1].first : od->count;
-    } else {
-        first = lower_bound(od, index, 0U);
-        end = lower_bound_key(od, entry_key(index, 0U) + 0x100U);
-    }
+    const unsigned first = object_rows(od, index, &end);
     if (first + sub < end && rows[first + sub].sub == sub) {
         return &rows[first + sub]; /* sub-indices 0..n without gaps or runs: the usual case */
     }
@@ -93,12 +93,14 @@ static const co_od_entry_t *find_row(const co_od_t *od, uint16_t index, uint8_t 
             hi = mid;
         }
     }
-    if (lo == first) {
+    if (lo <= first) {
         return NULL;
     }
     const co_od_entry_t *r = &rows[lo - 1U];
     return (unsigned)(sub - r->sub) < co_od_entry_subs(r) ? r : NULL;
 }
+
+const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub) { return find_row(od, index, sub); }
 
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one)
 {
@@ -106,45 +108,27 @@ const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, 
     return (r == NULL || r->sub == sub) ? r : co_od_entry_at(r, (uint8_t)(sub - r->sub), one);
 }
 
-/* Off the per-frame paths (PDO configuration, segmented SDO checks): a second walk of the object finds the row of a
- * sub-index inside a run rather than a second copy of the search. */
-const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub)
-{
-    co_od_entry_t one;
-    const co_od_entry_t *e = co_od_find(od, index, sub, &one);
-    if (e != &one) {
-        return e;
-    }
-    const co_od_entry_t *r = &od->entries[co_od_first_row(od, index)];
-    while ((unsigned)(sub - r->sub) >= co_od_entry_subs(r)) {
-        r++; /* the object has a row that holds sub: co_od_find narrowed one */
-    }
-    return r;
-}
-
-bool co_od_exists(const co_od_t *od, uint16_t index, uint8_t sub)
-{
-    co_od_entry_t one;
-    return co_od_find(od, index, sub, &one) != NULL;
-}
+bool co_od_exists(const co_od_t *od, uint16_t index, uint8_t sub) { return co_od_find_row(od, index, sub) != NULL; }
 
 uint16_t co_od_first_row(const co_od_t *od, uint16_t index)
 {
-    if (od->objects != NULL) {
-        const co_od_object_t *o = find_object(od, index);
-        return o != NULL ? o->first : od->count;
-    }
-    const uint16_t i = lower_bound(od, index, 0U);
-    return (i < od->count && od->entries[i].index == index) ? i : od->count;
+    unsigned end;
+    const unsigned first = object_rows(od, index, &end);
+    return (uint16_t)(first < end ? first : od->count);
 }
 
 bool co_od_has_index(const co_od_t *od, uint16_t index) { return co_od_first_row(od, index) < od->count; }
 
+uint32_t co_od_missing(const co_od_t *od, uint16_t index)
+{
+    return co_od_has_index(od, index) ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NO_OBJECT;
+}
+
 uint8_t co_od_sub_count(const co_od_t *od, uint16_t index)
 {
-    uint16_t i = co_od_first_row(od, index);
+    unsigned end;
     unsigned n = 0U;
-    for (; i < od->count && od->entries[i].index == index; i++) {
+    for (unsigned i = object_rows(od, index, &end); i < end; i++) {
         n += co_od_entry_subs(&od->entries[i]) - (od->entries[i].sub == 0U ? 1U : 0U);
     }
     return (uint8_t)n;
@@ -187,98 +171,62 @@ uint16_t co_od_type_size(uint8_t type)
     }
 }
 
-static bool is_bytes(const co_od_entry_t *e)
-{
-    return e->type == CO_T_VISIBLE_STRING || e->type == CO_T_OCTET_STRING || e->type == CO_T_UNICODE_STRING ||
-           e->type == CO_T_DOMAIN;
-}
+/* Strings and domains: bytes as they are (VISIBLE_STRING 0x09, OCTET_STRING 0x0A, UNICODE_STRING 0x0B, DOMAIN 0x0F). */
+static bool is_bytes(const co_od_entry_t *e) { return e->type <= CO_T_DOMAIN && ((0x8E00U >> e->type) & 1U) != 0U; }
 
-static bool is_signed(uint8_t type)
-{
-    return type == CO_T_INTEGER8 || type == CO_T_INTEGER16 || type == CO_T_INTEGER32 || type == CO_T_INTEGER64 ||
-           (type >= CO_T_INTEGER24 && type <= CO_T_INTEGER56 && type != CO_T_REAL64);
-}
+/* INTEGER8/16/32 (0x02..0x04), INTEGER24/40/48/56/64 (0x10, 0x12..0x15). */
+static bool is_signed(uint8_t type) { return type <= CO_T_INTEGER64 && ((0x003D001CUL >> type) & 1U) != 0U; }
 
 uint8_t *co_od_ptr(co_node_t *node, const co_od_entry_t *e) { return node->values + e->offset; }
 
-/* Native value (1, 2, 4 or 8 bytes) -> little-endian wire bytes. */
-static void native_to_wire(const co_od_entry_t *e, const uint8_t *src, uint8_t *dst)
+/* True on a big-endian core. A constant the compiler folds: the little-endian cores need no conversion code. */
+static bool big_endian(void)
 {
-    switch (e->size) {
-    case 1U:
-        dst[0] = src[0];
-        break;
-    case 2U: {
-        uint16_t v;
-        memcpy(&v, src, 2U);
-        co_put_u16(dst, v);
-        break;
-    }
-    case 4U: {
-        uint32_t v;
-        memcpy(&v, src, 4U);
-        co_put_u32(dst, v);
-        break;
-    }
-    case 8U: {
-        uint64_t v;
-        memcpy(&v, src, 8U);
-        co_put_u32(dst, (uint32_t)v);
-        co_put_u32(dst + 4, (uint32_t)(v >> 32));
-        break;
-    }
-    default: /* 3, 5, 6, 7 bytes: held as little-endian bytes already */
-        memcpy(dst, src, e->size);
-        break;
-    }
+    const uint16_t probe = 1U;
+    uint8_t first;
+    memcpy(&first, &probe, 1U);
+    return first == 0U;
 }
 
-static void wire_to_native(const co_od_entry_t *e, const uint8_t *src, uint8_t *dst)
+/* Copies n bytes of a row's value between the values block and the wire, either way: the block holds numbers of 2,
+ * 4 or 8 bytes as native integers (reversed on a big-endian core), everything else (strings, domains, the 3, 5, 6
+ * and 7-byte integers) as the wire's little-endian bytes. */
+static void copy_value(const co_od_entry_t *e, uint8_t *dst, const uint8_t *src, size_t n)
 {
-    switch (e->size) {
-    case 1U:
-        dst[0] = src[0];
-        break;
-    case 2U: {
-        const uint16_t v = co_get_u16(src);
-        memcpy(dst, &v, 2U);
-        break;
+    if (big_endian() && !is_bytes(e) && (n == 2U || n == 4U || n == 8U)) {
+        for (size_t i = 0U; i < n; i++) {
+            dst[i] = src[n - 1U - i];
+        }
+        return;
     }
-    case 4U: {
-        const uint32_t v = co_get_u32(src);
-        memcpy(dst, &v, 4U);
-        break;
+    memcpy(dst, src, n);
+}
+
+/* Rows co_od_entry_u32()/co_od_entry_set_u32() hold: 1, 2 or 4 bytes. */
+static bool fits_u32(const co_od_entry_t *e) { return e->size <= 4U && e->size != 3U && e->size != 0U; }
+
+/* The value of n <= 4 little-endian bytes, zero-extended. */
+static uint32_t wire_u32(const uint8_t *data, size_t n)
+{
+    uint32_t u = 0U;
+    while (n > 0U) {
+        u = (u << 8) | data[--n];
     }
-    case 8U: {
-        const uint64_t v = (uint64_t)co_get_u32(src) | ((uint64_t)co_get_u32(src + 4) << 32);
-        memcpy(dst, &v, 8U);
-        break;
-    }
-    default:
-        memcpy(dst, src, e->size);
-        break;
-    }
+    return u;
 }
 
 uint32_t co_od_entry_u32(const co_node_t *node, const co_od_entry_t *e)
 {
-    const uint8_t *p = node->values + e->offset;
-    switch (e->size) {
-    case 1U:
-        return p[0];
-    case 2U: {
-        uint16_t v;
-        memcpy(&v, p, 2U);
-        return v;
-    }
-    case 4U: {
-        uint32_t v;
-        memcpy(&v, p, 4U);
-        return v;
-    }
-    default:
+    if (!fits_u32(e)) {
         return 0U;
     }
+    const uint8_t *p = node->values + e->offset;
+    uint8_t wire[4];
+    if (big_endian()) {
+        copy_value(e, wire, p, e->size);
+        p = wire;
+    }
+    return wire_u32(p, e->size);
 }
 
 /* Every write of a value passes here or co_od_store_value: a TPDO-mappable one tells the event-driven TPDOs to
@@ -294,21 +242,10 @@ static void value_written(co_node_t *node, const co_od_entry_t *e)
 void co_od_entry_set_u32(co_node_t *node, const co_od_entry_t *e, uint32_t v)
 {
     value_written(node, e);
-    uint8_t *p = node->values + e->offset;
-    switch (e->size) {
-    case 1U:
-        p[0] = (uint8_t)v;
-        break;
-    case 2U: {
-        const uint16_t v16 = (uint16_t)v;
-        memcpy(p, &v16, 2U);
-        break;
-    }
-    case 4U:
-        memcpy(p, &v, 4U);
-        break;
-    default:
-        break;
+    if (fits_u32(e)) {
+        uint8_t wire[4];
+        co_put_u32(wire, v);
+        copy_value(e, node->values + e->offset, wire, e->size);
     }
 }
 
@@ -323,12 +260,10 @@ void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *d
 {
     value_written(node, e);
     uint8_t *p = co_od_ptr(node, e);
-    if (is_bytes(e)) {
-        const size_t n = len < e->size ? len : e->size;
-        memcpy(p, data, n);
+    const size_t n = len < e->size ? len : e->size; /* a number: its size (checked); a string may be shorter */
+    copy_value(e, p, data, n);
+    if (n < e->size) {
         memset(p + n, 0, (size_t)e->size - n);
-    } else {
-        wire_to_native(e, data, p);
     }
 }
 
@@ -346,19 +281,13 @@ static size_t value_len(co_node_t *node, const co_od_entry_t *e)
     return e->size;
 }
 
-/* Copies a row's current value in wire format (no hook). Returns its length, 0 if it does not fit. */
-static size_t copy_wire(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap)
+static uint32_t write_hook(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len,
+                           co_od_origin_t origin)
 {
-    const size_t n = value_len(node, e);
-    if (n > cap) {
-        return 0U;
+    if (node->hooks != NULL && node->hooks->on_write != NULL) {
+        return node->hooks->on_write(node->hooks_ctx, node, e, data, len, origin);
     }
-    if (is_bytes(e)) {
-        memcpy(buf, co_od_ptr(node, e), n);
-    } else {
-        native_to_wire(e, co_od_ptr(node, e), buf);
-    }
-    return n;
+    return CO_ABORT_NONE;
 }
 
 static uint32_t read_hook(co_node_t *node, const co_od_entry_t *e)
@@ -369,10 +298,24 @@ static uint32_t read_hook(co_node_t *node, const co_od_entry_t *e)
     return CO_ABORT_NONE;
 }
 
+/* Copies a row's current value in wire format (no hook): its length, or CO_ABORT_LENGTH_HIGH when it exceeds cap. */
+static uint32_t copy_wire(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap, size_t *len)
+{
+    const size_t n = value_len(node, e);
+    if (n > cap) {
+        return CO_ABORT_LENGTH_HIGH;
+    }
+    copy_value(e, buf, co_od_ptr(node, e), n);
+    *len = n;
+    return CO_ABORT_NONE;
+}
+
 size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap)
 {
+    size_t n = 0U; /* 0 if it does not fit */
     (void)read_hook(node, e); /* a PDO cannot be refused: the value is sent as it is */
-    return copy_wire(node, e, buf, cap);
+    (void)copy_wire(node, e, buf, cap, &n);
+    return n;
 }
 
 #if CO_CONFIG_OD_LIMITS_64
@@ -485,10 +428,7 @@ uint32_t co_od_check_limits(const co_od_t *od, const co_od_entry_t *e, const uin
     if (l == NULL || len < e->size || e->size > 4U) {
         return CO_ABORT_NONE;
     }
-    uint32_t u = 0U;
-    for (uint16_t i = e->size; i > 0U; i--) {
-        u = (u << 8) | data[i - 1U];
-    }
+    const uint32_t u = wire_u32(data, e->size);
     if (is_signed(e->type)) {
         const uint32_t sign = (uint32_t)1U << (e->size * 8U - 1U);
         const int32_t v = (int32_t)((u ^ sign) - sign); /* sign-extended */
@@ -623,17 +563,7 @@ uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, si
     if (r != CO_ABORT_NONE) {
         return r;
     }
-    const size_t n = value_len(node, e);
-    if (n > cap) {
-        return CO_ABORT_LENGTH_HIGH;
-    }
-    if (is_bytes(e)) {
-        memcpy(buf, co_od_ptr(node, e), n);
-    } else {
-        native_to_wire(e, co_od_ptr(node, e), (uint8_t *)buf);
-    }
-    *len = n;
-    return CO_ABORT_NONE;
+    return copy_wire(node, e, (uint8_t *)buf, cap, len);
 }
 
 uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *data, size_t len,
@@ -644,12 +574,30 @@ uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *d
     return e != NULL ? co_od_write_entry(node, e, data, len, origin) : co_od_missing(node->od, index);
 }
 
+/* The value's checks after those of access and length: limits (but for the application's writes), the protocol rules
+ * of a communication object (CO_HANDLED: an action, nothing to store), then the device's write hook. stored: a value
+ * being loaded (co_od_check_stored, origin CO_ORIGIN_NVM), checked by the rules of its value alone, and where the
+ * owner module has handled it, still by the hook. */
+static uint32_t check_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len,
+                            co_od_origin_t origin, bool stored)
+{
+    uint32_t r = origin != CO_ORIGIN_LOCAL ? co_od_check_limits(node->od, e, data, len) : CO_ABORT_NONE;
+    if (r == CO_ABORT_NONE && e->index < 0x2000U) {
+        r = comm_check_write(node, e, data, len, stored);
+        if (r == CO_HANDLED) {
+            if (!stored) {
+                return CO_HANDLED;
+            }
+            r = CO_ABORT_NONE;
+        }
+    }
+    return r == CO_ABORT_NONE ? write_hook(node, e, data, len, origin) : r;
+}
+
 uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *data, size_t len,
                            co_od_origin_t origin)
 {
     const uint8_t *bytes = (const uint8_t *)data;
-    const uint16_t index = e->index;
-    uint32_t r;
     if ((e->flags & CO_OD_CONST) != 0U) {
         return CO_ABORT_READ_ONLY;
     }
@@ -659,36 +607,18 @@ uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *
     if (origin == CO_ORIGIN_RPDO && (e->flags & CO_OD_RPDO) == 0U) {
         return CO_ABORT_NOT_MAPPABLE;
     }
-    if (is_bytes(e)) {
-        if (len > e->size) {
-            return CO_ABORT_LENGTH_HIGH;
-        }
-    } else if (len != e->size) {
-        return len > e->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW;
+    if (len > e->size) {
+        return CO_ABORT_LENGTH_HIGH;
     }
-    if (origin != CO_ORIGIN_LOCAL) {
-        r = co_od_check_limits(node->od, e, bytes, len);
-        if (r != CO_ABORT_NONE) {
-            return r;
-        }
+    if (len < e->size && !is_bytes(e)) {
+        return CO_ABORT_LENGTH_LOW; /* a string or domain may be shorter than its capacity, a number not */
     }
-    if (index < 0x2000U) {
-        r = comm_check_write(node, e, bytes, len, false);
-        if (r == CO_HANDLED) {
-            return CO_ABORT_NONE;
-        }
-        if (r != CO_ABORT_NONE) {
-            return r;
-        }
-    }
-    if (node->hooks != NULL && node->hooks->on_write != NULL) {
-        r = node->hooks->on_write(node->hooks_ctx, node, e, bytes, len, origin);
-        if (r != CO_ABORT_NONE) {
-            return r;
-        }
+    const uint32_t r = check_value(node, e, bytes, len, origin, false);
+    if (r != CO_ABORT_NONE) {
+        return r == CO_HANDLED ? CO_ABORT_NONE : r;
     }
     co_od_store_value(node, e, bytes, len);
-    if (index < 0x2000U) {
+    if (e->index < 0x2000U) {
         comm_written(node, e);
     }
     return CO_ABORT_NONE;
@@ -709,15 +639,7 @@ void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub)
 
 uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
-    uint32_t r = co_od_check_limits(node->od, e, data, len);
-    if (r == CO_ABORT_NONE && e->index < 0x2000U) {
-        r = comm_check_write(node, e, data, len, true);
-        r = r == CO_HANDLED ? CO_ABORT_NONE : r;
-    }
-    if (r == CO_ABORT_NONE && node->hooks != NULL && node->hooks->on_write != NULL) {
-        r = node->hooks->on_write(node->hooks_ctx, node, e, data, len, CO_ORIGIN_NVM);
-    }
-    return r;
+    return check_value(node, e, data, len, CO_ORIGIN_NVM, true);
 }
 
 void *co_od_value(co_node_t *node, uint16_t index, uint8_t sub)
@@ -775,7 +697,7 @@ void co_od_copy_defaults(const co_od_t *od, uint32_t offset, size_t len, void *d
 void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     const co_od_t *od = node->od;
-    for (uint16_t i = lower_bound(od, first, 0U); i < od->count && od->entries[i].index <= last; i++) {
+    for (uint16_t i = lower_bound_key(od, entry_key(first, 0U)); i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *row = &od->entries[i];
         const uint8_t subs = co_od_entry_subs(row);
         co_od_copy_defaults(od, row->offset, (size_t)row->size * subs, node->values + row->offset);

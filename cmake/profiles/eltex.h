@@ -24,7 +24,8 @@
  *   models of the emulator assume 64-bit time: their tests with this profile (tools/profile-tests) set it to 0.
  * - Compact dictionary rows (CO_CONFIG_OD_COMPACT): 10 bytes a row; both dictionaries are far below 64 KiB of
  *   values and 255 distinct limit pairs.
- * - 32-bit limit pairs (CO_CONFIG_OD_LIMITS_64 0): both dictionaries limit only 8- and 16-bit integers.
+ * - 16-bit limit pairs (CO_CONFIG_OD_LIMITS_64 0, CO_CONFIG_OD_LIMITS_16 1): both dictionaries limit only 8- and
+ *   16-bit integers, within 16 bits.
  * - TX queue: 8 frames. The largest burst of these devices is boot-up + 3 TPDOs on entering
  *   Operational + an EMCY + an SDO response + a heartbeat (7 frames) against a port that is busy.
  *
@@ -54,5 +55,6 @@
 
 #define CO_CONFIG_OD_COMPACT 1
 #define CO_CONFIG_OD_LIMITS_64 0
+#define CO_CONFIG_OD_LIMITS_16 1
 
 #endif /* CO_PROFILE_ELTEX_H */

@@ -35,6 +35,13 @@
 #define CO_CONFIG_OD_LIMITS_64 1
 #endif
 
+/** 1 (with CO_CONFIG_OD_LIMITS_64 0): 16-bit limit pairs (4 bytes each) instead of 32-bit ones; then every limit must
+ *  fit 16 bits, signed for signed rows (a generated table with a wider one fails to compile; <c_name>_od_config.h
+ *  sets 1 where the dictionary allows it). The compares stay 32-bit. */
+#ifndef CO_CONFIG_OD_LIMITS_16
+#define CO_CONFIG_OD_LIMITS_16 0
+#endif
+
 /** Most receive PDOs one node can have (the OD may declare fewer). */
 #ifndef CO_RPDO_MAX
 #define CO_RPDO_MAX 4U

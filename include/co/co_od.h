@@ -65,6 +65,9 @@ typedef union co_od_limit {
     int64_t i;
     uint64_t u;
     double r;
+#elif CO_CONFIG_OD_LIMITS_16
+    int16_t i; /**< Signed integer rows (CO_CONFIG_OD_LIMITS_16 1: limits of at most 16 bits only). */
+    uint16_t u; /**< Unsigned integer rows. */
 #else
     int32_t i; /**< Signed integer rows (CO_CONFIG_OD_LIMITS_64 0: integers of at most 4 bytes only). */
     uint32_t u; /**< Unsigned integer rows. */

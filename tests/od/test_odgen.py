@@ -242,3 +242,26 @@ def test_fitted_configuration_follows_the_objects(tmp_path):
     eds = set_key(set_key(eds, "2000sub2", "DataType", "0x0008"), "2000sub2", "HighLimit", "365.5")
     off, _ = fitted(tmp_path, eds)
     assert "CO_CONFIG_OD_LIMITS_64" not in off
+
+
+def test_16_bit_limit_pairs_where_every_limit_fits(tmp_path):
+    # The SDS limits UNSIGNED16 0x2000:02 to 0..365: 16-bit pairs, in the fitted configuration.
+    def generated(eds_text):
+        fitted(tmp_path, eds_text)
+        out = tmp_path / "out"
+        return next(out.glob("*_od_config.h")).read_text(), next(out.glob("*_od.c")).read_text()
+    config, source = generated(BASE_EDS)
+    assert re.search(r"^#define CO_CONFIG_OD_LIMITS_16 1$", config, re.MULTILINE)
+    assert "CO_CONFIG_OD_LIMITS_16 must be 0" not in source
+    # A limit beyond 16 bits (65,536 of an UNSIGNED32, -32,769 of an INTEGER32): 32-bit pairs, and a table built with
+    # 16-bit pairs fails to compile rather than truncate.
+    for data_type, key, limit in (("0x0007", "HighLimit", "65536"), ("0x0004", "LowLimit", "-32769")):
+        eds = set_key(set_key(BASE_EDS, "2000sub2", "DataType", data_type), "2000sub2", key, limit)
+        config, source = generated(eds)
+        assert "CO_CONFIG_OD_LIMITS_16" not in config
+        assert "#error \"this dictionary has limits beyond 16 bits: CO_CONFIG_OD_LIMITS_16 must be 0\"" in source
+    # At the bounds of 16 bits: still 16-bit pairs.
+    eds = set_key(set_key(BASE_EDS, "2000sub2", "DataType", "0x0003"), "2000sub2", "LowLimit", "-32768")
+    eds = set_key(eds, "2000sub2", "HighLimit", "32767")
+    config, _ = generated(eds)
+    assert re.search(r"^#define CO_CONFIG_OD_LIMITS_16 1$", config, re.MULTILINE)

@@ -17,7 +17,7 @@
 #define CONST (CO_OD_READ | CO_OD_CONST)
 
 static const co_od_limits_t limits[] = {
-    {{.i = 100}, {.i = 60000}}, /* 0: 0x2000 */
+    {{.u = 100U}, {.u = 60000U}}, /* 0: 0x2000 (UNSIGNED16) */
     {{.i = -100}, {.i = 100}},  /* 1: 0x2001 */
 };
 
