@@ -16,40 +16,37 @@
 
 static const uint8_t rpdo_msef[5] = {0x04U, 0U, 0U, 0U, 0U};
 
-/* 1 + the number of the highest PDO whose communication object exists (CiA 301: up to 512 each way). */
-static uint16_t highest_pdo(const co_od_t *od, uint16_t base)
+/* More PDOs than any node holds (its capacities are 16-bit): the area has what the node was built without. */
+#define PDO_REFUSED 0x10000UL
+
+/* 1 + the number of the highest PDO whose communication object exists (CiA 301: up to 512 each way), or PDO_REFUSED
+ * when a communication object has one of timer_subs (bit n: sub-index n < 8), the timers compiled out: a dictionary
+ * that has them would take values that change nothing. */
+static uint32_t highest_pdo(const co_od_t *od, uint16_t base, unsigned timer_subs)
 {
-    uint16_t n = 0U;
-    for (uint16_t i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U;) {
-        n = (uint16_t)(od->entries[i].index - base + 1U);
-        i = (uint16_t)(i + 1U);
+    uint32_t n = 0U;
+    for (uint16_t i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U; i++) {
+        const co_od_entry_t *e = &od->entries[i];
+        const unsigned subs = e->count > 7U ? 0xFFU : (1U << co_od_entry_subs(e)) - 1U; /* sub, sub + 1, ... */
+        if (e->sub < 8U && ((timer_subs >> e->sub) & subs) != 0U) {
+            return PDO_REFUSED;
+        }
+        n = (uint32_t)e->index - base + 1U;
     }
     return n;
 }
 
 co_status_t co_pdo_count(co_node_t *node)
 {
-    const uint16_t nr = highest_pdo(node->od, RPDO_COMM);
-    const uint16_t nt = highest_pdo(node->od, TPDO_COMM);
+    const unsigned rpdo_timers = CO_CONFIG_PDO_TIMERS ? 0U : 1U << 5;
+    const unsigned tpdo_timers = CO_CONFIG_PDO_TIMERS ? 0U : (1U << 3) | (1U << 5);
+    const uint32_t nr = highest_pdo(node->od, RPDO_COMM, rpdo_timers);
+    const uint32_t nt = highest_pdo(node->od, TPDO_COMM, tpdo_timers);
     if (nr > node->rpdo_cap || nt > node->tpdo_cap) {
         return CO_ERR_RANGE;
     }
-#if !CO_CONFIG_PDO_TIMERS
-    /* Timers compiled out: a dictionary that has them would take values that change nothing. */
-    for (uint16_t n = 0U; n < nr; n++) {
-        if (co_od_exists(node->od, (uint16_t)(RPDO_COMM + n), 5U)) {
-            return CO_ERR_RANGE;
-        }
-    }
-    for (uint16_t n = 0U; n < nt; n++) {
-        if (co_od_exists(node->od, (uint16_t)(TPDO_COMM + n), 3U) ||
-            co_od_exists(node->od, (uint16_t)(TPDO_COMM + n), 5U)) {
-            return CO_ERR_RANGE;
-        }
-    }
-#endif
-    node->n_rpdo = nr;
-    node->n_tpdo = nt;
+    node->n_rpdo = (uint16_t)nr;
+    node->n_tpdo = (uint16_t)nt;
     return CO_OK;
 }
 
@@ -281,8 +278,11 @@ static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
 
 static void tpdo_send(co_node_t *node, co_tpdo_t *p, const uint8_t buf[8])
 {
-    co_frame_t f = {p->cob_id & CO_COBID_CAN_ID, p->map_len, 0U, {0U}};
-    memcpy(f.data, buf, p->map_len);
+    co_frame_t f;
+    f.id = p->cob_id & CO_COBID_CAN_ID;
+    f.len = p->map_len;
+    f.flags = 0U;
+    memcpy(f.data, buf, 8U); /* zero past map_len: sampled into a cleared buffer (an MPDO fills all 8) */
     co_node_send(node, &f);
     memcpy(p->last, buf, 8U);
     p->sent_once = true;
@@ -377,16 +377,15 @@ co_time_us_t co_pdo_process(co_node_t *node)
 #if CO_CONFIG_PDO_TIMERS
         co_time_retire(node->now, &p->next_allowed);
 #endif
+        co_time_us_t t;
         if (!p->valid || p->type < 254U) {
-            next = co_min_time(next, tpdo_inhibit_end(p));
-            continue;
+            t = tpdo_inhibit_end(p);
+        } else if (!cos && p->sent_once && !p->event && !tpdo_timer_due(node, p)) {
+            t = tpdo_timers_next(p); /* nothing to compare, nothing asked for, the timer not due */
+        } else {
+            t = tpdo_event_driven(node, p);
         }
-        if (!cos && p->sent_once && !p->event && !tpdo_timer_due(node, p)) {
-            /* nothing to compare, nothing asked for, the timer not due */
-            next = co_min_time(next, tpdo_timers_next(p));
-            continue;
-        }
-        next = co_min_time(next, tpdo_event_driven(node, p));
+        next = co_min_time(next, t);
     }
     /* Consumed: the values were compared. A read hook's write during the sampling is taken as sampled. */
     node->cos_pending = false;
@@ -559,35 +558,31 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
 #endif
 }
 
+/* The four areas by two bits of the index (0x1400..0x1BFF only, co_od.c): 0x0800 a TPDO, 0x0200 a mapping. */
+static bool is_receive(uint16_t index) { return (index & 0x0800U) == 0U; }
+static bool is_mapping(uint16_t index) { return (index & 0x0200U) != 0U; }
+
 uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)
 {
-    const uint16_t base = (uint16_t)(e->index & 0xFE00U);
-    const uint16_t n = (uint16_t)(e->index & 0x01FFU);
-    switch (base) {
-    case RPDO_COMM:
-        return n < node->n_rpdo ? check_comm(node, e, data, true, stored) : CO_ABORT_NONE;
-    case TPDO_COMM:
-        return n < node->n_tpdo ? check_comm(node, e, data, false, stored) : CO_ABORT_NONE;
-    case RPDO_MAP:
-        return n < node->n_rpdo ? check_map(node, e, data, true, stored) : CO_ABORT_NONE;
-    case TPDO_MAP:
-        return n < node->n_tpdo ? check_map(node, e, data, false, stored) : CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
+    const bool receive = is_receive(e->index);
+    if ((e->index & 0x01FFU) >= (receive ? node->n_rpdo : node->n_tpdo)) {
+        return CO_ABORT_NONE; /* beyond the PDOs the node counted: no rules */
     }
+    return is_mapping(e->index) ? check_map(node, e, data, receive, stored) : check_comm(node, e, data, receive, stored);
 }
 
 void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
 {
-    const uint16_t base = (uint16_t)(e->index & 0xFE00U);
     const uint16_t n = (uint16_t)(e->index & 0x01FFU);
-    if ((base == RPDO_COMM || base == RPDO_MAP) && n < node->n_rpdo) {
+    if (!is_receive(e->index)) {
+        if (n < node->n_tpdo) {
+            configure_tpdo(node, n);
+        }
+    } else if (n < node->n_rpdo) {
         const uint32_t was = node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
         configure_rpdo(node, n);
         if ((node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
             co_node_routes_update(node); /* the frames it takes changed */
         }
-    } else if ((base == TPDO_COMM || base == TPDO_MAP) && n < node->n_tpdo) {
-        configure_tpdo(node, n);
     }
 }
