@@ -23,48 +23,52 @@ static uint8_t error_register(const co_node_t *node)
     return node->emcy.n_active > 0U ? (uint8_t)(reg | 0x01U) : 0U;
 }
 
-static void update_register(co_node_t *node)
+/* 0x1001 from the active list; returns the register. */
+static uint8_t update_register(co_node_t *node)
 {
+    const uint8_t reg = error_register(node);
     co_od_entry_t one;
     const co_od_entry_t *e = co_od_find(node->od, 0x1001U, 0U, &one);
     if (e != NULL) {
-        co_od_entry_set_u32(node, e, error_register(node));
+        co_od_entry_set_u32(node, e, reg);
     }
+    return reg;
 }
 
-/* 0x1003: newest error at sub 1, older ones move up, the oldest falls out when the array is full. */
+/* 0x1003: newest error at sub 1, older ones move up, the oldest falls out when the array is full. One pass from
+ * sub 1 up: each sub-index takes the value the one below held (a sub-index the table lacks moves nothing). */
 static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
 {
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
     co_od_entry_t count_one;
-    co_od_entry_t one;
-    co_od_entry_t other;
     const co_od_entry_t *count_e = co_od_find(node->od, 0x1003U, 0U, &count_one);
     if (size == 0U || count_e == NULL) {
         return;
     }
     uint8_t count = (uint8_t)co_od_entry_u32(node, count_e);
-    if (count > size) {
-        count = size;
+    if (count >= size) {
+        count = (uint8_t)(size - 1U); /* the oldest falls out */
     }
-    for (uint8_t i = (count < size) ? count : (uint8_t)(size - 1U); i >= 1U; i--) {
-        const co_od_entry_t *from = co_od_find(node->od, 0x1003U, i, &one);
-        if (from != NULL) {
-            const uint32_t v = co_od_entry_u32(node, from);
-            const co_od_entry_t *to = co_od_find(node->od, 0x1003U, (uint8_t)(i + 1U), &other);
-            if (to != NULL) {
-                co_od_entry_set_u32(node, to, v);
+    count++;
+    uint32_t carry = (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24);
+    bool below = true; /* the sub-index below exists (sub 1 takes the new error) */
+    for (uint8_t i = 1U; i <= count; i++) {
+        co_od_entry_t one;
+        const co_od_entry_t *e = co_od_find(node->od, 0x1003U, i, &one);
+        if (e != NULL) {
+            const uint32_t was = co_od_entry_u32(node, e);
+            if (below) {
+                co_od_entry_set_u32(node, e, carry);
             }
+            carry = was;
         }
+        below = e != NULL;
     }
-    const co_od_entry_t *first = co_od_find(node->od, 0x1003U, 1U, &other);
-    if (first != NULL) {
-        co_od_entry_set_u32(node, first, (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24));
-    }
-    co_od_entry_set_u32(node, count_e, count < size ? (uint32_t)count + 1U : size);
+    co_od_entry_set_u32(node, count_e, count);
 }
 
-static void enqueue(co_node_t *node, uint16_t code, const uint8_t *msef)
+/* Queues the 8 bytes of an EMCY (code 0: an error reset) with the error register reg. */
+static void enqueue(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
     if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way */
@@ -74,10 +78,27 @@ static void enqueue(co_node_t *node, uint16_t code, const uint8_t *msef)
     }
     uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN];
     co_put_u16(data, code);
-    data[2] = error_register(node);
+    data[2] = reg;
     memcpy(&data[3], msef, 5U);
     em->q_count++;
-    co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, data[2]);
+    co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, reg);
+}
+
+/* The active list changed (an error raised, or cleared: code 0): 0x1001 follows and the EMCY is queued. */
+static void report(co_node_t *node, uint16_t code, const uint8_t *msef)
+{
+    co_node_wake(node, CO_SVC_EMCY);
+    enqueue(node, code, update_register(node), msef);
+}
+
+/* Where the error (code, msef) is in the active list, or n_active when it is not active. */
+static uint8_t find_active(const co_emcy_t *em, uint16_t code, const uint8_t *msef)
+{
+    uint8_t i = 0U;
+    while (i < em->n_active && !same_error(&em->active[i], code, msef)) {
+        i++;
+    }
+    return i;
 }
 
 bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8_t *msef)
@@ -87,22 +108,18 @@ bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8
     if (code == 0x0000U) {
         return false; /* 0x0000 is the error reset, never an error (and never logged in 0x1003) */
     }
-    for (uint8_t i = 0U; i < em->n_active; i++) {
-        if (same_error(&em->active[i], code, m)) {
-            return true;
-        }
+    if (find_active(em, code, m) < em->n_active) {
+        return true;
     }
     if (em->n_active >= CO_EMCY_ACTIVE_MAX) {
         return false;
     }
-    co_node_wake(node, CO_SVC_EMCY);
     co_emcy_error_t *a = &em->active[em->n_active++];
     a->code = code;
     a->reg = reg_bits;
     memcpy(a->msef, m, 5U);
-    update_register(node);
     push_history(node, code, m);
-    enqueue(node, code, m);
+    report(node, code, m);
     return true;
 }
 
@@ -110,17 +127,14 @@ bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
     const uint8_t *m = msef != NULL ? msef : zero_msef;
-    for (uint8_t i = 0U; i < em->n_active; i++) {
-        if (same_error(&em->active[i], code, m)) {
-            co_node_wake(node, CO_SVC_EMCY);
-            em->active[i] = em->active[em->n_active - 1U];
-            em->n_active--;
-            update_register(node);
-            enqueue(node, 0x0000U, m); /* error reset, with the register of what remains */
-            return true;
-        }
+    const uint8_t i = find_active(em, code, m);
+    if (i >= em->n_active) {
+        return false;
     }
-    return false;
+    em->active[i] = em->active[em->n_active - 1U];
+    em->n_active--;
+    report(node, 0x0000U, m); /* error reset, with the register of what remains */
+    return true;
 }
 
 bool co_emcy_is_active(const co_node_t *node, uint16_t code)
@@ -148,7 +162,7 @@ void co_emcy_reset(co_node_t *node)
     node->emcy.q_count = 0U;
     node->emcy.q_head = 0U;
     node->emcy.next_allowed = CO_NEVER;
-    update_register(node);
+    (void)update_register(node);
 }
 
 co_time_us_t co_emcy_process(co_node_t *node)
