@@ -191,8 +191,8 @@ void co_pdo_reset(co_node_t *node)
 
 static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
 {
-    uint8_t pos = 0U;
-    for (uint8_t i = 0U; i < p->n_map; i++) {
+    unsigned pos = 0U; /* unsigned: no narrowing at each step */
+    for (unsigned i = 0U; i < p->n_map; i++) {
         if (p->map[i].row != CO_PDO_MAP_DUMMY) {
             /* The device hook may refuse a value; an RPDO has no way to answer, so it is dropped. */
             co_od_entry_t one;
@@ -200,15 +200,7 @@ static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
             e = p->map[i].k == 0U ? e : co_od_entry_at(e, p->map[i].k, &one); /* a sub-index inside a run */
             (void)co_od_write_entry(node, e, &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
         }
-        pos = (uint8_t)(pos + p->map[i].len);
-    }
-}
-
-static void rpdo_length_error(co_node_t *node, co_rpdo_t *p, uint16_t code)
-{
-    if (!p->length_error) {
-        p->length_error = true;
-        (void)co_emcy_raise(node, code, 0x10U, rpdo_msef);
+        pos += p->map[i].len;
     }
 }
 
@@ -218,12 +210,15 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return; /* dropped, not applied later */
     }
-    if (f->len < p->map_len) {
-        rpdo_length_error(node, p, 0x8210U); /* data discarded */
-        return;
-    }
-    if (f->len > p->map_len) {
-        rpdo_length_error(node, p, 0x8220U); /* first mapped bytes applied */
+    if (f->len != p->map_len) {
+        const bool short_frame = f->len < p->map_len;
+        if (!p->length_error) {
+            p->length_error = true;
+            (void)co_emcy_raise(node, short_frame ? 0x8210U : 0x8220U, 0x10U, rpdo_msef);
+        }
+        if (short_frame) {
+            return; /* data discarded (too long: the first mapped bytes are applied) */
+        }
     } else if (p->length_error) {
         p->length_error = false;
         if (!co_emcy_clear(node, 0x8210U, rpdo_msef)) {
@@ -262,18 +257,17 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
 #endif
 }
 
-static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
+static void tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
 {
-    uint8_t pos = 0U;
+    unsigned pos = 0U; /* unsigned: no narrowing at each step */
     memset(buf, 0, 8U);
-    for (uint8_t i = 0U; i < p->n_map; i++) {
+    for (unsigned i = 0U; i < p->n_map; i++) {
         co_od_entry_t one;
         const co_od_entry_t *e = &node->od->entries[p->map[i].row];
         e = p->map[i].k == 0U ? e : co_od_entry_at(e, p->map[i].k, &one); /* a sub-index inside a run */
         (void)co_od_sample(node, e, &buf[pos], p->map[i].len);
-        pos = (uint8_t)(pos + p->map[i].len);
+        pos += p->map[i].len;
     }
-    return pos;
 }
 
 static void tpdo_send(co_node_t *node, co_tpdo_t *p, const uint8_t buf[8])
@@ -307,15 +301,14 @@ static co_time_us_t tpdo_inhibit_end(const co_tpdo_t *p) { (void)p; return CO_NE
 static co_time_us_t tpdo_timers_next(const co_tpdo_t *p) { (void)p; return CO_NEVER; }
 #endif
 
-static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
+/* An event-driven TPDO with something to look at: values written (node->cos_pending, co_node_values_changed), a
+ * first transmission, an event, or its timer due (timer). */
+static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p, bool timer)
 {
     uint8_t buf[8];
     bool cos = false;
-    const bool timer = tpdo_timer_due(node, p);
-    /* Mapped values change only where a write says so (node->cos_pending, co_node_values_changed): sampled then,
-     * and when something is to be sent anyway. */
-    if (!IS_MPDO(p) && (node->cos_pending || !p->sent_once || p->event || timer)) {
-        (void)tpdo_sample(node, p, buf);
+    if (!IS_MPDO(p)) {
+        tpdo_sample(node, p, buf);
         cos = (node->options & CO_OPT_TPDO_NO_COS) == 0U && memcmp(buf, p->last, 8U) != 0;
     }
     const bool changed = !p->sent_once || p->event || cos;
@@ -380,10 +373,13 @@ co_time_us_t co_pdo_process(co_node_t *node)
         co_time_us_t t;
         if (!p->valid || p->type < 254U) {
             t = tpdo_inhibit_end(p);
-        } else if (!cos && p->sent_once && !p->event && !tpdo_timer_due(node, p)) {
-            t = tpdo_timers_next(p); /* nothing to compare, nothing asked for, the timer not due */
         } else {
-            t = tpdo_event_driven(node, p);
+            const bool timer = tpdo_timer_due(node, p);
+            if (!cos && p->sent_once && !p->event && !timer) {
+                t = tpdo_timers_next(p); /* nothing to compare, nothing asked for, the timer not due */
+            } else {
+                t = tpdo_event_driven(node, p, timer);
+            }
         }
         next = co_min_time(next, t);
     }
@@ -419,7 +415,7 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
             p->sync_count = p->type; /* the first transmission is at the SYNC carrying the start value */
         }
         uint8_t buf[8];
-        (void)tpdo_sample(node, p, buf);
+        tpdo_sample(node, p, buf);
         if (p->type == 0U) {
             if (p->event || !p->sent_once || memcmp(buf, p->last, 8U) != 0) {
                 tpdo_send(node, p, buf); /* acyclic: only when something changed */
