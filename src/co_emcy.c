@@ -176,14 +176,16 @@ co_time_us_t co_emcy_process(co_node_t *node)
         if (co_time_pending(node->now, em->next_allowed)) {
             return em->next_allowed;
         }
-        co_frame_t f = {0U, 8U, 0U, {0U}};
+        co_frame_t f;
+        f.id = em->cob_id & CO_COBID_CAN_ID;
+        f.len = 8U;
+        f.flags = 0U;
         memcpy(f.data, em->queue[em->q_head], 8U);
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
         if ((em->cob_id & CO_COBID_INVALID) != 0U) {
             continue; /* EMCY disabled */
         }
-        f.id = em->cob_id & CO_COBID_CAN_ID;
         co_node_send(node, &f);
         em->next_allowed = em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
     }
