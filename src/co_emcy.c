@@ -199,18 +199,11 @@ uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint
     }
     const uint32_t v = co_get_u32(data);
     const uint32_t cur = co_od_entry_u32(node, e);
-    if ((v & 0x7FFFF800UL) != 0U) {
-        return CO_ABORT_INVALID_VALUE; /* 29-bit or reserved bits */
+    if ((v & CO_COBID_NO_RTR) != 0U) {
+        return CO_ABORT_INVALID_VALUE; /* bit 30 is reserved here */
     }
-    if ((v & CO_COBID_INVALID) == 0U) {
-        if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
-            return CO_ABORT_INVALID_VALUE;
-        }
-        if (!stored && (cur & CO_COBID_INVALID) == 0U && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
-            return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while bit 31 is set */
-        }
-    }
-    return CO_ABORT_NONE;
+    /* the PDOs' rules otherwise: 11-bit, not restricted, the CAN-ID changed only while bit 31 is set */
+    return co_cob_id_check(v, cur, !stored && (cur & CO_COBID_INVALID) == 0U);
 }
 
 uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e)
