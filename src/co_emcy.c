@@ -16,7 +16,7 @@ static bool same_error(const co_emcy_error_t *a, uint16_t code, const uint8_t *m
 static uint8_t error_register(const co_node_t *node)
 {
     uint8_t reg = 0U;
-    for (uint8_t i = 0U; i < node->emcy.n_active; i++) {
+    for (unsigned i = 0U; i < node->emcy.n_active; i++) {
         reg |= node->emcy.active[i].reg;
     }
     /* Bit 0 (generic) is set whenever any error is present (CiA 301; see docs/decisions.md). */
@@ -52,9 +52,9 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
     count++;
     uint32_t carry = (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24);
     bool below = true; /* the sub-index below exists (sub 1 takes the new error) */
-    for (uint8_t i = 1U; i <= count; i++) {
+    for (unsigned i = 1U; i <= count; i++) {
         co_od_entry_t one;
-        const co_od_entry_t *e = co_od_find(node->od, 0x1003U, i, &one);
+        const co_od_entry_t *e = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
         if (e != NULL) {
             const uint32_t was = co_od_entry_u32(node, e);
             if (below) {
@@ -92,9 +92,9 @@ static void report(co_node_t *node, uint16_t code, const uint8_t *msef)
 }
 
 /* Where the error (code, msef) is in the active list, or n_active when it is not active. */
-static uint8_t find_active(const co_emcy_t *em, uint16_t code, const uint8_t *msef)
+static unsigned find_active(const co_emcy_t *em, uint16_t code, const uint8_t *msef)
 {
-    uint8_t i = 0U;
+    unsigned i = 0U;
     while (i < em->n_active && !same_error(&em->active[i], code, msef)) {
         i++;
     }
@@ -127,7 +127,7 @@ bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
     const uint8_t *m = msef != NULL ? msef : zero_msef;
-    const uint8_t i = find_active(em, code, m);
+    const unsigned i = find_active(em, code, m);
     if (i >= em->n_active) {
         return false;
     }
@@ -139,7 +139,7 @@ bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef)
 
 bool co_emcy_is_active(const co_node_t *node, uint16_t code)
 {
-    for (uint8_t i = 0U; i < node->emcy.n_active; i++) {
+    for (unsigned i = 0U; i < node->emcy.n_active; i++) {
         if (node->emcy.active[i].code == code) {
             return true;
         }
@@ -222,9 +222,9 @@ bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t
         return false; /* only 0 (clear the history) may be written to 0x1003:00 */
     }
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
-    for (uint8_t i = 1U; i <= size; i++) {
+    for (unsigned i = 1U; i <= size; i++) {
         co_od_entry_t one;
-        const co_od_entry_t *s = co_od_find(node->od, 0x1003U, i, &one);
+        const co_od_entry_t *s = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
         if (s != NULL) {
             co_od_entry_set_u32(node, s, 0U);
         }

@@ -111,8 +111,8 @@ static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, 
     if (n > 8U) {
         return -1;
     }
-    for (uint8_t i = 1U; i <= n; i++) {
-        if (resolve(node, co_od_u32_or(node, map_index, i, 0U), receive, &map[i - 1U]) != CO_ABORT_NONE) {
+    for (unsigned i = 1U; i <= n; i++) {
+        if (resolve(node, co_od_u32_or(node, map_index, (uint8_t)i, 0U), receive, &map[i - 1U]) != CO_ABORT_NONE) {
             return -1;
         }
         total += map[i - 1U].len;
@@ -124,7 +124,7 @@ static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, 
     return total;
 }
 
-static void configure_rpdo(co_node_t *node, uint16_t n)
+static void configure_rpdo(co_node_t *node, unsigned n)
 {
     co_rpdo_t *p = &node->rpdo[n];
     const uint16_t comm = (uint16_t)(RPDO_COMM + n);
@@ -146,7 +146,7 @@ static void configure_rpdo(co_node_t *node, uint16_t n)
 #endif
 }
 
-static void configure_tpdo(co_node_t *node, uint16_t n)
+static void configure_tpdo(co_node_t *node, unsigned n)
 {
     co_tpdo_t *p = &node->tpdo[n];
     const uint16_t comm = (uint16_t)(TPDO_COMM + n);
@@ -177,14 +177,14 @@ static void configure_tpdo(co_node_t *node, uint16_t n)
 
 void co_pdo_reset(co_node_t *node)
 {
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
         node->rpdo[n].length_error = false;
 #if CO_CONFIG_PDO_TIMERS
         node->rpdo[n].timeout_error = false;
 #endif
         configure_rpdo(node, n);
     }
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         configure_tpdo(node, n);
     }
 }
@@ -350,7 +350,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
         return next;
     }
 #if CO_CONFIG_PDO_TIMERS
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (!p->valid || p->deadline == CO_NEVER) {
             continue;
@@ -365,7 +365,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
     }
 #endif
     const bool cos = node->cos_pending;
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
 #if CO_CONFIG_PDO_TIMERS
         co_time_retire(node->now, &p->next_allowed);
@@ -373,13 +373,10 @@ co_time_us_t co_pdo_process(co_node_t *node)
         co_time_us_t t;
         if (!p->valid || p->type < 254U) {
             t = tpdo_inhibit_end(p);
+        } else if (!cos && p->sent_once && !p->event && !tpdo_timer_due(node, p)) {
+            t = tpdo_timers_next(p); /* nothing to compare, nothing asked for, the timer not due */
         } else {
-            const bool timer = tpdo_timer_due(node, p);
-            if (!cos && p->sent_once && !p->event && !timer) {
-                t = tpdo_timers_next(p); /* nothing to compare, nothing asked for, the timer not due */
-            } else {
-                t = tpdo_event_driven(node, p, timer);
-            }
+            t = tpdo_event_driven(node, p, tpdo_timer_due(node, p));
         }
         next = co_min_time(next, t);
     }
@@ -395,14 +392,14 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (p->valid && p->sync_pending) {
             p->sync_pending = false;
             rpdo_apply(node, p, p->sync_data);
         }
     }
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
         if (!p->valid || p->type > 240U || IS_MPDO(p)) {
             continue; /* an MPDO is event-driven only (CiA 301) */
@@ -438,7 +435,7 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
     }
     /* Entering or leaving Operational: timers and SYNC counts restart; on entering, every event-driven
      * TPDO is sent once at once (its first "change"), as CANopenNode does. */
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
         p->sent_once = false;
         p->event = false;
@@ -451,7 +448,7 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
         p->sync_started = p->sync_start == 0U;
 #endif
     }
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
 #if CO_CONFIG_SYNC
         node->rpdo[n].sync_pending = false;
 #endif
@@ -523,9 +520,9 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
             return CO_ABORT_NONE; /* its entries load after it: each is checked on its own, the sum at configuration */
         }
         uint32_t bytes = 0U;
-        for (uint8_t i = 1U; i <= n; i++) {
+        for (unsigned i = 1U; i <= n; i++) {
             co_pdo_map_t m;
-            const uint32_t r = resolve(node, co_od_u32_or(node, e->index, i, 0U), receive, &m);
+            const uint32_t r = resolve(node, co_od_u32_or(node, e->index, (uint8_t)i, 0U), receive, &m);
             if (r != CO_ABORT_NONE) {
                 return r;
             }
@@ -569,7 +566,7 @@ uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
 
 void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
 {
-    const uint16_t n = (uint16_t)(e->index & 0x01FFU);
+    const unsigned n = e->index & 0x01FFU;
     if (!is_receive(e->index)) {
         if (n < node->n_tpdo) {
             configure_tpdo(node, n);
