@@ -561,7 +561,10 @@ uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
     if ((e->index & 0x01FFU) >= (receive ? node->n_rpdo : node->n_tpdo)) {
         return CO_ABORT_NONE; /* beyond the PDOs the node counted: no rules */
     }
-    return is_mapping(e->index) ? check_map(node, e, data, receive, stored) : check_comm(node, e, data, receive, stored);
+    if (is_mapping(e->index)) {
+        return check_map(node, e, data, receive, stored);
+    }
+    return check_comm(node, e, data, receive, stored);
 }
 
 void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
