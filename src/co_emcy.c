@@ -16,55 +16,59 @@ static bool same_error(const co_emcy_error_t *a, uint16_t code, const uint8_t *m
 static uint8_t error_register(const co_node_t *node)
 {
     uint8_t reg = 0U;
-    for (uint8_t i = 0U; i < node->emcy.n_active; i++) {
+    for (unsigned i = 0U; i < node->emcy.n_active; i++) {
         reg |= node->emcy.active[i].reg;
     }
     /* Bit 0 (generic) is set whenever any error is present (CiA 301; see docs/decisions.md). */
     return node->emcy.n_active > 0U ? (uint8_t)(reg | 0x01U) : 0U;
 }
 
-static void update_register(co_node_t *node)
+/* 0x1001 from the active list; returns the register. */
+static uint8_t update_register(co_node_t *node)
 {
+    const uint8_t reg = error_register(node);
     co_od_entry_t one;
     const co_od_entry_t *e = co_od_find(node->od, 0x1001U, 0U, &one);
     if (e != NULL) {
-        co_od_entry_set_u32(node, e, error_register(node));
+        co_od_entry_set_u32(node, e, reg);
     }
+    return reg;
 }
 
-/* 0x1003: newest error at sub 1, older ones move up, the oldest falls out when the array is full. */
+/* 0x1003: newest error at sub 1, older ones move up, the oldest falls out when the array is full. One pass from
+ * sub 1 up: each sub-index takes the value the one below held (a sub-index the table lacks moves nothing). */
 static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
 {
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
     co_od_entry_t count_one;
-    co_od_entry_t one;
-    co_od_entry_t other;
     const co_od_entry_t *count_e = co_od_find(node->od, 0x1003U, 0U, &count_one);
     if (size == 0U || count_e == NULL) {
         return;
     }
     uint8_t count = (uint8_t)co_od_entry_u32(node, count_e);
-    if (count > size) {
-        count = size;
+    if (count >= size) {
+        count = (uint8_t)(size - 1U); /* the oldest falls out */
     }
-    for (uint8_t i = (count < size) ? count : (uint8_t)(size - 1U); i >= 1U; i--) {
-        const co_od_entry_t *from = co_od_find(node->od, 0x1003U, i, &one);
-        if (from != NULL) {
-            const uint32_t v = co_od_entry_u32(node, from);
-            const co_od_entry_t *to = co_od_find(node->od, 0x1003U, (uint8_t)(i + 1U), &other);
-            if (to != NULL) {
-                co_od_entry_set_u32(node, to, v);
+    count++;
+    uint32_t carry = (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24);
+    bool below = true; /* the sub-index below exists (sub 1 takes the new error) */
+    for (unsigned i = 1U; i <= count; i++) {
+        co_od_entry_t one;
+        const co_od_entry_t *e = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
+        if (e != NULL) {
+            const uint32_t was = co_od_entry_u32(node, e);
+            if (below) {
+                co_od_entry_set_u32(node, e, carry);
             }
+            carry = was;
         }
+        below = e != NULL;
     }
-    const co_od_entry_t *first = co_od_find(node->od, 0x1003U, 1U, &other);
-    if (first != NULL) {
-        co_od_entry_set_u32(node, first, (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24));
-    }
-    co_od_entry_set_u32(node, count_e, count < size ? (uint32_t)count + 1U : size);
+    co_od_entry_set_u32(node, count_e, count);
 }
 
-static void enqueue(co_node_t *node, uint16_t code, const uint8_t *msef)
+/* Queues the 8 bytes of an EMCY (code 0: an error reset) with the error register reg. */
+static void enqueue(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
     if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way */
@@ -74,10 +78,27 @@ static void enqueue(co_node_t *node, uint16_t code, const uint8_t *msef)
     }
     uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN];
     co_put_u16(data, code);
-    data[2] = error_register(node);
+    data[2] = reg;
     memcpy(&data[3], msef, 5U);
     em->q_count++;
-    co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, data[2]);
+    co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, reg);
+}
+
+/* The active list changed (an error raised, or cleared: code 0): 0x1001 follows and the EMCY is queued. */
+static void report(co_node_t *node, uint16_t code, const uint8_t *msef)
+{
+    co_node_wake(node, CO_SVC_EMCY);
+    enqueue(node, code, update_register(node), msef);
+}
+
+/* Where the error (code, msef) is in the active list, or n_active when it is not active. */
+static unsigned find_active(const co_emcy_t *em, uint16_t code, const uint8_t *msef)
+{
+    unsigned i = 0U;
+    while (i < em->n_active && !same_error(&em->active[i], code, msef)) {
+        i++;
+    }
+    return i;
 }
 
 bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8_t *msef)
@@ -87,22 +108,18 @@ bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8
     if (code == 0x0000U) {
         return false; /* 0x0000 is the error reset, never an error (and never logged in 0x1003) */
     }
-    for (uint8_t i = 0U; i < em->n_active; i++) {
-        if (same_error(&em->active[i], code, m)) {
-            return true;
-        }
+    if (find_active(em, code, m) < em->n_active) {
+        return true;
     }
     if (em->n_active >= CO_EMCY_ACTIVE_MAX) {
         return false;
     }
-    co_node_wake(node, CO_SVC_EMCY);
     co_emcy_error_t *a = &em->active[em->n_active++];
     a->code = code;
     a->reg = reg_bits;
     memcpy(a->msef, m, 5U);
-    update_register(node);
     push_history(node, code, m);
-    enqueue(node, code, m);
+    report(node, code, m);
     return true;
 }
 
@@ -110,22 +127,19 @@ bool co_emcy_clear(co_node_t *node, uint16_t code, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
     const uint8_t *m = msef != NULL ? msef : zero_msef;
-    for (uint8_t i = 0U; i < em->n_active; i++) {
-        if (same_error(&em->active[i], code, m)) {
-            co_node_wake(node, CO_SVC_EMCY);
-            em->active[i] = em->active[em->n_active - 1U];
-            em->n_active--;
-            update_register(node);
-            enqueue(node, 0x0000U, m); /* error reset, with the register of what remains */
-            return true;
-        }
+    const unsigned i = find_active(em, code, m);
+    if (i >= em->n_active) {
+        return false;
     }
-    return false;
+    em->active[i] = em->active[em->n_active - 1U];
+    em->n_active--;
+    report(node, 0x0000U, m); /* error reset, with the register of what remains */
+    return true;
 }
 
 bool co_emcy_is_active(const co_node_t *node, uint16_t code)
 {
-    for (uint8_t i = 0U; i < node->emcy.n_active; i++) {
+    for (unsigned i = 0U; i < node->emcy.n_active; i++) {
         if (node->emcy.active[i].code == code) {
             return true;
         }
@@ -148,7 +162,7 @@ void co_emcy_reset(co_node_t *node)
     node->emcy.q_count = 0U;
     node->emcy.q_head = 0U;
     node->emcy.next_allowed = CO_NEVER;
-    update_register(node);
+    (void)update_register(node);
 }
 
 co_time_us_t co_emcy_process(co_node_t *node)
@@ -162,14 +176,16 @@ co_time_us_t co_emcy_process(co_node_t *node)
         if (co_time_pending(node->now, em->next_allowed)) {
             return em->next_allowed;
         }
-        co_frame_t f = {0U, 8U, 0U, {0U}};
+        co_frame_t f;
+        f.id = em->cob_id & CO_COBID_CAN_ID;
+        f.len = 8U;
+        f.flags = 0U;
         memcpy(f.data, em->queue[em->q_head], 8U);
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
         if ((em->cob_id & CO_COBID_INVALID) != 0U) {
             continue; /* EMCY disabled */
         }
-        f.id = em->cob_id & CO_COBID_CAN_ID;
         co_node_send(node, &f);
         em->next_allowed = em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
     }
@@ -183,18 +199,11 @@ uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint
     }
     const uint32_t v = co_get_u32(data);
     const uint32_t cur = co_od_entry_u32(node, e);
-    if ((v & 0x7FFFF800UL) != 0U) {
-        return CO_ABORT_INVALID_VALUE; /* 29-bit or reserved bits */
+    if ((v & CO_COBID_NO_RTR) != 0U) {
+        return CO_ABORT_INVALID_VALUE; /* bit 30 is reserved here */
     }
-    if ((v & CO_COBID_INVALID) == 0U) {
-        if (co_cob_id_restricted(v & CO_COBID_CAN_ID)) {
-            return CO_ABORT_INVALID_VALUE;
-        }
-        if (!stored && (cur & CO_COBID_INVALID) == 0U && ((v ^ cur) & CO_COBID_CAN_ID) != 0U) {
-            return CO_ABORT_INVALID_VALUE; /* the CAN-ID may only change while bit 31 is set */
-        }
-    }
-    return CO_ABORT_NONE;
+    /* the PDOs' rules otherwise: 11-bit, not restricted, the CAN-ID changed only while bit 31 is set */
+    return co_cob_id_check(v, cur, !stored && (cur & CO_COBID_INVALID) == 0U);
 }
 
 uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e)
@@ -213,9 +222,9 @@ bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t
         return false; /* only 0 (clear the history) may be written to 0x1003:00 */
     }
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
-    for (uint8_t i = 1U; i <= size; i++) {
+    for (unsigned i = 1U; i <= size; i++) {
         co_od_entry_t one;
-        const co_od_entry_t *s = co_od_find(node->od, 0x1003U, i, &one);
+        const co_od_entry_t *s = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
         if (s != NULL) {
             co_od_entry_set_u32(node, s, 0U);
         }

@@ -14,7 +14,7 @@ static void slot_msef(uint8_t node_id, uint8_t msef[5])
     msef[2] = msef[3] = msef[4] = 0U;
 }
 
-static void slot_configure(co_node_t *node, uint8_t i)
+static void slot_configure(co_node_t *node, unsigned i)
 {
     co_hb_consumer_slot_t *s = &node->hbc.slot[i];
     const uint32_t v = co_od_u32_or(node, 0x1016U, (uint8_t)(i + 1U), 0U);
@@ -38,7 +38,7 @@ static void update_index(co_node_t *node)
 {
     node->hbc.used = 0U;
     memset(node->hbc.monitored, 0, sizeof node->hbc.monitored);
-    for (uint8_t i = 0U; i < node->hbc.count; i++) {
+    for (unsigned i = 0U; i < node->hbc.count; i++) {
         const uint8_t id = node->hbc.slot[i].node_id;
         if (id != 0U) {
             node->hbc.used = (uint8_t)(i + 1U);
@@ -51,7 +51,7 @@ void co_hbc_reset(co_node_t *node)
 {
     uint8_t n = co_od_sub_count(node->od, 0x1016U);
     node->hbc.count = n;
-    for (uint8_t i = 0U; i < n; i++) {
+    for (unsigned i = 0U; i < n; i++) {
         node->hbc.slot[i].state = 0U;
         slot_configure(node, i);
     }
@@ -68,7 +68,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
         return false;
     }
     bool used = false;
-    for (uint8_t i = 0U; i < node->hbc.used; i++) {
+    for (unsigned i = 0U; i < node->hbc.used; i++) {
         co_hb_consumer_slot_t *s = &node->hbc.slot[i];
         if (s->node_id != id || s->state == 0U) {
             continue;
@@ -97,7 +97,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
 co_time_us_t co_hbc_process(co_node_t *node)
 {
     co_time_us_t next = CO_NEVER;
-    for (uint8_t i = 0U; i < node->hbc.used; i++) {
+    for (unsigned i = 0U; i < node->hbc.used; i++) {
         co_hb_consumer_slot_t *s = &node->hbc.slot[i];
         if (s->state != 2U) {
             continue;
@@ -127,8 +127,8 @@ uint32_t co_hbc_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
         return CO_ABORT_NONE; /* an unused entry */
     }
     const uint8_t n = co_od_sub_count(node->od, 0x1016U);
-    for (uint8_t k = 1U; k <= n; k++) {
-        const uint32_t other = co_od_u32_or(node, 0x1016U, k, 0U);
+    for (unsigned k = 1U; k <= n; k++) {
+        const uint32_t other = co_od_u32_or(node, 0x1016U, (uint8_t)k, 0U);
         if (k != e->sub && ((other >> 16) & 0xFFU) == id && (other & 0xFFFFU) != 0U) {
             return CO_ABORT_PARAM_INCOMPATIBLE; /* one node-ID monitored twice */
         }
@@ -139,7 +139,7 @@ uint32_t co_hbc_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
 void co_hbc_written(co_node_t *node, const co_od_entry_t *e)
 {
     if (e->sub >= 1U && e->sub <= node->hbc.count) {
-        slot_configure(node, (uint8_t)(e->sub - 1U));
+        slot_configure(node, e->sub - 1U);
         update_index(node);
         co_node_routes_update(node); /* the heartbeats it takes changed */
     }

@@ -16,40 +16,37 @@
 
 static const uint8_t rpdo_msef[5] = {0x04U, 0U, 0U, 0U, 0U};
 
-/* 1 + the number of the highest PDO whose communication object exists (CiA 301: up to 512 each way). */
-static uint16_t highest_pdo(const co_od_t *od, uint16_t base)
+/* More PDOs than any node holds (its capacities are 16-bit): the area has what the node was built without. */
+#define PDO_REFUSED 0x10000UL
+
+/* 1 + the number of the highest PDO whose communication object exists (CiA 301: up to 512 each way), or PDO_REFUSED
+ * when a communication object has one of timer_subs (bit n: sub-index n < 8), the timers compiled out: a dictionary
+ * that has them would take values that change nothing. */
+static uint32_t highest_pdo(const co_od_t *od, uint16_t base, unsigned timer_subs)
 {
-    uint16_t n = 0U;
-    for (uint16_t i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U;) {
-        n = (uint16_t)(od->entries[i].index - base + 1U);
-        i = (uint16_t)(i + 1U);
+    uint32_t n = 0U;
+    for (unsigned i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U; i++) {
+        const co_od_entry_t *e = &od->entries[i];
+        const unsigned subs = e->count > 7U ? 0xFFU : ((1U << e->count) - 1U) | 1U; /* sub, sub + 1, ... (count 0: 1) */
+        if (e->sub < 8U && ((timer_subs >> e->sub) & subs) != 0U) {
+            return PDO_REFUSED;
+        }
+        n = (uint32_t)e->index - base + 1U;
     }
     return n;
 }
 
 co_status_t co_pdo_count(co_node_t *node)
 {
-    const uint16_t nr = highest_pdo(node->od, RPDO_COMM);
-    const uint16_t nt = highest_pdo(node->od, TPDO_COMM);
+    const unsigned rpdo_timers = CO_CONFIG_PDO_TIMERS ? 0U : 1U << 5;
+    const unsigned tpdo_timers = CO_CONFIG_PDO_TIMERS ? 0U : (1U << 3) | (1U << 5);
+    const uint32_t nr = highest_pdo(node->od, RPDO_COMM, rpdo_timers);
+    const uint32_t nt = highest_pdo(node->od, TPDO_COMM, tpdo_timers);
     if (nr > node->rpdo_cap || nt > node->tpdo_cap) {
         return CO_ERR_RANGE;
     }
-#if !CO_CONFIG_PDO_TIMERS
-    /* Timers compiled out: a dictionary that has them would take values that change nothing. */
-    for (uint16_t n = 0U; n < nr; n++) {
-        if (co_od_exists(node->od, (uint16_t)(RPDO_COMM + n), 5U)) {
-            return CO_ERR_RANGE;
-        }
-    }
-    for (uint16_t n = 0U; n < nt; n++) {
-        if (co_od_exists(node->od, (uint16_t)(TPDO_COMM + n), 3U) ||
-            co_od_exists(node->od, (uint16_t)(TPDO_COMM + n), 5U)) {
-            return CO_ERR_RANGE;
-        }
-    }
-#endif
-    node->n_rpdo = nr;
-    node->n_tpdo = nt;
+    node->n_rpdo = (uint16_t)nr;
+    node->n_tpdo = (uint16_t)nt;
     return CO_OK;
 }
 
@@ -114,8 +111,8 @@ static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, 
     if (n > 8U) {
         return -1;
     }
-    for (uint8_t i = 1U; i <= n; i++) {
-        if (resolve(node, co_od_u32_or(node, map_index, i, 0U), receive, &map[i - 1U]) != CO_ABORT_NONE) {
+    for (unsigned i = 1U; i <= n; i++) {
+        if (resolve(node, co_od_u32_or(node, map_index, (uint8_t)i, 0U), receive, &map[i - 1U]) != CO_ABORT_NONE) {
             return -1;
         }
         total += map[i - 1U].len;
@@ -127,7 +124,7 @@ static int resolve_all(const co_node_t *node, uint16_t map_index, bool receive, 
     return total;
 }
 
-static void configure_rpdo(co_node_t *node, uint16_t n)
+static void configure_rpdo(co_node_t *node, unsigned n)
 {
     co_rpdo_t *p = &node->rpdo[n];
     const uint16_t comm = (uint16_t)(RPDO_COMM + n);
@@ -149,7 +146,7 @@ static void configure_rpdo(co_node_t *node, uint16_t n)
 #endif
 }
 
-static void configure_tpdo(co_node_t *node, uint16_t n)
+static void configure_tpdo(co_node_t *node, unsigned n)
 {
     co_tpdo_t *p = &node->tpdo[n];
     const uint16_t comm = (uint16_t)(TPDO_COMM + n);
@@ -180,22 +177,22 @@ static void configure_tpdo(co_node_t *node, uint16_t n)
 
 void co_pdo_reset(co_node_t *node)
 {
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
         node->rpdo[n].length_error = false;
 #if CO_CONFIG_PDO_TIMERS
         node->rpdo[n].timeout_error = false;
 #endif
         configure_rpdo(node, n);
     }
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         configure_tpdo(node, n);
     }
 }
 
 static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
 {
-    uint8_t pos = 0U;
-    for (uint8_t i = 0U; i < p->n_map; i++) {
+    unsigned pos = 0U; /* unsigned: no narrowing at each step */
+    for (unsigned i = 0U; i < p->n_map; i++) {
         if (p->map[i].row != CO_PDO_MAP_DUMMY) {
             /* The device hook may refuse a value; an RPDO has no way to answer, so it is dropped. */
             co_od_entry_t one;
@@ -203,15 +200,7 @@ static void rpdo_apply(co_node_t *node, co_rpdo_t *p, const uint8_t *data)
             e = p->map[i].k == 0U ? e : co_od_entry_at(e, p->map[i].k, &one); /* a sub-index inside a run */
             (void)co_od_write_entry(node, e, &data[pos], p->map[i].len, CO_ORIGIN_RPDO);
         }
-        pos = (uint8_t)(pos + p->map[i].len);
-    }
-}
-
-static void rpdo_length_error(co_node_t *node, co_rpdo_t *p, uint16_t code)
-{
-    if (!p->length_error) {
-        p->length_error = true;
-        (void)co_emcy_raise(node, code, 0x10U, rpdo_msef);
+        pos += p->map[i].len;
     }
 }
 
@@ -221,12 +210,15 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return; /* dropped, not applied later */
     }
-    if (f->len < p->map_len) {
-        rpdo_length_error(node, p, 0x8210U); /* data discarded */
-        return;
-    }
-    if (f->len > p->map_len) {
-        rpdo_length_error(node, p, 0x8220U); /* first mapped bytes applied */
+    if (f->len != p->map_len) {
+        const bool short_frame = f->len < p->map_len;
+        if (!p->length_error) {
+            p->length_error = true;
+            (void)co_emcy_raise(node, short_frame ? 0x8210U : 0x8220U, 0x10U, rpdo_msef);
+        }
+        if (short_frame) {
+            return; /* data discarded (too long: the first mapped bytes are applied) */
+        }
     } else if (p->length_error) {
         p->length_error = false;
         if (!co_emcy_clear(node, 0x8210U, rpdo_msef)) {
@@ -265,24 +257,26 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
 #endif
 }
 
-static uint8_t tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
+static void tpdo_sample(co_node_t *node, co_tpdo_t *p, uint8_t buf[8])
 {
-    uint8_t pos = 0U;
+    unsigned pos = 0U; /* unsigned: no narrowing at each step */
     memset(buf, 0, 8U);
-    for (uint8_t i = 0U; i < p->n_map; i++) {
+    for (unsigned i = 0U; i < p->n_map; i++) {
         co_od_entry_t one;
         const co_od_entry_t *e = &node->od->entries[p->map[i].row];
         e = p->map[i].k == 0U ? e : co_od_entry_at(e, p->map[i].k, &one); /* a sub-index inside a run */
         (void)co_od_sample(node, e, &buf[pos], p->map[i].len);
-        pos = (uint8_t)(pos + p->map[i].len);
+        pos += p->map[i].len;
     }
-    return pos;
 }
 
 static void tpdo_send(co_node_t *node, co_tpdo_t *p, const uint8_t buf[8])
 {
-    co_frame_t f = {p->cob_id & CO_COBID_CAN_ID, p->map_len, 0U, {0U}};
-    memcpy(f.data, buf, p->map_len);
+    co_frame_t f;
+    f.id = p->cob_id & CO_COBID_CAN_ID;
+    f.len = p->map_len;
+    f.flags = 0U;
+    memcpy(f.data, buf, 8U); /* zero past map_len: sampled into a cleared buffer (an MPDO fills all 8) */
     co_node_send(node, &f);
     memcpy(p->last, buf, 8U);
     p->sent_once = true;
@@ -307,15 +301,14 @@ static co_time_us_t tpdo_inhibit_end(const co_tpdo_t *p) { (void)p; return CO_NE
 static co_time_us_t tpdo_timers_next(const co_tpdo_t *p) { (void)p; return CO_NEVER; }
 #endif
 
-static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p)
+/* An event-driven TPDO with something to look at: values written (node->cos_pending, co_node_values_changed), a
+ * first transmission, an event, or its timer due (timer). */
+static co_time_us_t tpdo_event_driven(co_node_t *node, co_tpdo_t *p, bool timer)
 {
     uint8_t buf[8];
     bool cos = false;
-    const bool timer = tpdo_timer_due(node, p);
-    /* Mapped values change only where a write says so (node->cos_pending, co_node_values_changed): sampled then,
-     * and when something is to be sent anyway. */
-    if (!IS_MPDO(p) && (node->cos_pending || !p->sent_once || p->event || timer)) {
-        (void)tpdo_sample(node, p, buf);
+    if (!IS_MPDO(p)) {
+        tpdo_sample(node, p, buf);
         cos = (node->options & CO_OPT_TPDO_NO_COS) == 0U && memcmp(buf, p->last, 8U) != 0;
     }
     const bool changed = !p->sent_once || p->event || cos;
@@ -357,7 +350,7 @@ co_time_us_t co_pdo_process(co_node_t *node)
         return next;
     }
 #if CO_CONFIG_PDO_TIMERS
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (!p->valid || p->deadline == CO_NEVER) {
             continue;
@@ -372,21 +365,20 @@ co_time_us_t co_pdo_process(co_node_t *node)
     }
 #endif
     const bool cos = node->cos_pending;
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
 #if CO_CONFIG_PDO_TIMERS
         co_time_retire(node->now, &p->next_allowed);
 #endif
+        co_time_us_t t;
         if (!p->valid || p->type < 254U) {
-            next = co_min_time(next, tpdo_inhibit_end(p));
-            continue;
+            t = tpdo_inhibit_end(p);
+        } else if (!cos && p->sent_once && !p->event && !tpdo_timer_due(node, p)) {
+            t = tpdo_timers_next(p); /* nothing to compare, nothing asked for, the timer not due */
+        } else {
+            t = tpdo_event_driven(node, p, tpdo_timer_due(node, p));
         }
-        if (!cos && p->sent_once && !p->event && !tpdo_timer_due(node, p)) {
-            /* nothing to compare, nothing asked for, the timer not due */
-            next = co_min_time(next, tpdo_timers_next(p));
-            continue;
-        }
-        next = co_min_time(next, tpdo_event_driven(node, p));
+        next = co_min_time(next, t);
     }
     /* Consumed: the values were compared. A read hook's write during the sampling is taken as sampled. */
     node->cos_pending = false;
@@ -400,14 +392,14 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
     if (node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
         co_rpdo_t *p = &node->rpdo[n];
         if (p->valid && p->sync_pending) {
             p->sync_pending = false;
             rpdo_apply(node, p, p->sync_data);
         }
     }
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
         if (!p->valid || p->type > 240U || IS_MPDO(p)) {
             continue; /* an MPDO is event-driven only (CiA 301) */
@@ -420,7 +412,7 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
             p->sync_count = p->type; /* the first transmission is at the SYNC carrying the start value */
         }
         uint8_t buf[8];
-        (void)tpdo_sample(node, p, buf);
+        tpdo_sample(node, p, buf);
         if (p->type == 0U) {
             if (p->event || !p->sent_once || memcmp(buf, p->last, 8U) != 0) {
                 tpdo_send(node, p, buf); /* acyclic: only when something changed */
@@ -443,7 +435,7 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
     }
     /* Entering or leaving Operational: timers and SYNC counts restart; on entering, every event-driven
      * TPDO is sent once at once (its first "change"), as CANopenNode does. */
-    for (uint16_t n = 0U; n < node->n_tpdo; n++) {
+    for (unsigned n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
         p->sent_once = false;
         p->event = false;
@@ -456,7 +448,7 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
         p->sync_started = p->sync_start == 0U;
 #endif
     }
-    for (uint16_t n = 0U; n < node->n_rpdo; n++) {
+    for (unsigned n = 0U; n < node->n_rpdo; n++) {
 #if CO_CONFIG_SYNC
         node->rpdo[n].sync_pending = false;
 #endif
@@ -528,9 +520,9 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
             return CO_ABORT_NONE; /* its entries load after it: each is checked on its own, the sum at configuration */
         }
         uint32_t bytes = 0U;
-        for (uint8_t i = 1U; i <= n; i++) {
+        for (unsigned i = 1U; i <= n; i++) {
             co_pdo_map_t m;
-            const uint32_t r = resolve(node, co_od_u32_or(node, e->index, i, 0U), receive, &m);
+            const uint32_t r = resolve(node, co_od_u32_or(node, e->index, (uint8_t)i, 0U), receive, &m);
             if (r != CO_ABORT_NONE) {
                 return r;
             }
@@ -559,35 +551,34 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
 #endif
 }
 
+/* The four areas by two bits of the index (0x1400..0x1BFF only, co_od.c): 0x0800 a TPDO, 0x0200 a mapping. */
+static bool is_receive(uint16_t index) { return (index & 0x0800U) == 0U; }
+static bool is_mapping(uint16_t index) { return (index & 0x0200U) != 0U; }
+
 uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)
 {
-    const uint16_t base = (uint16_t)(e->index & 0xFE00U);
-    const uint16_t n = (uint16_t)(e->index & 0x01FFU);
-    switch (base) {
-    case RPDO_COMM:
-        return n < node->n_rpdo ? check_comm(node, e, data, true, stored) : CO_ABORT_NONE;
-    case TPDO_COMM:
-        return n < node->n_tpdo ? check_comm(node, e, data, false, stored) : CO_ABORT_NONE;
-    case RPDO_MAP:
-        return n < node->n_rpdo ? check_map(node, e, data, true, stored) : CO_ABORT_NONE;
-    case TPDO_MAP:
-        return n < node->n_tpdo ? check_map(node, e, data, false, stored) : CO_ABORT_NONE;
-    default:
-        return CO_ABORT_NONE;
+    const bool receive = is_receive(e->index);
+    if ((e->index & 0x01FFU) >= (receive ? node->n_rpdo : node->n_tpdo)) {
+        return CO_ABORT_NONE; /* beyond the PDOs the node counted: no rules */
     }
+    if (is_mapping(e->index)) {
+        return check_map(node, e, data, receive, stored);
+    }
+    return check_comm(node, e, data, receive, stored);
 }
 
 void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
 {
-    const uint16_t base = (uint16_t)(e->index & 0xFE00U);
-    const uint16_t n = (uint16_t)(e->index & 0x01FFU);
-    if ((base == RPDO_COMM || base == RPDO_MAP) && n < node->n_rpdo) {
+    const unsigned n = e->index & 0x01FFU;
+    if (!is_receive(e->index)) {
+        if (n < node->n_tpdo) {
+            configure_tpdo(node, n);
+        }
+    } else if (n < node->n_rpdo) {
         const uint32_t was = node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
         configure_rpdo(node, n);
         if ((node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
             co_node_routes_update(node); /* the frames it takes changed */
         }
-    } else if ((base == TPDO_COMM || base == TPDO_MAP) && n < node->n_tpdo) {
-        configure_tpdo(node, n);
     }
 }

@@ -25,31 +25,35 @@ typedef struct lean_values {
 #define RO CO_OD_READ
 #define RW (CO_OD_READ | CO_OD_WRITE)
 
-static const co_od_entry_t lean_rows[] = {
-    E(0x1000, 0x00, CO_T_UNSIGNED32, RO, device_type),
-    E(0x1001, 0x00, CO_T_UNSIGNED8, RO, error_register),
-    E(0x1017, 0x00, CO_T_UNSIGNED16, RW, producer_hb),
-    E(0x1018, 0x00, CO_T_UNSIGNED8, RO, identity_n),
-    E(0x1018, 0x01, CO_T_UNSIGNED32, RO, identity[0]),
-    E(0x1018, 0x02, CO_T_UNSIGNED32, RO, identity[1]),
-    E(0x1018, 0x03, CO_T_UNSIGNED32, RO, identity[2]),
-    E(0x1018, 0x04, CO_T_UNSIGNED32, RO, identity[3]),
-    E(0x1200, 0x00, CO_T_UNSIGNED8, RO, sdo_n),
-    E(0x1200, 0x01, CO_T_UNSIGNED32, RO | CO_OD_NODEID, sdo_cob[0]),
-    E(0x1200, 0x02, CO_T_UNSIGNED32, RO | CO_OD_NODEID, sdo_cob[1]),
-    E(0x1400, 0x00, CO_T_UNSIGNED8, RO, rpdo_n),
-    E(0x1400, 0x01, CO_T_UNSIGNED32, RW | CO_OD_NODEID, rpdo_cob),
-    E(0x1400, 0x02, CO_T_UNSIGNED8, RO, rpdo_type),
-    E(0x1600, 0x00, CO_T_UNSIGNED8, RO, rpdo_map_n),
-    E(0x1600, 0x01, CO_T_UNSIGNED32, RO, rpdo_map),
-    E(0x1800, 0x00, CO_T_UNSIGNED8, RO, tpdo_n),
-    E(0x1800, 0x01, CO_T_UNSIGNED32, RW | CO_OD_NODEID, tpdo_cob),
-    E(0x1800, 0x02, CO_T_UNSIGNED8, RO, tpdo_type),
-    E(0x1A00, 0x00, CO_T_UNSIGNED8, RO, tpdo_map_n),
-    E(0x1A00, 0x01, CO_T_UNSIGNED32, RO, tpdo_map),
-    E(0x2000, 0x00, CO_T_UNSIGNED8, RW | CO_OD_TPDO, input),
-    E(0x2001, 0x00, CO_T_UNSIGNED8, RW | CO_OD_RPDO, output),
-};
+/* The lean dictionary in three parts, so that the variants below can put rows between them. */
+#define LEAN_UP_TO_RPDO_COMM                                                                                           \
+    E(0x1000, 0x00, CO_T_UNSIGNED32, RO, device_type),                                                                 \
+    E(0x1001, 0x00, CO_T_UNSIGNED8, RO, error_register),                                                               \
+    E(0x1017, 0x00, CO_T_UNSIGNED16, RW, producer_hb),                                                                 \
+    E(0x1018, 0x00, CO_T_UNSIGNED8, RO, identity_n),                                                                   \
+    E(0x1018, 0x01, CO_T_UNSIGNED32, RO, identity[0]),                                                                 \
+    E(0x1018, 0x02, CO_T_UNSIGNED32, RO, identity[1]),                                                                 \
+    E(0x1018, 0x03, CO_T_UNSIGNED32, RO, identity[2]),                                                                 \
+    E(0x1018, 0x04, CO_T_UNSIGNED32, RO, identity[3]),                                                                 \
+    E(0x1200, 0x00, CO_T_UNSIGNED8, RO, sdo_n),                                                                        \
+    E(0x1200, 0x01, CO_T_UNSIGNED32, RO | CO_OD_NODEID, sdo_cob[0]),                                                   \
+    E(0x1200, 0x02, CO_T_UNSIGNED32, RO | CO_OD_NODEID, sdo_cob[1]),                                                   \
+    E(0x1400, 0x00, CO_T_UNSIGNED8, RO, rpdo_n),                                                                       \
+    E(0x1400, 0x01, CO_T_UNSIGNED32, RW | CO_OD_NODEID, rpdo_cob),                                                     \
+    E(0x1400, 0x02, CO_T_UNSIGNED8, RO, rpdo_type)
+#define LEAN_UP_TO_TPDO_COMM                                                                                           \
+    E(0x1600, 0x00, CO_T_UNSIGNED8, RO, rpdo_map_n),                                                                   \
+    E(0x1600, 0x01, CO_T_UNSIGNED32, RO, rpdo_map),                                                                    \
+    E(0x1800, 0x00, CO_T_UNSIGNED8, RO, tpdo_n),                                                                       \
+    E(0x1800, 0x01, CO_T_UNSIGNED32, RW | CO_OD_NODEID, tpdo_cob),                                                     \
+    E(0x1800, 0x02, CO_T_UNSIGNED8, RO, tpdo_type)
+#define LEAN_REST                                                                                                      \
+    E(0x1A00, 0x00, CO_T_UNSIGNED8, RO, tpdo_map_n),                                                                   \
+    E(0x1A00, 0x01, CO_T_UNSIGNED32, RO, tpdo_map),                                                                    \
+    E(0x2000, 0x00, CO_T_UNSIGNED8, RW | CO_OD_TPDO, input),                                                           \
+    E(0x2001, 0x00, CO_T_UNSIGNED8, RW | CO_OD_RPDO, output)
+
+static const co_od_entry_t lean_rows[] = {LEAN_UP_TO_RPDO_COMM, LEAN_UP_TO_TPDO_COMM, LEAN_REST};
 
 /* Node-ID-relative COB-IDs without the ID (the generator's convention). */
 static const lean_values_t lean_defaults = {
@@ -98,12 +102,54 @@ static uint32_t sent(uint32_t id)
     return n;
 }
 
+static co_node_t other; /* a node of another dictionary (one, for a small target's RAM) */
+
 static void a_dictionary_with_timers_is_refused(void)
 {
-    static co_node_t other;
     static test_od_values_t other_values;
     const co_node_cfg_t cfg = config(&test_od, &other_values); /* 0x1400:05, 0x1800:03 and :05 */
     TEST_ASSERT_EQUAL(CO_ERR_RANGE, co_node_init(&other, &cfg, now));
+}
+
+/* Variants of the lean dictionary with more communication sub-indices, their values after the lean ones. */
+typedef struct extra_values {
+    lean_values_t lean;
+    uint16_t extra[5];
+} extra_values_t;
+
+#define X(i, s, n, k) CO_OD_RUN(i, s, n, CO_T_UNSIGNED16, RW, sizeof(uint16_t), offsetof(extra_values_t, extra[k]))
+
+static co_status_t init_variant(const co_od_entry_t *rows, uint16_t count)
+{
+    static extra_values_t other_values;
+    const co_od_t od = {"variant", rows, count, &lean_defaults, (uint32_t)sizeof(extra_values_t), 0x1EA8U, 0U, NULL,
+                        0U, NULL, (uint32_t)sizeof lean_defaults};
+    const co_node_cfg_t cfg = config(&od, &other_values);
+    return co_node_init(&other, &cfg, now);
+}
+#define INIT_VARIANT(rows) init_variant(rows, (uint16_t)(sizeof rows / sizeof rows[0]))
+
+static void sub_indices_that_are_no_timers_are_taken(void)
+{
+    /* RPDO 3, 4 and 6 (sub 3 is a TPDO's inhibit time only), TPDO 4 and 6: none is a timer this core leaves out */
+    static const co_od_entry_t rows[] = {LEAN_UP_TO_RPDO_COMM, X(0x1400, 3, 2, 0), X(0x1400, 6, 1, 2),
+                                         LEAN_UP_TO_TPDO_COMM, X(0x1800, 4, 1, 3),  X(0x1800, 6, 1, 4), LEAN_REST};
+    TEST_ASSERT_EQUAL(CO_OK, INIT_VARIANT(rows));
+}
+
+static void a_timer_sub_index_alone_or_inside_a_run_is_refused(void)
+{
+    static const co_od_entry_t rpdo_event[] = {LEAN_UP_TO_RPDO_COMM, X(0x1400, 5, 1, 0), LEAN_UP_TO_TPDO_COMM,
+                                               LEAN_REST};
+    static const co_od_entry_t rpdo_run[] = {LEAN_UP_TO_RPDO_COMM, X(0x1400, 3, 3, 0), LEAN_UP_TO_TPDO_COMM,
+                                             LEAN_REST};
+    static const co_od_entry_t tpdo_inhibit[] = {LEAN_UP_TO_RPDO_COMM, LEAN_UP_TO_TPDO_COMM, X(0x1800, 3, 1, 0),
+                                                 LEAN_REST};
+    static const co_od_entry_t tpdo_run[] = {LEAN_UP_TO_RPDO_COMM, LEAN_UP_TO_TPDO_COMM, X(0x1800, 4, 3, 0), LEAN_REST};
+    TEST_ASSERT_EQUAL(CO_ERR_RANGE, INIT_VARIANT(rpdo_event));
+    TEST_ASSERT_EQUAL(CO_ERR_RANGE, INIT_VARIANT(rpdo_run)); /* 3..5 */
+    TEST_ASSERT_EQUAL(CO_ERR_RANGE, INIT_VARIANT(tpdo_inhibit));
+    TEST_ASSERT_EQUAL(CO_ERR_RANGE, INIT_VARIANT(tpdo_run)); /* 4..6 */
 }
 
 static void event_driven_tpdo_goes_at_each_change_at_once(void)
@@ -142,6 +188,8 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(a_dictionary_with_timers_is_refused);
+    RUN_TEST(sub_indices_that_are_no_timers_are_taken);
+    RUN_TEST(a_timer_sub_index_alone_or_inside_a_run_is_refused);
     RUN_TEST(event_driven_tpdo_goes_at_each_change_at_once);
     RUN_TEST(rpdo_applies_and_nothing_monitors_it);
     return UNITY_END();
