@@ -463,13 +463,19 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
     return true;
 }
 
-/* Whether a pass runs a service: all of them at a deadline, else those marked since they last ran. The mark is
- * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. */
-static bool take(co_node_t *node, unsigned service, bool all)
+typedef co_time_us_t (*service_process_t)(co_node_t *node);
+
+/* Runs a service if the pass runs it: all of them at a deadline, else those marked since they last ran. The mark is
+ * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. next: the
+ * earliest deadline so far; returns it with the service's. */
+static co_time_us_t run_service(co_node_t *node, unsigned service, bool all, service_process_t process,
+                                co_time_us_t next)
 {
-    const bool run = all || (node->wake & service) != 0U;
+    if (!all && (node->wake & service) == 0U) {
+        return next;
+    }
     node->wake = (uint8_t)(node->wake & ~service);
-    return run;
+    return co_min_time(next, process(node));
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
@@ -492,37 +498,21 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
     co_time_us_t next = all ? CO_NEVER : node->next_due;
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
     next = co_min_time(next, txq_flush(node));
-    if (take(node, CO_SVC_LSS, all)) {
-        next = co_min_time(next, co_lss_process(node));
-    }
+    next = run_service(node, CO_SVC_LSS, all, co_lss_process, next);
     if (services_run(node)) {
-        if (take(node, CO_SVC_HB, all)) {
-            next = co_min_time(next, co_hb_process(node));
-        }
+        next = run_service(node, CO_SVC_HB, all, co_hb_process, next);
 #if CO_CONFIG_NODE_GUARDING
-        if (take(node, CO_SVC_GUARD, all)) {
-            next = co_min_time(next, co_guard_process(node));
-        }
+        next = run_service(node, CO_SVC_GUARD, all, co_guard_process, next);
 #endif
 #if CO_CONFIG_HB_CONSUMER
-        if (take(node, CO_SVC_HBC, all)) {
-            next = co_min_time(next, co_hbc_process(node));
-        }
+        next = run_service(node, CO_SVC_HBC, all, co_hbc_process, next);
 #endif
-        if (take(node, CO_SVC_SDO, all)) {
-            next = co_min_time(next, co_sdo_process(node));
-        }
+        next = run_service(node, CO_SVC_SDO, all, co_sdo_process, next);
 #if CO_CONFIG_SYNC
-        if (take(node, CO_SVC_SYNC, all)) {
-            next = co_min_time(next, co_sync_process(node));
-        }
+        next = run_service(node, CO_SVC_SYNC, all, co_sync_process, next);
 #endif
-        if (take(node, CO_SVC_PDO, all)) {
-            next = co_min_time(next, co_pdo_process(node));
-        }
-        if (take(node, CO_SVC_EMCY, all)) {
-            next = co_min_time(next, co_emcy_process(node));
-        }
+        next = run_service(node, CO_SVC_PDO, all, co_pdo_process, next);
+        next = run_service(node, CO_SVC_EMCY, all, co_emcy_process, next);
     } else {
         node->wake = 0U; /* nothing but LSS runs; a reset that starts the services wakes them all */
     }
