@@ -132,13 +132,35 @@ void co_node_set_state(co_node_t *node, co_nmt_state_t state)
     }
 }
 
-/* loaded: the communication area was just loaded with the application area (a reset application). Otherwise
- * it is loaded again, unless the stored parameters were refused (their records passed no write check). */
-static void reset_communication(co_node_t *node, bool loaded)
+static void reset_hook(co_node_t *node, co_reset_t what)
+{
+    if (node->hooks != NULL && node->hooks->on_reset != NULL) {
+        node->hooks->on_reset(node->hooks_ctx, node, what);
+    }
+}
+
+/* The start of a reset: the node-ID an LSS master configured takes effect (the dictionary's node-ID-relative
+ * defaults use it). */
+static void enter_initialising(co_node_t *node)
 {
     node->nmt_state = CO_NMT_INITIALISING;
     node->node_id = node->lss.pending_node_id;
-    if (!loaded) {
+}
+
+void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
+{
+    node->now = now;
+    co_node_wake(node, CO_SVC_ALL);
+    enter_initialising(node);
+    if (what == CO_RESET_APPLICATION) {
+        /* Both areas from one pass over the stored records, so that one refused record refuses them all. */
+        co_od_reset_area(node, 0x1000U, 0x9FFFU);
+        co_node_event(node, CO_EV_NVM_LOADED, 0x1010U, 0U, (uint32_t)node->nvm_status, 0U);
+        reset_hook(node, CO_RESET_APPLICATION);
+        enter_initialising(node); /* again: the hook may have set a pending node-ID */
+    } else {
+        /* The communication area loaded again, unless the stored parameters were refused (their records passed no
+         * write check). */
         co_od_defaults_area(node, 0x1000U, 0x1FFFU);
         if (node->nvm_status != CO_NVM_REFUSED) {
             co_store_load_area(node, 0x1000U, 0x1FFFU);
@@ -157,33 +179,13 @@ static void reset_communication(co_node_t *node, bool loaded)
     co_sync_reset(node);
 #endif
     co_pdo_reset(node);
-    if (node->hooks != NULL && node->hooks->on_reset != NULL) {
-        node->hooks->on_reset(node->hooks_ctx, node, CO_RESET_COMMUNICATION);
-    }
+    reset_hook(node, CO_RESET_COMMUNICATION);
     if (node->node_id != CO_NODE_ID_UNCONFIGURED) { /* CiA 305: an unconfigured node runs LSS only, no boot-up */
         const co_frame_t bootup = {0x700U + node->node_id, 1U, 0U, {0U}};
         co_node_send(node, &bootup);
         co_node_set_state(node, CO_NMT_PRE_OPERATIONAL);
     }
     co_node_routes_update(node);
-}
-
-void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
-{
-    node->now = now;
-    co_node_wake(node, CO_SVC_ALL);
-    const bool application = what == CO_RESET_APPLICATION;
-    if (application) {
-        /* Both areas from one pass over the stored records, so that one refused record refuses them all. */
-        node->nmt_state = CO_NMT_INITIALISING;
-        node->node_id = node->lss.pending_node_id;
-        co_od_reset_area(node, 0x1000U, 0x9FFFU);
-        co_node_event(node, CO_EV_NVM_LOADED, 0x1010U, 0U, (uint32_t)node->nvm_status, 0U);
-        if (node->hooks != NULL && node->hooks->on_reset != NULL) {
-            node->hooks->on_reset(node->hooks_ctx, node, CO_RESET_APPLICATION);
-        }
-    }
-    reset_communication(node, application);
 }
 
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now)
@@ -451,9 +453,6 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
         co_sdo_server_t *s = &node->sdo;
 #endif
         co_sdo_rx(node, s, frame);
-        if (s->state != CO_SDO_IDLE) {
-            co_node_wake(node, CO_SVC_SDO); /* a transfer in progress: its timeout, block segments to send */
-        }
         break;
     }
     default:

@@ -283,6 +283,7 @@ void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
     serve(node, s, f);
     if (s->state != SDO_IDLE) {
         s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US); /* the client's last frame starts the timeout */
+        co_node_wake(node, CO_SVC_SDO); /* the pass takes the deadline, and sends the segments of a block */
     }
 }
 
