@@ -269,19 +269,22 @@ static uint16_t route_target(enum co_rx_kind kind, uint16_t n) { return (uint16_
  * of the tests was before the table (SYNC, then the SDO servers, then the RPDOs). */
 static void route_add(co_node_t *node, uint16_t id, uint16_t target)
 {
-    uint16_t i = node->n_route;
-    while (i > 0U && node->route[i - 1U].id > id) {
+    co_rx_route_t *const route = node->route;
+    const unsigned n = node->n_route;
+    unsigned i = n;
+    while (i > 0U && route[i - 1U].id > id) {
         i--;
     }
-    if ((i > 0U && node->route[i - 1U].id == id) || node->n_route >= node->route_cap) {
+    if ((i > 0U && route[i - 1U].id == id) || n >= node->route_cap) {
         return; /* the capacity is checked at co_node_init: never full */
     }
-    for (uint16_t k = node->n_route; k > i; k--) {
-        node->route[k] = node->route[k - 1U];
+    for (unsigned k = n; k > i; k--) {
+        route[k].id = route[k - 1U].id;
+        route[k].target = route[k - 1U].target;
     }
-    node->route[i].id = id;
-    node->route[i].target = target;
-    node->n_route++;
+    route[i].id = id;
+    route[i].target = target;
+    node->n_route = (uint16_t)(n + 1U);
 }
 
 /* A heartbeat (0x701..0x77F) of a node this one monitors. */
