@@ -10,6 +10,9 @@
 
 enum { SDO_IDLE = CO_SDO_IDLE, SDO_SEG_DOWNLOAD = CO_SDO_SEG_DOWNLOAD, SDO_SEG_UPLOAD = CO_SDO_SEG_UPLOAD };
 
+/* Whether a transfer can stay open after a request: with expedited transfer alone a server is always idle. */
+#define SDO_TRANSFERS (CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK)
+
 void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len)
 {
     co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
@@ -281,7 +284,7 @@ void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
         return; /* SDO is silent in Stopped */
     }
     serve(node, s, f);
-    if (s->state != SDO_IDLE) {
+    if (SDO_TRANSFERS && s->state != SDO_IDLE) {
         s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US); /* the client's last frame starts the timeout */
         co_node_wake(node, CO_SVC_SDO); /* the pass takes the deadline, and sends the segments of a block */
     }
@@ -289,7 +292,7 @@ void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 
 static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)
 {
-    if (s->state == SDO_IDLE) {
+    if (!SDO_TRANSFERS || s->state == SDO_IDLE) {
         return CO_NEVER;
     }
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
