@@ -92,19 +92,17 @@ void co_node_send(co_node_t *node, const co_frame_t *frame)
     node->txq.count++;
 }
 
-/* Sends queued frames in order until the port is busy. Returns the retry deadline or CO_NEVER. */
-static co_time_us_t txq_flush(co_node_t *node)
+/* Sends queued frames in order until the port is busy (what is left makes the pass come again after
+ * CO_TX_RETRY_US). */
+static void txq_flush(co_node_t *node)
 {
-    if (node->txq.count > 0U && node->lss.silent_until != CO_NEVER && !co_time_reached(node->now, node->lss.silent_until)) {
-        return node->lss.silent_until; /* CiA 305 bit-rate switch: queued frames wait for its end */
-    }
     while (node->txq.count > 0U) {
         const co_txq_frame_t *q = &node->txq.frame[node->txq.head];
         co_frame_t f = {q->id, q->len, 0U, {0U}};
         memcpy(f.data, q->data, 8U);
         const co_status_t st = node->port->send(node->port_ctx, &f);
         if (st == CO_ERR_BUSY) {
-            return co_time_after(node->now, CO_TX_RETRY_US);
+            return;
         }
         if (st == CO_OK) {
             node->stats.tx_frames++;
@@ -114,7 +112,6 @@ static co_time_us_t txq_flush(co_node_t *node)
         node->txq.head = (uint8_t)((node->txq.head + 1U) % CO_TX_QUEUE_LEN);
         node->txq.count--;
     }
-    return CO_NEVER;
 }
 
 void co_node_set_state(co_node_t *node, co_nmt_state_t state)
@@ -496,7 +493,11 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
     const bool all = co_time_reached(now, node->next_due);
     co_time_us_t next = all ? CO_NEVER : node->next_due;
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
-    next = co_min_time(next, txq_flush(node));
+    if (node->txq.count > 0U && co_time_pending(now, node->lss.silent_until)) {
+        next = co_min_time(next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits for its end */
+    } else {
+        txq_flush(node);
+    }
     next = run_service(node, CO_SVC_LSS, all, co_lss_process, next);
     if (services_run(node)) {
         next = run_service(node, CO_SVC_HB, all, co_hb_process, next);
