@@ -9,21 +9,21 @@ static const uint16_t cia305_bit_rates[CO_LSS_BIT_TIMING_COUNT] = {1000U, 800U, 
 
 uint32_t co_div_u32(uint32_t a, uint32_t b, uint32_t *rem)
 {
-    uint32_t q = 0U;
+    /* The dividend's bits leave a at the top into r while the quotient's bits enter a at the bottom. */
     uint32_t r = 0U;
     for (unsigned bit = 32U; bit > 0U; bit--) {
         const uint32_t carry = r >> 31; /* r < b, so 2r + 1 - b fits even when 2r does not */
-        r = (r << 1) | ((a >> (bit - 1U)) & 1U);
-        q <<= 1;
+        r = (r << 1) | (a >> 31);
+        a <<= 1;
         if (carry != 0U || r >= b) {
             r -= b;
-            q |= 1U;
+            a |= 1U;
         }
     }
     if (rem != NULL) {
         *rem = r;
     }
-    return q;
+    return a;
 }
 
 bool co_cob_id_restricted(uint32_t can_id)
