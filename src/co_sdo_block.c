@@ -27,11 +27,11 @@ static uint16_t block_crc(const uint8_t *data, uint32_t len)
     return (uint16_t)crc;
 }
 
-/* Segments the server takes in the next block of a download: as many as the rest of the buffer can hold (the last
- * one may carry fewer than 7 bytes), at least 1. */
-static uint8_t download_block_size(const co_sdo_server_t *s)
+/* Segments the server takes in the next block of a download, pos bytes received: as many as the rest of the buffer
+ * can hold (the last one may carry fewer than 7 bytes), at least 1. */
+static uint8_t download_block_size(uint32_t pos)
 {
-    const uint32_t room = s->pos < sizeof s->buf ? (uint32_t)sizeof s->buf - s->pos : 0U;
+    const uint32_t room = pos < CO_SDO_BUF_SIZE ? CO_SDO_BUF_SIZE - pos : 0U;
     if (room >= BLK_SIZE_MAX * BLK_SEG_DATA) {
         return BLK_SIZE_MAX;
     }
@@ -56,7 +56,7 @@ void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, con
         }
         co_sdo_start(s, CO_SDO_BLK_DOWNLOAD, size);
         s->crc = client_crc;
-        s->blksize = download_block_size(s);
+        s->blksize = download_block_size(0U); /* a constant */
         co_sdo_respond(node, s, 0xA4U, &s->blksize, 1U); /* server CRC support: always */
         return;
     }
@@ -112,7 +112,7 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         s->state = CO_SDO_BLK_DOWNLOAD_END;
     } else {
         s->seq = 0U;
-        s->blksize = download_block_size(s);
+        s->blksize = download_block_size(s->pos);
     }
     const uint8_t confirmation[2] = {ackseq, s->blksize};
     co_sdo_send(node, s, 0xA2U, confirmation, 2U);
