@@ -17,11 +17,11 @@
  * Bitwise rather than by table: it runs once per transfer, and 512 bytes of table would outweigh the service. */
 static uint16_t block_crc(const uint8_t *data, uint32_t len)
 {
-    uint32_t crc = 0U;
+    uint32_t crc = 0U; /* bits above 15 are shifted out of the CRC, never fed back: cut once, at the end */
     for (uint32_t i = 0U; i < len; i++) {
         crc ^= (uint32_t)data[i] << 8;
         for (unsigned bit = 0U; bit < 8U; bit++) {
-            crc = (crc & 0x8000U) != 0U ? ((crc << 1) ^ 0x1021U) & 0xFFFFU : (crc << 1) & 0xFFFFU;
+            crc = (crc << 1) ^ ((crc & 0x8000U) != 0U ? 0x1021U : 0U);
         }
     }
     return (uint16_t)crc;
