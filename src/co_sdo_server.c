@@ -68,20 +68,17 @@ static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd,
 {
     co_od_entry_t one;
     const co_od_entry_t *e = co_od_find(node->od, s->index, s->sub, &one);
-    uint32_t r = e != NULL ? CO_ABORT_NONE : co_od_missing(node->od, s->index);
-    size_t len = 4U;
-    if ((cmd & 0x01U) != 0U) {
-        len = 4U - ((cmd >> 2) & 0x03U);
-    } else if (e != NULL) {
-        /* Size not indicated (0x22): the object's own size, as the Eltex masters rely on (decisions.md). */
-        const uint16_t size = co_od_type_size(e->type);
-        len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
-        if (len > 4U) {
-            r = CO_ABORT_LENGTH_HIGH;
+    uint32_t r;
+    if (e == NULL) {
+        r = co_od_missing(node->od, s->index);
+    } else {
+        size_t len = 4U - ((cmd >> 2) & 0x03U);
+        if ((cmd & 0x01U) == 0U) {
+            /* Size not indicated (0x22): the object's own size, as the Eltex masters rely on (decisions.md). */
+            const uint16_t size = co_od_type_size(e->type);
+            len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
         }
-    }
-    if (r == CO_ABORT_NONE) {
-        r = co_od_write_entry(node, e, data, len, CO_ORIGIN_SDO);
+        r = len > 4U ? CO_ABORT_LENGTH_HIGH : co_od_write_entry(node, e, data, len, CO_ORIGIN_SDO);
     }
     if (r != CO_ABORT_NONE) {
         co_sdo_abort(node, s, r);
