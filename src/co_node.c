@@ -129,6 +129,7 @@ void co_node_set_state(co_node_t *node, co_nmt_state_t state)
     }
 }
 
+/* The device's on_reset hook, where it has one. */
 static void reset_hook(co_node_t *node, co_reset_t what)
 {
     if (node->hooks != NULL && node->hooks->on_reset != NULL) {
