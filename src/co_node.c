@@ -9,21 +9,21 @@ static const uint16_t cia305_bit_rates[CO_LSS_BIT_TIMING_COUNT] = {1000U, 800U, 
 
 uint32_t co_div_u32(uint32_t a, uint32_t b, uint32_t *rem)
 {
-    uint32_t q = 0U;
+    /* The dividend's bits leave a at the top into r while the quotient's bits enter a at the bottom. */
     uint32_t r = 0U;
     for (unsigned bit = 32U; bit > 0U; bit--) {
         const uint32_t carry = r >> 31; /* r < b, so 2r + 1 - b fits even when 2r does not */
-        r = (r << 1) | ((a >> (bit - 1U)) & 1U);
-        q <<= 1;
+        r = (r << 1) | (a >> 31);
+        a <<= 1;
         if (carry != 0U || r >= b) {
             r -= b;
-            q |= 1U;
+            a |= 1U;
         }
     }
     if (rem != NULL) {
         *rem = r;
     }
-    return q;
+    return a;
 }
 
 bool co_cob_id_restricted(uint32_t can_id)
@@ -92,19 +92,17 @@ void co_node_send(co_node_t *node, const co_frame_t *frame)
     node->txq.count++;
 }
 
-/* Sends queued frames in order until the port is busy. Returns the retry deadline or CO_NEVER. */
-static co_time_us_t txq_flush(co_node_t *node)
+/* Sends queued frames in order until the port is busy (what is left makes the pass come again after
+ * CO_TX_RETRY_US). */
+static void txq_flush(co_node_t *node)
 {
-    if (node->txq.count > 0U && node->lss.silent_until != CO_NEVER && !co_time_reached(node->now, node->lss.silent_until)) {
-        return node->lss.silent_until; /* CiA 305 bit-rate switch: queued frames wait for its end */
-    }
     while (node->txq.count > 0U) {
         const co_txq_frame_t *q = &node->txq.frame[node->txq.head];
         co_frame_t f = {q->id, q->len, 0U, {0U}};
         memcpy(f.data, q->data, 8U);
         const co_status_t st = node->port->send(node->port_ctx, &f);
         if (st == CO_ERR_BUSY) {
-            return co_time_after(node->now, CO_TX_RETRY_US);
+            return;
         }
         if (st == CO_OK) {
             node->stats.tx_frames++;
@@ -114,7 +112,6 @@ static co_time_us_t txq_flush(co_node_t *node)
         node->txq.head = (uint8_t)((node->txq.head + 1U) % CO_TX_QUEUE_LEN);
         node->txq.count--;
     }
-    return CO_NEVER;
 }
 
 void co_node_set_state(co_node_t *node, co_nmt_state_t state)
@@ -132,13 +129,36 @@ void co_node_set_state(co_node_t *node, co_nmt_state_t state)
     }
 }
 
-/* loaded: the communication area was just loaded with the application area (a reset application). Otherwise
- * it is loaded again, unless the stored parameters were refused (their records passed no write check). */
-static void reset_communication(co_node_t *node, bool loaded)
+/* The device's on_reset hook, where it has one. */
+static void reset_hook(co_node_t *node, co_reset_t what)
+{
+    if (node->hooks != NULL && node->hooks->on_reset != NULL) {
+        node->hooks->on_reset(node->hooks_ctx, node, what);
+    }
+}
+
+/* The start of a reset: the node-ID an LSS master configured takes effect (the dictionary's node-ID-relative
+ * defaults use it). */
+static void enter_initialising(co_node_t *node)
 {
     node->nmt_state = CO_NMT_INITIALISING;
     node->node_id = node->lss.pending_node_id;
-    if (!loaded) {
+}
+
+void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
+{
+    node->now = now;
+    co_node_wake(node, CO_SVC_ALL);
+    enter_initialising(node);
+    if (what == CO_RESET_APPLICATION) {
+        /* Both areas from one pass over the stored records, so that one refused record refuses them all. */
+        co_od_reset_area(node, 0x1000U, 0x9FFFU);
+        co_node_event(node, CO_EV_NVM_LOADED, 0x1010U, 0U, (uint32_t)node->nvm_status, 0U);
+        reset_hook(node, CO_RESET_APPLICATION);
+        enter_initialising(node); /* again: the hook may have set a pending node-ID */
+    } else {
+        /* The communication area loaded again, unless the stored parameters were refused (their records passed no
+         * write check). */
         co_od_defaults_area(node, 0x1000U, 0x1FFFU);
         if (node->nvm_status != CO_NVM_REFUSED) {
             co_store_load_area(node, 0x1000U, 0x1FFFU);
@@ -157,33 +177,13 @@ static void reset_communication(co_node_t *node, bool loaded)
     co_sync_reset(node);
 #endif
     co_pdo_reset(node);
-    if (node->hooks != NULL && node->hooks->on_reset != NULL) {
-        node->hooks->on_reset(node->hooks_ctx, node, CO_RESET_COMMUNICATION);
-    }
+    reset_hook(node, CO_RESET_COMMUNICATION);
     if (node->node_id != CO_NODE_ID_UNCONFIGURED) { /* CiA 305: an unconfigured node runs LSS only, no boot-up */
         const co_frame_t bootup = {0x700U + node->node_id, 1U, 0U, {0U}};
         co_node_send(node, &bootup);
         co_node_set_state(node, CO_NMT_PRE_OPERATIONAL);
     }
     co_node_routes_update(node);
-}
-
-void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
-{
-    node->now = now;
-    co_node_wake(node, CO_SVC_ALL);
-    const bool application = what == CO_RESET_APPLICATION;
-    if (application) {
-        /* Both areas from one pass over the stored records, so that one refused record refuses them all. */
-        node->nmt_state = CO_NMT_INITIALISING;
-        node->node_id = node->lss.pending_node_id;
-        co_od_reset_area(node, 0x1000U, 0x9FFFU);
-        co_node_event(node, CO_EV_NVM_LOADED, 0x1010U, 0U, (uint32_t)node->nvm_status, 0U);
-        if (node->hooks != NULL && node->hooks->on_reset != NULL) {
-            node->hooks->on_reset(node->hooks_ctx, node, CO_RESET_APPLICATION);
-        }
-    }
-    reset_communication(node, application);
 }
 
 co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t now)
@@ -235,19 +235,16 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         return CO_ERR_RANGE;
     }
     co_od_copy_defaults(node->od, 0U, (size_t)node->od->values_size, node->values);
-    uint8_t node_id = cfg->node_id;
-    uint8_t bit_timing = cfg->bit_timing;
-    const co_nvm_status_t lss = co_store_lss_load(node, &node_id, &bit_timing);
-    if (lss == CO_NVM_LOADED) {
-        if (node->port->set_bit_rate != NULL && node->bit_rates_kbit[bit_timing] != 0U) {
-            (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[bit_timing]);
-        }
+    node->node_id = cfg->node_id;
+    uint8_t *const bit_timing = &node->lss.active_bit_timing;
+    *bit_timing = cfg->bit_timing;
+    const co_nvm_status_t lss = co_store_lss_load(node, &node->node_id, bit_timing);
+    if (lss == CO_NVM_LOADED && node->port->set_bit_rate != NULL && node->bit_rates_kbit[*bit_timing] != 0U) {
+        (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[*bit_timing]);
     }
-    if (bit_timing >= CO_LSS_BIT_TIMING_COUNT) {
-        bit_timing = 0U; /* a bad configured default: index 0 of the table, never past its end */
+    if (*bit_timing >= CO_LSS_BIT_TIMING_COUNT) {
+        *bit_timing = 0U; /* a bad configured default: index 0 of the table, never past its end */
     }
-    node->node_id = node_id;
-    node->lss.active_bit_timing = bit_timing;
     co_node_event(node, CO_EV_NVM_LOADED, 0x7E5U, 0U, (uint32_t)lss, 0U); /* the LSS area, once at power-on */
     co_lss_init(node);
     co_node_reset(node, CO_RESET_APPLICATION, now);
@@ -267,19 +264,22 @@ static uint16_t route_target(enum co_rx_kind kind, uint16_t n) { return (uint16_
  * of the tests was before the table (SYNC, then the SDO servers, then the RPDOs). */
 static void route_add(co_node_t *node, uint16_t id, uint16_t target)
 {
-    uint16_t i = node->n_route;
-    while (i > 0U && node->route[i - 1U].id > id) {
+    co_rx_route_t *const route = node->route;
+    const unsigned n = node->n_route;
+    unsigned i = n;
+    while (i > 0U && route[i - 1U].id > id) {
         i--;
     }
-    if ((i > 0U && node->route[i - 1U].id == id) || node->n_route >= node->route_cap) {
+    if ((i > 0U && route[i - 1U].id == id) || n >= node->route_cap) {
         return; /* the capacity is checked at co_node_init: never full */
     }
-    for (uint16_t k = node->n_route; k > i; k--) {
-        node->route[k] = node->route[k - 1U];
+    for (unsigned k = n; k > i; k--) {
+        route[k].id = route[k - 1U].id;
+        route[k].target = route[k - 1U].target;
     }
-    node->route[i].id = id;
-    node->route[i].target = target;
-    node->n_route++;
+    route[i].id = id;
+    route[i].target = target;
+    node->n_route = (uint16_t)(n + 1U);
 }
 
 /* A heartbeat (0x701..0x77F) of a node this one monitors. */
@@ -451,9 +451,6 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
         co_sdo_server_t *s = &node->sdo;
 #endif
         co_sdo_rx(node, s, frame);
-        if (s->state != CO_SDO_IDLE) {
-            co_node_wake(node, CO_SVC_SDO); /* a transfer in progress: its timeout, block segments to send */
-        }
         break;
     }
     default:
@@ -463,13 +460,19 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
     return true;
 }
 
-/* Whether a pass runs a service: all of them at a deadline, else those marked since they last ran. The mark is
- * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. */
-static bool take(co_node_t *node, unsigned service, bool all)
+typedef co_time_us_t (*service_process_t)(co_node_t *node);
+
+/* Runs a service if the pass runs it: all of them at a deadline, else those marked since they last ran. The mark is
+ * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. next: the
+ * earliest deadline so far; returns it with the service's. */
+static co_time_us_t run_service(co_node_t *node, unsigned service, bool all, service_process_t process,
+                                co_time_us_t next)
 {
-    const bool run = all || (node->wake & service) != 0U;
+    if (!all && (node->wake & service) == 0U) {
+        return next;
+    }
     node->wake = (uint8_t)(node->wake & ~service);
-    return run;
+    return co_min_time(next, process(node));
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
@@ -491,38 +494,26 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
     const bool all = co_time_reached(now, node->next_due);
     co_time_us_t next = all ? CO_NEVER : node->next_due;
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
-    next = co_min_time(next, txq_flush(node));
-    if (take(node, CO_SVC_LSS, all)) {
-        next = co_min_time(next, co_lss_process(node));
+    if (node->txq.count > 0U && co_time_pending(now, node->lss.silent_until)) {
+        next = co_min_time(next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits for its end */
+    } else {
+        txq_flush(node);
     }
+    next = run_service(node, CO_SVC_LSS, all, co_lss_process, next);
     if (services_run(node)) {
-        if (take(node, CO_SVC_HB, all)) {
-            next = co_min_time(next, co_hb_process(node));
-        }
+        next = run_service(node, CO_SVC_HB, all, co_hb_process, next);
 #if CO_CONFIG_NODE_GUARDING
-        if (take(node, CO_SVC_GUARD, all)) {
-            next = co_min_time(next, co_guard_process(node));
-        }
+        next = run_service(node, CO_SVC_GUARD, all, co_guard_process, next);
 #endif
 #if CO_CONFIG_HB_CONSUMER
-        if (take(node, CO_SVC_HBC, all)) {
-            next = co_min_time(next, co_hbc_process(node));
-        }
+        next = run_service(node, CO_SVC_HBC, all, co_hbc_process, next);
 #endif
-        if (take(node, CO_SVC_SDO, all)) {
-            next = co_min_time(next, co_sdo_process(node));
-        }
+        next = run_service(node, CO_SVC_SDO, all, co_sdo_process, next);
 #if CO_CONFIG_SYNC
-        if (take(node, CO_SVC_SYNC, all)) {
-            next = co_min_time(next, co_sync_process(node));
-        }
+        next = run_service(node, CO_SVC_SYNC, all, co_sync_process, next);
 #endif
-        if (take(node, CO_SVC_PDO, all)) {
-            next = co_min_time(next, co_pdo_process(node));
-        }
-        if (take(node, CO_SVC_EMCY, all)) {
-            next = co_min_time(next, co_emcy_process(node));
-        }
+        next = run_service(node, CO_SVC_PDO, all, co_pdo_process, next);
+        next = run_service(node, CO_SVC_EMCY, all, co_emcy_process, next);
     } else {
         node->wake = 0U; /* nothing but LSS runs; a reset that starts the services wakes them all */
     }

@@ -17,21 +17,21 @@
  * Bitwise rather than by table: it runs once per transfer, and 512 bytes of table would outweigh the service. */
 static uint16_t block_crc(const uint8_t *data, uint32_t len)
 {
-    uint32_t crc = 0U;
+    uint32_t crc = 0U; /* bits above 15 are shifted out of the CRC, never fed back: cut once, at the end */
     for (uint32_t i = 0U; i < len; i++) {
         crc ^= (uint32_t)data[i] << 8;
         for (unsigned bit = 0U; bit < 8U; bit++) {
-            crc = (crc & 0x8000U) != 0U ? ((crc << 1) ^ 0x1021U) & 0xFFFFU : (crc << 1) & 0xFFFFU;
+            crc = (crc << 1) ^ ((crc & 0x8000U) != 0U ? 0x1021U : 0U);
         }
     }
     return (uint16_t)crc;
 }
 
-/* Segments the server takes in the next block of a download: as many as the rest of the buffer can hold (the last
- * one may carry fewer than 7 bytes), at least 1. */
-static uint8_t download_block_size(const co_sdo_server_t *s)
+/* Segments the server takes in the next block of a download, pos bytes received: as many as the rest of the buffer
+ * can hold (the last one may carry fewer than 7 bytes), at least 1. */
+static uint8_t download_block_size(uint32_t pos)
 {
-    const uint32_t room = s->pos < sizeof s->buf ? (uint32_t)sizeof s->buf - s->pos : 0U;
+    const uint32_t room = pos < CO_SDO_BUF_SIZE ? CO_SDO_BUF_SIZE - pos : 0U;
     if (room >= BLK_SIZE_MAX * BLK_SEG_DATA) {
         return BLK_SIZE_MAX;
     }
@@ -41,72 +41,58 @@ static uint8_t download_block_size(const co_sdo_server_t *s)
     return (uint8_t)(segments == 0U ? 1U : segments);
 }
 
-static void start_transfer(co_sdo_server_t *s, uint8_t state, uint16_t index, uint8_t sub, co_time_us_t now)
-{
-    s->state = state;
-    s->index = index;
-    s->sub = sub;
-    s->pos = 0U;
-    s->seq = 0U;
-    s->deadline = co_time_after(now, CO_SDO_TIMEOUT_US);
-}
-
 /* Initiate block download (byte 0 0b110x_xcs0: c client CRC, s size indicated) or block upload (0b101x_xc00, byte 4
  * block size, byte 5 protocol switch threshold). The object checks come first, as for a segmented download. */
-void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
-                           const uint8_t *data)
+void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *data)
 {
     const bool client_crc = (cmd & 0x04U) != 0U;
     if ((cmd & 0xE0U) == 0xC0U) {
         const bool sized = (cmd & 0x02U) != 0U;
         const uint32_t size = sized ? co_get_u32(data) : 0U;
-        const uint32_t r = co_sdo_download_checks(node, index, sub, sized, size, true);
+        const uint32_t r = co_sdo_download_checks(node, s, sized, size, true);
         if (r != CO_ABORT_NONE) {
-            co_sdo_abort(node, s, index, sub, r);
+            co_sdo_abort(node, s, r);
             return;
         }
-        start_transfer(s, CO_SDO_BLK_DOWNLOAD, index, sub, node->now);
-        s->size = size;
+        co_sdo_start(s, CO_SDO_BLK_DOWNLOAD, size);
         s->crc = client_crc;
-        s->blksize = download_block_size(s);
-        const uint8_t answer[4] = {s->blksize, 0U, 0U, 0U};
-        co_sdo_respond(node, s, 0xA4U, index, sub, answer, 4U); /* server CRC support: always */
+        s->blksize = download_block_size(0U); /* a constant */
+        co_sdo_respond(node, s, 0xA4U, &s->blksize, 1U); /* server CRC support: always */
         return;
     }
     const uint8_t blksize = data[0];
     const uint8_t pst = data[1];
     if (blksize == 0U || blksize > BLK_SIZE_MAX) {
-        co_sdo_abort(node, s, index, sub, CO_ABORT_BLOCK_SIZE);
+        co_sdo_abort(node, s, CO_ABORT_BLOCK_SIZE);
         return;
     }
     size_t len;
-    if (!co_sdo_read_object(node, s, index, sub, &len)) {
+    if (!co_sdo_read_object(node, s, &len)) {
         return;
     }
     if (pst != 0U && len <= pst) {
-        co_sdo_upload_answer(node, s, index, sub, len); /* protocol switch: the client accepts an ordinary upload */
+        co_sdo_upload_answer(node, s, len); /* protocol switch: the client accepts an ordinary upload */
         return;
     }
-    start_transfer(s, CO_SDO_BLK_UPLOAD_START, index, sub, node->now);
-    s->size = (uint32_t)len;
+    co_sdo_start(s, CO_SDO_BLK_UPLOAD_START, (uint32_t)len);
     s->crc = client_crc;
     s->blksize = blksize;
     uint8_t size[4];
     co_put_u32(size, (uint32_t)len);
-    co_sdo_respond(node, s, 0xC6U, index, sub, size, 4U); /* server CRC support, size indicated */
+    co_sdo_respond(node, s, 0xC6U, size, 4U); /* server CRC support, size indicated */
 }
 
 static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *frame)
 {
     const uint8_t seqno = (uint8_t)(frame[0] & 0x7FU);
     if (seqno == 0U || seqno > s->blksize) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_SEQUENCE);
+        co_sdo_abort(node, s, CO_ABORT_SEQUENCE);
         return;
     }
     const bool in_order = seqno == s->seq + 1U;
     if (in_order) {
         if (s->pos >= sizeof s->buf) {
-            co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_OUT_OF_MEMORY);
+            co_sdo_abort(node, s, CO_ABORT_OUT_OF_MEMORY);
             return;
         }
         const uint32_t room = (uint32_t)sizeof s->buf - s->pos;
@@ -126,10 +112,10 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         s->state = CO_SDO_BLK_DOWNLOAD_END;
     } else {
         s->seq = 0U;
-        s->blksize = download_block_size(s);
+        s->blksize = download_block_size(s->pos);
     }
-    co_frame_t f = {s->tx_id, 8U, 0U, {0xA2U, ackseq, s->blksize, 0U, 0U, 0U, 0U, 0U}};
-    co_node_send(node, &f);
+    const uint8_t confirmation[2] = {ackseq, s->blksize};
+    co_sdo_send(node, s, 0xA2U, confirmation, 2U);
 }
 
 static void download_end(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *frame)
@@ -137,24 +123,10 @@ static void download_end(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const
     const uint32_t unused = (uint32_t)(cmd >> 2) & 0x07U;
     const uint32_t len = s->pos - unused; /* pos >= 7: the last segment was taken */
     if (len > sizeof s->buf) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_OUT_OF_MEMORY);
+        co_sdo_abort(node, s, CO_ABORT_OUT_OF_MEMORY);
         return;
     }
-    if (s->size != 0U && len != s->size) {
-        co_sdo_abort(node, s, s->index, s->sub, len > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
-        return;
-    }
-    if (s->crc && co_get_u16(&frame[1]) != block_crc(s->buf, len)) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_CRC);
-        return;
-    }
-    const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, (size_t)len, CO_ORIGIN_SDO);
-    if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, s, s->index, s->sub, r);
-        return;
-    }
-    s->state = CO_SDO_IDLE;
-    co_sdo_respond(node, s, 0xA1U, 0U, 0U, NULL, 0U);
+    co_sdo_download_end(node, s, len, !s->crc || co_get_u16(&frame[1]) == block_crc(s->buf, len), 0xA1U);
 }
 
 /* Bytes of the upload, counted in segments: an empty object still takes one segment (with 7 unused bytes). */
@@ -173,10 +145,8 @@ static void upload_send_block(co_node_t *node, co_sdo_server_t *s)
         const uint32_t offset = upload_end_of_block(s);
         const uint32_t left = s->size - offset;
         s->seq++;
-        co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
-        f.data[0] = (uint8_t)(s->seq | (left <= BLK_SEG_DATA ? BLK_LAST : 0U));
-        memcpy(&f.data[1], &s->buf[offset], (size_t)(left < BLK_SEG_DATA ? left : BLK_SEG_DATA));
-        co_node_send(node, &f);
+        co_sdo_send(node, s, (uint8_t)(s->seq | (left <= BLK_SEG_DATA ? BLK_LAST : 0U)), &s->buf[offset],
+                    (size_t)(left < BLK_SEG_DATA ? left : BLK_SEG_DATA));
     }
 }
 
@@ -188,21 +158,20 @@ static void upload_confirmation(co_node_t *node, co_sdo_server_t *s, const uint8
     const uint8_t ackseq = frame[1];
     const uint8_t blksize = frame[2];
     if (ackseq > s->seq) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_SEQUENCE);
+        co_sdo_abort(node, s, CO_ABORT_SEQUENCE);
         return;
     }
     if (blksize == 0U || blksize > BLK_SIZE_MAX) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_BLOCK_SIZE);
+        co_sdo_abort(node, s, CO_ABORT_BLOCK_SIZE);
         return;
     }
     const bool all_taken = ackseq == s->seq && upload_block_sent(s) && upload_end_of_block(s) >= s->size;
     if (all_taken) {
         const uint32_t unused = upload_end_of_block(s) - s->size;
-        co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
-        f.data[0] = (uint8_t)(0xC1U | (unused << 2));
-        co_put_u16(&f.data[1], s->crc ? block_crc(s->buf, s->size) : 0U);
+        uint8_t crc[2];
+        co_put_u16(crc, s->crc ? block_crc(s->buf, s->size) : 0U);
         s->state = CO_SDO_BLK_UPLOAD_END; /* before the frame: only segments go out in CO_SDO_BLK_UPLOAD */
-        co_node_send(node, &f);
+        co_sdo_send(node, s, (uint8_t)(0xC1U | (unused << 2)), crc, 2U);
         return;
     }
     s->pos += (uint32_t)ackseq * BLK_SEG_DATA;
@@ -211,35 +180,42 @@ static void upload_confirmation(co_node_t *node, co_sdo_server_t *s, const uint8
     upload_send_block(node, s);
 }
 
+/* The client's next step in each state from CO_SDO_BLK_DOWNLOAD_END on: its command byte without the bits that
+ * carry values (cmd & 0xE3). */
+static const uint8_t next_step[] = {
+    0xC1U, /* CO_SDO_BLK_DOWNLOAD_END: end request */
+    0xA3U, /* CO_SDO_BLK_UPLOAD_START: start request */
+    0xA2U, /* CO_SDO_BLK_UPLOAD: block confirmation */
+    0xA1U, /* CO_SDO_BLK_UPLOAD_END: end response */
+};
+
 bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 {
     const uint8_t cmd = f->data[0];
     const uint8_t state = s->state;
-    if (state == CO_SDO_BLK_DOWNLOAD) {
-        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
-        download_segment(node, s, f->data); /* every frame but an abort (0x80, handled before) is a segment */
-        return true;
+    /* In CO_SDO_BLK_DOWNLOAD every frame but an abort (0x80, handled before) is a segment. */
+    if (state != CO_SDO_BLK_DOWNLOAD && (cmd & 0xE3U) != next_step[state - CO_SDO_BLK_DOWNLOAD_END]) {
+        return false; /* not this transfer's next step: co_sdo_rx ends it and reads the frame as a new request */
     }
-    if (state == CO_SDO_BLK_DOWNLOAD_END && (cmd & 0xE3U) == 0xC1U) {
+    switch (state) {
+    case CO_SDO_BLK_DOWNLOAD:
+        download_segment(node, s, f->data);
+        break;
+    case CO_SDO_BLK_DOWNLOAD_END:
         download_end(node, s, cmd, f->data);
-        return true;
-    }
-    if (state == CO_SDO_BLK_UPLOAD_START && (cmd & 0xE3U) == 0xA3U) {
+        break;
+    case CO_SDO_BLK_UPLOAD_START:
         s->state = CO_SDO_BLK_UPLOAD;
-        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
         upload_send_block(node, s);
-        return true;
-    }
-    if (state == CO_SDO_BLK_UPLOAD && (cmd & 0xE3U) == 0xA2U) {
-        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
+        break;
+    case CO_SDO_BLK_UPLOAD:
         upload_confirmation(node, s, f->data);
-        return true;
-    }
-    if (state == CO_SDO_BLK_UPLOAD_END && (cmd & 0xE3U) == 0xA1U) {
+        break;
+    default:
         s->state = CO_SDO_IDLE; /* end response: the transfer is complete, nothing to answer */
-        return true;
+        break;
     }
-    return false; /* not this transfer's next step: co_sdo_rx ends it and reads the frame as a new request */
+    return true; /* co_sdo_rx restarts the timeout of a transfer still open */
 }
 
 co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s)

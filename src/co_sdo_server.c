@@ -10,27 +10,48 @@
 
 enum { SDO_IDLE = CO_SDO_IDLE, SDO_SEG_DOWNLOAD = CO_SDO_SEG_DOWNLOAD, SDO_SEG_UPLOAD = CO_SDO_SEG_UPLOAD };
 
-void co_sdo_respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
-                    const uint8_t *data, size_t len)
+/* Whether a transfer can stay open after a request: with expedited transfer alone a server is always idle. */
+#define SDO_TRANSFERS (CO_CONFIG_SDO_SEGMENTED || CO_CONFIG_SDO_BLOCK)
+
+void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len)
 {
     co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
     f.data[0] = cmd;
-    co_put_u16(&f.data[1], index);
-    f.data[3] = sub;
+    if (data != NULL) {
+        memcpy(&f.data[1], data, len);
+    }
+    co_node_send(node, &f);
+}
+
+void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len)
+{
+    co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
+    f.data[0] = cmd;
+    co_put_u16(&f.data[1], s->index);
+    f.data[3] = s->sub;
     if (data != NULL) {
         memcpy(&f.data[4], data, len);
     }
     co_node_send(node, &f);
 }
 
-void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, uint32_t code)
+void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint32_t code)
 {
     uint8_t d[4];
     co_put_u32(d, code);
     s->state = SDO_IDLE; /* before the frame goes out: the port sees no transfer open behind an abort */
-    co_sdo_respond(node, s, 0x80U, index, sub, d, 4U);
+    co_sdo_respond(node, s, 0x80U, d, 4U);
     node->stats.sdo_aborts++;
-    co_node_event(node, CO_EV_SDO_ABORT, index, sub, 0U, code);
+    co_node_event(node, CO_EV_SDO_ABORT, s->index, s->sub, 0U, code);
+}
+
+void co_sdo_start(co_sdo_server_t *s, uint8_t state, uint32_t size)
+{
+    s->state = state;
+    s->size = size;
+    s->pos = 0U;
+    s->toggle = 0U;
+    s->seq = 0U;
 }
 
 static bool segmented_enabled(const co_node_t *node)
@@ -43,46 +64,40 @@ static bool segmented_enabled(const co_node_t *node)
 #endif
 }
 
-static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
-                               const uint8_t *data)
+static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *data)
 {
     co_od_entry_t one;
-    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
-    uint32_t r = e != NULL ? CO_ABORT_NONE : co_od_missing(node->od, index);
-    size_t len = 4U;
-    if ((cmd & 0x01U) != 0U) {
-        len = 4U - ((cmd >> 2) & 0x03U);
-    } else if (e != NULL) {
-        /* Size not indicated (0x22): the object's own size, as the Eltex masters rely on (decisions.md). */
-        const uint16_t size = co_od_type_size(e->type);
-        len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
-        if (len > 4U) {
-            co_sdo_abort(node, s, index, sub, CO_ABORT_LENGTH_HIGH);
-            return;
+    const co_od_entry_t *e = co_od_find(node->od, s->index, s->sub, &one);
+    uint32_t r;
+    if (e == NULL) {
+        r = co_od_missing(node->od, s->index);
+    } else {
+        size_t len = 4U - ((cmd >> 2) & 0x03U);
+        if ((cmd & 0x01U) == 0U) {
+            /* Size not indicated (0x22): the object's own size, as the Eltex masters rely on (decisions.md). */
+            const uint16_t size = co_od_type_size(e->type);
+            len = size != 0U ? size : (e->size < 4U ? e->size : 4U);
         }
-    }
-    if (r == CO_ABORT_NONE) {
-        r = co_od_write_entry(node, e, data, len, CO_ORIGIN_SDO);
+        r = len > 4U ? CO_ABORT_LENGTH_HIGH : co_od_write_entry(node, e, data, len, CO_ORIGIN_SDO);
     }
     if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, s, index, sub, r);
+        co_sdo_abort(node, s, r);
         return;
     }
-    co_sdo_respond(node, s, 0x60U, index, sub, NULL, 0U);
+    co_sdo_respond(node, s, 0x60U, NULL, 0U);
 }
 
-/* Reads the object into the transfer buffer. False (and the abort sent) when it cannot be read. */
-bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t *len)
+/* Reads the object of the request into the transfer buffer. False (and the abort sent) when it cannot be read. */
+bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, size_t *len)
 {
     *len = 0U;
-    const uint32_t r = co_od_read(node, index, sub, s->buf, sizeof s->buf, len, CO_ORIGIN_SDO);
+    uint32_t r = co_od_read(node, s->index, s->sub, s->buf, sizeof s->buf, len, CO_ORIGIN_SDO);
     if (r == CO_ABORT_LENGTH_HIGH) { /* larger than any transfer buffer */
         const bool large_transfers = segmented_enabled(node) || (node->options & CO_OPT_SDO_BLOCK) != 0U;
-        co_sdo_abort(node, s, index, sub, large_transfers ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_UNSUPPORTED_ACCESS);
-        return false;
+        r = large_transfers ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
     if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, s, index, sub, r);
+        co_sdo_abort(node, s, r);
         return false;
     }
     return true;
@@ -90,44 +105,35 @@ bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, uint16_t index, uin
 
 /* The answer to an upload initiate for len bytes read into the buffer: expedited, or the start of a segmented
  * upload. Also the protocol switch of a block upload initiate (CiA 301 §7.2.4.3.13). */
-void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t len)
+void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, size_t len)
 {
-    const uint8_t *buf = s->buf;
-    if (len >= 1U && len <= 4U) {
-        co_sdo_respond(node, s, (uint8_t)(0x43U | ((4U - len) << 2)), index, sub, buf, len);
+    const bool segmented = segmented_enabled(node);
+    if (len <= 4U && (len != 0U || !segmented)) {
+        /* An empty string without segmented transfer: one NUL byte, the shortest expedited answer (0x4F). */
+        const size_t shown = len != 0U ? len : 1U;
+        co_sdo_respond(node, s, (uint8_t)(0x43U | ((4U - shown) << 2)), s->buf, len);
         return;
     }
-    if (!segmented_enabled(node)) {
-        if (len == 0U) { /* an empty string: one NUL byte is the shortest expedited answer */
-            const uint8_t nul = 0U;
-            co_sdo_respond(node, s, 0x4FU, index, sub, &nul, 1U);
-            return;
-        }
-        co_sdo_abort(node, s, index, sub, CO_ABORT_UNSUPPORTED_ACCESS); /* > 4 bytes need segmented transfer */
+    if (!segmented) {
+        co_sdo_abort(node, s, CO_ABORT_UNSUPPORTED_ACCESS); /* > 4 bytes need segmented transfer */
         return;
     }
     uint8_t size[4];
     co_put_u32(size, (uint32_t)len);
-    co_sdo_respond(node, s, 0x41U, index, sub, size, 4U);
-    s->state = SDO_SEG_UPLOAD;
-    s->index = index;
-    s->sub = sub;
-    s->size = (uint32_t)len;
-    s->pos = 0U;
-    s->toggle = 0U;
-    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
+    co_sdo_respond(node, s, 0x41U, size, 4U);
+    co_sdo_start(s, SDO_SEG_UPLOAD, (uint32_t)len);
 }
 
 /* The checks of a segmented or block download initiate before the transfer (the object's existence, access and
  * the size indicated, if sized), also where the transfer type is off: they come first, so a missing object answers
  * 0x06020000 rather than 0x06010000 (docs/decisions.md). staged: the transfer goes through the SDO buffer, which
  * the object must fit (0x05040005). 0 or the abort code. */
-uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size,
+uint32_t co_sdo_download_checks(const co_node_t *node, const co_sdo_server_t *s, bool sized, uint32_t size,
                                 bool staged)
 {
-    const co_od_entry_t *e = co_od_find_row(node->od, index, sub); /* flags and size are the sub-index's */
+    const co_od_entry_t *e = co_od_find_row(node->od, s->index, s->sub); /* flags and size are the sub-index's */
     if (e == NULL) {
-        return co_od_has_index(node->od, index) ? CO_ABORT_NO_SUBINDEX : CO_ABORT_NO_OBJECT;
+        return co_od_missing(node->od, s->index);
     }
     if ((e->flags & CO_OD_WRITE) == 0U || (e->flags & CO_OD_CONST) != 0U) {
         return (e->flags & CO_OD_READ) != 0U ? CO_ABORT_READ_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
@@ -138,89 +144,63 @@ uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t s
     return (staged && e->size > CO_SDO_BUF_SIZE) ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_NONE;
 }
 
-#if CO_CONFIG_SDO_SEGMENTED
-/* After co_sdo_download_checks passed (staged). */
-static void download_initiate_segmented(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
-                                        const uint8_t *data)
+/* The end of a segmented or block download with len bytes in the buffer: against the size indicated (if any), then
+ * crc_ok (a block download's CRC), then the write. The transfer is over either way. */
+void co_sdo_download_end(co_node_t *node, co_sdo_server_t *s, uint32_t len, bool crc_ok, uint8_t answer)
 {
-    const uint32_t size = (cmd & 0x01U) != 0U ? co_get_u32(data) : 0U;
-    s->state = SDO_SEG_DOWNLOAD;
-    s->index = index;
-    s->sub = sub;
-    s->size = size;
-    s->pos = 0U;
-    s->toggle = 0U;
-    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
-    co_sdo_respond(node, s, 0x60U, index, sub, NULL, 0U);
-}
-
-static void download_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *seg)
-{
-    const uint8_t toggle = (uint8_t)((cmd >> 4) & 1U);
-    if (toggle != s->toggle) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_TOGGLE);
+    uint32_t r;
+    if (s->size != 0U && len != s->size) {
+        r = len > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW;
+    } else if (!crc_ok) {
+        r = CO_ABORT_CRC;
+    } else {
+        r = co_od_write(node, s->index, s->sub, s->buf, (size_t)len, CO_ORIGIN_SDO);
+    }
+    if (r != CO_ABORT_NONE) {
+        co_sdo_abort(node, s, r);
         return;
     }
+    s->state = SDO_IDLE;
+    co_sdo_send(node, s, answer, NULL, 0U);
+}
+
+#if CO_CONFIG_SDO_SEGMENTED
+/* A segment of the transfer, its toggle bit checked and taken (cmd & 0x10). */
+static void download_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *seg)
+{
     const uint32_t n = 7U - ((cmd >> 1) & 0x07U);
     if (s->pos + n > sizeof s->buf) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_LENGTH_HIGH);
+        co_sdo_abort(node, s, CO_ABORT_LENGTH_HIGH);
         return;
     }
     memcpy(&s->buf[s->pos], seg, (size_t)n);
     s->pos += n;
-    s->toggle ^= 1U;
-    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
+    const uint8_t answer = (uint8_t)(0x20U | (cmd & 0x10U));
     if ((cmd & 0x01U) == 0U) {
-        co_sdo_respond(node, s, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
+        co_sdo_send(node, s, answer, NULL, 0U);
         return;
     }
-    if (s->size != 0U && s->pos != s->size) {
-        co_sdo_abort(node, s, s->index, s->sub, s->pos > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW);
-        return;
-    }
-    const uint32_t r = co_od_write(node, s->index, s->sub, s->buf, (size_t)s->pos, CO_ORIGIN_SDO);
-    if (r != CO_ABORT_NONE) {
-        co_sdo_abort(node, s, s->index, s->sub, r);
-        return;
-    }
-    s->state = SDO_IDLE;
-    co_sdo_respond(node, s, (uint8_t)(0x20U | ((uint32_t)toggle << 4)), 0U, 0U, NULL, 0U);
+    co_sdo_download_end(node, s, s->pos, true, answer);
 }
 
 static void upload_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd)
 {
-    const uint8_t toggle = (uint8_t)((cmd >> 4) & 1U);
-    if (toggle != s->toggle) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_TOGGLE);
-        return;
-    }
     const uint32_t left = s->size - s->pos;
     const uint32_t n = left < 7U ? left : 7U;
     const bool last = s->pos + n >= s->size;
-    co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
-    f.data[0] = (uint8_t)(((uint32_t)toggle << 4) | ((7U - n) << 1) | (last ? 1U : 0U));
-    memcpy(&f.data[1], &s->buf[s->pos], (size_t)n);
-    co_node_send(node, &f);
+    const uint8_t answer = (uint8_t)((cmd & 0x10U) | ((7U - n) << 1) | (last ? 1U : 0U));
+    co_sdo_send(node, s, answer, &s->buf[s->pos], (size_t)n);
     s->pos += n;
-    s->toggle ^= 1U;
-    s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US);
     if (last) {
         s->state = SDO_IDLE;
     }
 }
 #endif /* CO_CONFIG_SDO_SEGMENTED */
 
-void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
+/* A request: the next frame of the transfer in progress, or a new request, which ends any transfer in progress. */
+static void serve(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 {
-    if (f->len != 8U) {
-        return; /* not an SDO frame: ignored */
-    }
-    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
-        return; /* SDO is silent in Stopped */
-    }
     const uint8_t cmd = f->data[0];
-    const uint16_t index = co_get_u16(&f->data[1]);
-    const uint8_t sub = f->data[3];
     if (cmd == 0x80U) {
         s->state = SDO_IDLE; /* client abort: no answer */
         return;
@@ -231,36 +211,47 @@ void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
     }
 #endif
 #if CO_CONFIG_SDO_SEGMENTED
-    if (s->state == SDO_SEG_DOWNLOAD && (cmd & 0xE0U) == 0x00U) {
-        download_segment(node, s, cmd, &f->data[1]);
-        return;
-    }
-    if (s->state == SDO_SEG_UPLOAD && (cmd & 0xEFU) == 0x60U) {
-        upload_segment(node, s, cmd);
+    const bool download = s->state == SDO_SEG_DOWNLOAD && (cmd & 0xE0U) == 0x00U;
+    if (download || (s->state == SDO_SEG_UPLOAD && (cmd & 0xEFU) == 0x60U)) {
+        if (((cmd >> 4) & 1U) != s->toggle) {
+            co_sdo_abort(node, s, CO_ABORT_TOGGLE);
+            return;
+        }
+        s->toggle ^= 1U;
+        if (download) {
+            download_segment(node, s, cmd, &f->data[1]);
+        } else {
+            upload_segment(node, s, cmd);
+        }
         return;
     }
 #endif
     s->state = SDO_IDLE; /* a new initiate (or garbage) ends any transfer in progress */
+    s->index = co_get_u16(&f->data[1]);
+    s->sub = f->data[3];
     if ((cmd & 0xF0U) == 0x20U) {
         if ((cmd & 0x02U) != 0U) {
-            download_expedited(node, s, cmd, index, sub, &f->data[4]);
+            download_expedited(node, s, cmd, &f->data[4]);
             return;
         }
-        const uint32_t r = co_sdo_download_checks(node, index, sub, (cmd & 0x01U) != 0U, co_get_u32(&f->data[4]),
-                                                  segmented_enabled(node));
-        if (r != CO_ABORT_NONE || !segmented_enabled(node)) {
-            co_sdo_abort(node, s, index, sub, r != CO_ABORT_NONE ? r : CO_ABORT_UNSUPPORTED_ACCESS);
-        } else {
-#if CO_CONFIG_SDO_SEGMENTED
-            download_initiate_segmented(node, s, cmd, index, sub, &f->data[4]);
-#endif
+        const bool segmented = segmented_enabled(node);
+        const uint32_t size = (cmd & 0x01U) != 0U ? co_get_u32(&f->data[4]) : 0U;
+        uint32_t r = co_sdo_download_checks(node, s, (cmd & 0x01U) != 0U, size, segmented);
+        if (r == CO_ABORT_NONE && !segmented) {
+            r = CO_ABORT_UNSUPPORTED_ACCESS;
         }
+        if (r != CO_ABORT_NONE) {
+            co_sdo_abort(node, s, r);
+            return;
+        }
+        co_sdo_start(s, SDO_SEG_DOWNLOAD, size);
+        co_sdo_respond(node, s, 0x60U, NULL, 0U);
         return;
     }
     if (cmd == 0x40U) {
         size_t len;
-        if (co_sdo_read_object(node, s, index, sub, &len)) {
-            co_sdo_upload_answer(node, s, index, sub, len);
+        if (co_sdo_read_object(node, s, &len)) {
+            co_sdo_upload_answer(node, s, len);
         }
         return;
     }
@@ -269,21 +260,36 @@ void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
     const bool block_initiate = (ccs == 5U && (cmd & 0x03U) == 0U) || (ccs == 6U && (cmd & 0x01U) == 0U);
 #if CO_CONFIG_SDO_BLOCK
     if (block_initiate && (node->options & CO_OPT_SDO_BLOCK) != 0U) {
-        co_sdo_block_initiate(node, s, cmd, index, sub, &f->data[4]);
+        co_sdo_block_initiate(node, s, cmd, &f->data[4]);
         return;
     }
 #endif
     if (ccs == 0U || ccs == 3U || ((ccs == 5U || ccs == 6U) && !block_initiate)) {
         /* A segment, or a block sub-command, with no transfer open: its bytes 1..3 are no multiplexer to echo. */
-        co_sdo_abort(node, s, 0U, 0U, CO_ABORT_COMMAND);
-        return;
+        s->index = 0U;
+        s->sub = 0U;
     }
-    co_sdo_abort(node, s, index, sub, CO_ABORT_COMMAND); /* block transfer switched off, unknown commands */
+    co_sdo_abort(node, s, CO_ABORT_COMMAND); /* block transfer switched off, unknown commands */
+}
+
+void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
+{
+    if (f->len != 8U) {
+        return; /* not an SDO frame: ignored */
+    }
+    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
+        return; /* SDO is silent in Stopped */
+    }
+    serve(node, s, f);
+    if (SDO_TRANSFERS && s->state != SDO_IDLE) {
+        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US); /* the client's last frame starts the timeout */
+        co_node_wake(node, CO_SVC_SDO); /* the pass takes the deadline, and sends the segments of a block */
+    }
 }
 
 static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)
 {
-    if (s->state == SDO_IDLE) {
+    if (!SDO_TRANSFERS || s->state == SDO_IDLE) {
         return CO_NEVER;
     }
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
@@ -291,7 +297,7 @@ static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)
         return CO_NEVER;
     }
     if (co_time_reached(node->now, s->deadline)) {
-        co_sdo_abort(node, s, s->index, s->sub, CO_ABORT_TIMEOUT);
+        co_sdo_abort(node, s, CO_ABORT_TIMEOUT);
         return CO_NEVER;
     }
 #if CO_CONFIG_SDO_BLOCK

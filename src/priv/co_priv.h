@@ -268,16 +268,23 @@ co_time_us_t co_sdo_process(co_node_t *node);
 uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
 void co_sdo_written(co_node_t *node, const co_od_entry_t *e);
 #endif
-void co_sdo_respond(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
-                    const uint8_t *data, size_t len);
-void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, uint32_t code);
-uint32_t co_sdo_download_checks(const co_node_t *node, uint16_t index, uint8_t sub, bool sized, uint32_t size,
+/* The transfer's object (s->index, s->sub) is the request's from its initiate on, or 0 and 0 (a segment with no
+ * transfer open). A response to the client: cmd, the object's multiplexer, then len <= 4 bytes of data (NULL:
+ * zeros). */
+void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len);
+/* A frame of a transfer without multiplexer: cmd, then len <= 7 bytes of data (NULL: zeros). */
+void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len);
+/* Ends the transfer with an abort of its object. */
+void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint32_t code);
+/* Starts a transfer of the request's object (co_sdo_rx then starts its timeout). */
+void co_sdo_start(co_sdo_server_t *s, uint8_t state, uint32_t size);
+uint32_t co_sdo_download_checks(const co_node_t *node, const co_sdo_server_t *s, bool sized, uint32_t size,
                                 bool staged);
-bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t *len);
-void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, uint16_t index, uint8_t sub, size_t len);
+void co_sdo_download_end(co_node_t *node, co_sdo_server_t *s, uint32_t len, bool crc_ok, uint8_t answer);
+bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, size_t *len);
+void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, size_t len);
 #if CO_CONFIG_SDO_BLOCK
-void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, uint16_t index, uint8_t sub,
-                           const uint8_t *data);
+void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *data);
 bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
 co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s);
 #endif

@@ -157,6 +157,33 @@ static void stopped_node_drops_an_open_transfer_silently(void)
     TEST_ASSERT_EQUAL_STRING("test node", fx.values.x2005_description);
 }
 
+/* The server keeps the object of the transfer; a request that ends it is answered with its own multiplexer. */
+static void a_request_during_a_transfer_has_its_own_multiplexer(void)
+{
+    SDO(0x21, 0x05, 0x20, 0x00, 16, 0, 0, 0);
+    SDO(0xE0, 0x18, 0x10, 0x01, 0, 0, 0, 0); /* unknown command */
+    EXPECT(0x80, 0x18, 0x10, 0x01, 0x01, 0x00, 0x04, 0x05);
+    SDO(0x00, 's', 'e', 'g', 'm', 'e', 'n', 't'); /* the transfer is over */
+    EXPECT(0x80, 0x00, 0x00, 0x00, 0x01, 0x00, 0x04, 0x05);
+    SDO(0x40, 0x09, 0x10, 0x00, 0, 0, 0, 0);
+    SDO(0x60, 0, 0, 0, 0, 0, 0, 0);
+    SDO(0x21, 0x05, 0x20, 0x00, 16, 0, 0, 0); /* a download initiate in the middle of an upload */
+    EXPECT(0x60, 0x05, 0x20, 0x00, 0, 0, 0, 0);
+    fx_advance(CO_SDO_TIMEOUT_US);
+    EXPECT(0x80, 0x05, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05); /* the timeout names the new transfer's object */
+}
+
+/* A frame that is no SDO request (DLC other than 8) is ignored: it does not restart the timeout either. */
+static void a_short_frame_does_not_restart_the_timeout(void)
+{
+    SDO(0x21, 0x05, 0x20, 0x00, 16, 0, 0, 0);
+    fx_advance(CO_SDO_TIMEOUT_US / 2U);
+    RX(0x605, 0x00, 's', 'e', 'g', 'm', 'e', 'n'); /* 7 bytes */
+    TEST_ASSERT_EQUAL_UINT32(1U, fx.port.n_sent);
+    fx_advance(CO_SDO_TIMEOUT_US / 2U);
+    EXPECT(0x80, 0x05, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -171,5 +198,7 @@ int main(void)
     RUN_TEST(device_refusal_at_the_end);
     RUN_TEST(client_abort_and_new_initiate_end_a_transfer);
     RUN_TEST(stopped_node_drops_an_open_transfer_silently);
+    RUN_TEST(a_request_during_a_transfer_has_its_own_multiplexer);
+    RUN_TEST(a_short_frame_does_not_restart_the_timeout);
     return UNITY_END();
 }
