@@ -28,7 +28,7 @@ uint32_t co_crc32(uint32_t crc, const uint8_t *data, size_t len)
     crc = ~crc;
     for (size_t i = 0U; i < len; i++) {
         crc ^= data[i];
-        for (uint8_t b = 0U; b < 8U; b++) {
+        for (unsigned b = 0U; b < 8U; b++) {
             crc = (crc >> 1) ^ (0xEDB88320UL & (0U - (crc & 1U)));
         }
     }
@@ -89,43 +89,41 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
     return CO_NVM_LOADED;
 }
 
-/* Sequential reader of the stored records. */
+#define READER_END UINT32_MAX /* the key past the last record: above every index << 8 | sub */
+
+/* Sequential reader of the stored records. A record is kept as stored, head and value in one buffer: a save
+ * copies it with one write. */
 typedef struct record_reader {
     co_node_t *node;
     uint32_t pos;
     uint32_t end;
-    uint16_t index;
-    uint8_t sub;
-    uint8_t len;
-    uint8_t value[255];
-    bool valid;
+    uint32_t key; /* index << 8 | sub of the record in rec; READER_END: none (the end, or a record cut short) */
+    uint8_t rec[RECORD_HEAD + 255U];
 } record_reader_t;
 
 static void reader_next(record_reader_t *r)
 {
-    uint8_t head[RECORD_HEAD];
-    r->valid = false;
+    uint8_t *rec = r->rec;
+    r->key = READER_END;
     if (r->pos + RECORD_HEAD > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos, head, RECORD_HEAD) != CO_OK) {
+        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos, rec, RECORD_HEAD) != CO_OK) {
         return;
     }
-    r->index = co_get_u16(head);
-    r->sub = head[2];
-    r->len = head[3];
-    if (r->pos + RECORD_HEAD + r->len > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos + RECORD_HEAD, r->value,
-                                r->len) != CO_OK) {
+    const uint32_t size = RECORD_HEAD + (uint32_t)rec[3];
+    if (r->pos + size > r->end ||
+        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos + RECORD_HEAD,
+                                &rec[RECORD_HEAD], rec[3]) != CO_OK) {
         return;
     }
-    r->pos += RECORD_HEAD + r->len;
-    r->valid = true;
+    r->pos += size;
+    r->key = ((uint32_t)co_get_u16(rec) << 8) | rec[2];
 }
 
 static co_nvm_status_t reader_open(record_reader_t *r, co_node_t *node)
 {
     r->node = node;
     r->pos = 0U;
-    r->valid = false;
+    r->key = READER_END;
     const co_nvm_status_t st = params_check(node, &r->end);
     if (st == CO_NVM_LOADED) {
         reader_next(r);
@@ -137,10 +135,10 @@ static co_nvm_status_t reader_open(record_reader_t *r, co_node_t *node)
 static bool reader_seek(record_reader_t *r, uint16_t index, uint8_t sub)
 {
     const uint32_t key = ((uint32_t)index << 8) | sub;
-    while (r->valid && (((uint32_t)r->index << 8) | r->sub) < key) {
+    while (r->key < key) {
         reader_next(r);
     }
-    return r->valid && r->index == index && r->sub == sub;
+    return r->key == key;
 }
 
 /* Loads the records of [first, last] in index order, each checked as a write of it would be (co_od_check_stored:
@@ -153,20 +151,23 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     record_reader_t local;
     node->nvm_status = reader_open(&local, node);
-    for (; local.valid; reader_next(&local)) {
-        if (local.index < first || local.index > last) {
+    for (; local.key != READER_END; reader_next(&local)) {
+        const uint16_t index = (uint16_t)(local.key >> 8);
+        const uint8_t len = local.rec[3];
+        const uint8_t *value = &local.rec[RECORD_HEAD];
+        if (index < first || index > last) {
             continue;
         }
         co_od_entry_t one;
-        const co_od_entry_t *e = co_od_find(node->od, local.index, local.sub, &one);
+        const co_od_entry_t *e = co_od_find(node->od, index, (uint8_t)local.key, &one);
         if (e == NULL || (e->flags & CO_OD_STORE) == 0U) {
             continue;
         }
         const uint16_t fixed = co_od_type_size(e->type);
-        if ((fixed != 0U && local.len != fixed) || local.len > e->size) {
+        if ((fixed != 0U && len != fixed) || len > e->size) {
             continue;
         }
-        const uint32_t r = co_od_check_stored(node, e, local.value, local.len);
+        const uint32_t r = co_od_check_stored(node, e, value, len);
         if (r == CO_ABORT_NO_SUBINDEX) {
             /* The device says this node has no such sub-index (a PRO IONIZER variant hides rows of others): skipped
              * like a row the OD lacks. A save writes every stored row, so refusing here refused every save of such
@@ -179,22 +180,16 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
             node->nvm_status = CO_NVM_REFUSED;
             return;
         }
-        co_od_store_value(node, e, local.value, local.len);
+        co_od_store_value(node, e, value, len);
     }
 }
 
+/* The groups of 0x1010/0x1011 sub 2..4 as sets of the index's top hex digit: 2 = 0x1000-0x1FFF, 3 = 0x6000-0x9FFF,
+ * 4 = 0x2000-0x5FFF; sub 1 and others: every index. */
 static bool in_group(uint8_t sub, uint16_t index)
 {
-    switch (sub) {
-    case 2:
-        return index >= 0x1000U && index <= 0x1FFFU;
-    case 3:
-        return index >= 0x6000U && index <= 0x9FFFU;
-    case 4:
-        return index >= 0x2000U && index <= 0x5FFFU;
-    default:
-        return true;
-    }
+    static const uint16_t top_digits[3] = {0x0002U, 0x03C0U, 0x003CU};
+    return sub < 2U || sub > 4U || ((top_digits[sub - 2U] >> (index >> 12)) & 1U) != 0U;
 }
 
 /* Streams records to the staging area and keeps the running CRC. */
@@ -205,21 +200,14 @@ typedef struct blob_writer {
     bool ok;
 } blob_writer_t;
 
-static void writer_put(blob_writer_t *w, uint16_t index, uint8_t sub, const uint8_t *value, uint8_t len)
+/* Appends a record: head and value in one buffer, as record_reader_t.rec holds it. */
+static void writer_put(blob_writer_t *w, const uint8_t *rec)
 {
-    uint8_t head[RECORD_HEAD];
-    co_put_u16(head, index);
-    head[2] = sub;
-    head[3] = len;
-    if (!w->ok) {
-        return;
-    }
-    w->ok = w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, head, RECORD_HEAD) == CO_OK &&
-            w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos + RECORD_HEAD, value, len) ==
-                CO_OK;
-    w->crc = co_crc32(w->crc, head, RECORD_HEAD);
-    w->crc = co_crc32(w->crc, value, len);
-    w->pos += RECORD_HEAD + (uint32_t)len;
+    const uint32_t size = RECORD_HEAD + (uint32_t)rec[3];
+    w->ok = w->ok &&
+            w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, rec, size) == CO_OK;
+    w->crc = co_crc32(w->crc, rec, size);
+    w->pos += size;
 }
 
 /* True when a row holds its node-ID-relative default: not stored, so a new node-ID moves it along. While the node-ID
@@ -286,10 +274,12 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
             co_od_entry_t one;
             const co_od_entry_t *e = co_od_entry_at(row, k, &one);
             const bool stored = reader_seek(&old, e->index, e->sub);
-            if (save && in_group(group, e->index)) {
+            const bool grouped = in_group(group, e->index);
+            if (save && grouped) {
                 if (!at_relative_default(node, e)) {
-                    uint8_t value[255];
-                    const size_t n = co_od_sample(node, e, value, sizeof value);
+                    uint8_t rec[RECORD_HEAD + 255U];
+                    uint8_t *value = &rec[RECORD_HEAD];
+                    const size_t n = co_od_sample(node, e, value, 255U);
                     /* As the load will check it (a sub-index the node hides is skipped there); a check that
                      * depends on another stored value sees the present one here, the loaded one there: the same
                      * for every value saved before it in index order. */
@@ -299,10 +289,13 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
                         (void)commit_store(node, CO_NVM_PARAMS, 0U, false);
                         return CO_ERR_RANGE;
                     }
-                    writer_put(&w, e->index, e->sub, value, (uint8_t)n);
+                    co_put_u16(rec, e->index);
+                    rec[2] = e->sub;
+                    rec[3] = (uint8_t)n;
+                    writer_put(&w, rec);
                 }
-            } else if (stored && (save || !in_group(group, e->index) || (e->flags & CO_OD_KEEP) != 0U)) {
-                writer_put(&w, e->index, e->sub, old.value, old.len);
+            } else if (stored && (save || !grouped || (e->flags & CO_OD_KEEP) != 0U)) {
+                writer_put(&w, old.rec);
             }
         }
     }
@@ -372,12 +365,11 @@ co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bi
         return CO_NVM_CORRUPT;
     }
     /* A valid CRC over values this node never writes is not ours: a node-ID out of range, "unconfigured" where LSS
-     * may not unconfigure, a bit timing outside the table or not in the device's (co_lss_set_pending_bit_timing
-     * refuses it). Loaded, a Buerkert showed them in its stored 0x2001:01/02, and the next load of its parameters
-     * refused them, and so every value saved (found by tests/fuzz/target_nvm_file.c). */
-    const bool unconfigured_ok = (node->options & CO_OPT_LSS_NO_UNCONFIGURE) == 0U;
-    if (((b[4] < 1U || b[4] > 127U) && (b[4] != CO_NODE_ID_UNCONFIGURED || !unconfigured_ok)) ||
-        b[5] >= CO_LSS_BIT_TIMING_COUNT || node->bit_rates_kbit[b[5]] == 0U) {
+     * may not unconfigure, a bit timing outside the table or not in the device's: what LSS configure refuses.
+     * Loaded, a Buerkert showed them in its stored 0x2001:01/02, and the next load of its parameters refused them,
+     * and so every value saved (found by tests/fuzz/target_nvm_file.c). The checks are LSS's own setters: the
+     * pending values they set are the ones co_lss_init sets after this load (the node's node-ID and bit timing). */
+    if (!co_lss_set_pending_node_id(node, b[4]) || !co_lss_set_pending_bit_timing(node, b[5])) {
         return CO_NVM_CORRUPT;
     }
     *node_id = b[4];
