@@ -149,10 +149,9 @@ static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
 }
 
 #if CO_CONFIG_LSS_FASTSCAN
-static void fastscan(co_node_t *node, const uint8_t *d)
+static void fastscan(co_node_t *node, const uint8_t *d, uint32_t id_number)
 {
     co_lss_slave_t *l = &node->lss;
-    const uint32_t id_number = co_get_u32(&d[1]);
     const uint8_t bit_checked = d[5];
     const uint8_t lss_sub = d[6];
     const uint8_t lss_next = d[7];
@@ -161,25 +160,25 @@ static void fastscan(co_node_t *node, const uint8_t *d)
         return;
     }
     if (bit_checked == 0x80U) {
-        l->fastscan_pos = 0U;
-        reply(node, 0x4FU, 0U);
-        return;
-    }
-    if (bit_checked > 31U || lss_sub > 3U || lss_next > 3U || lss_sub != l->fastscan_pos) {
-        return;
-    }
-    const uint32_t mask = (uint32_t)(UINT32_MAX << bit_checked);
-    if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
-        return;
-    }
-    reply(node, 0x4FU, 0U);
-    if (bit_checked == 0U) {
-        l->fastscan_pos = lss_next;
-        if (lss_next < lss_sub) {
-            l->state = LSS_CONFIGURATION; /* all four numbers matched */
-            l->fastscan_pos = 0U;
+        l->fastscan_pos = 0U; /* a new scan: every slave taking part answers */
+    } else {
+        /* lss_sub is checked by its equality with fastscan_pos, which is never above 3 */
+        if (bit_checked > 31U || lss_next > 3U || lss_sub != l->fastscan_pos) {
+            return;
+        }
+        const uint32_t mask = (uint32_t)(UINT32_MAX << bit_checked);
+        if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
+            return;
+        }
+        if (bit_checked == 0U) {
+            l->fastscan_pos = lss_next;
+            if (lss_next < lss_sub) {
+                l->state = LSS_CONFIGURATION; /* all four numbers matched */
+                l->fastscan_pos = 0U;
+            }
         }
     }
+    reply(node, 0x4FU, 0U);
 }
 #endif
 
@@ -252,7 +251,7 @@ void co_lss_rx(co_node_t *node, const co_frame_t *f)
         }
 #if CO_CONFIG_LSS_FASTSCAN
     } else if (cs == 0x51U) {
-        fastscan(node, f->data);
+        fastscan(node, f->data, v);
 #endif
     } else if (node->lss.state == LSS_CONFIGURATION) {
         configure(node, cs, f->data);
