@@ -41,13 +41,20 @@ static bool have_write(const co_node_t *node)
     return node->port->nvm_write != NULL && node->port->nvm_commit != NULL;
 }
 
-/* A read of a blob's header failed with st: nothing is stored (CO_ERR_NO_DATA and not even one byte there), or
- * a blob shorter than its header is (a port that can tell answers other than CO_ERR_NO_DATA, e.g. for an
- * empty file; one that cannot is asked for a single byte). */
-static co_nvm_status_t short_blob(co_node_t *node, co_nvm_area_t area, co_status_t st)
+/* Reads the first len bytes of an area's blob (its header): CO_NVM_LOADED when they are there. Otherwise nothing is
+ * stored (no storage, or CO_ERR_NO_DATA and not even one byte there), or the blob is shorter than its header (a
+ * port that can tell answers other than CO_ERR_NO_DATA, e.g. for an empty file; one that cannot is asked for a
+ * single byte). */
+static co_nvm_status_t read_header(co_node_t *node, co_nvm_area_t area, uint8_t *h, size_t len)
 {
-    uint8_t b;
-    if (st != CO_ERR_NO_DATA || node->port->nvm_read(node->port_ctx, area, 0U, &b, 1U) == CO_OK) {
+    if (!have_read(node)) {
+        return CO_NVM_NONE;
+    }
+    const co_status_t st = node->port->nvm_read(node->port_ctx, area, 0U, h, len);
+    if (st == CO_OK) {
+        return CO_NVM_LOADED;
+    }
+    if (st != CO_ERR_NO_DATA || node->port->nvm_read(node->port_ctx, area, 0U, h, 1U) == CO_OK) {
         return CO_NVM_CORRUPT;
     }
     return CO_NVM_NONE;
@@ -58,12 +65,9 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
 {
     uint8_t h[HEADER_LEN];
     *len = 0U;
-    if (!have_read(node)) {
-        return CO_NVM_NONE;
-    }
-    const co_status_t st = node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN);
-    if (st != CO_OK) {
-        return short_blob(node, CO_NVM_PARAMS, st);
+    const co_nvm_status_t st = read_header(node, CO_NVM_PARAMS, h, HEADER_LEN);
+    if (st != CO_NVM_LOADED) {
+        return st;
     }
     const uint32_t payload = co_get_u32(&h[8]);
     if (memcmp(h, "COS1", 4U) != 0 || payload > PAYLOAD_MAX) {
@@ -354,12 +358,9 @@ co_status_t co_lss_stage(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing)
 {
     uint8_t b[LSS_BLOB_LEN];
-    if (!have_read(node)) {
-        return CO_NVM_NONE;
-    }
-    const co_status_t st = node->port->nvm_read(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b);
-    if (st != CO_OK) {
-        return short_blob(node, CO_NVM_LSS, st);
+    const co_nvm_status_t st = read_header(node, CO_NVM_LSS, b, sizeof b);
+    if (st != CO_NVM_LOADED) {
+        return st;
     }
     if (memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
         return CO_NVM_CORRUPT;
