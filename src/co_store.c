@@ -247,10 +247,12 @@ static bool stage_device_areas(co_node_t *node, co_nvm_area_t own, uint16_t inde
     return false;
 }
 
-/* The last commit of a store; staged_ok false: staging the core's area failed, the store is dropped. */
-static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, uint32_t total_len, bool staged_ok)
+/* The last commit of a store: the core's area gets its header (head_len bytes at offset 0; whatever follows it is
+ * staged: staged_ok) and is committed with total_len bytes. If anything of it failed, the store is dropped. */
+static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, const uint8_t *head, size_t head_len,
+                                uint32_t total_len, bool staged_ok)
 {
-    if (!staged_ok) {
+    if (!staged_ok || node->port->nvm_write(node->port_ctx, own, 0U, head, head_len) != CO_OK) {
         discard_store(node, own);
         return CO_ERR_IO;
     }
@@ -290,7 +292,7 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
                     const uint32_t refused = co_od_check_stored(node, e, value, n);
                     if (refused != CO_ABORT_NONE && refused != CO_ABORT_NO_SUBINDEX) {
                         co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 1U, refused);
-                        (void)commit_store(node, CO_NVM_PARAMS, 0U, false);
+                        discard_store(node, CO_NVM_PARAMS);
                         return CO_ERR_RANGE;
                     }
                     co_put_u16(rec, e->index);
@@ -308,8 +310,7 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
     co_put_u32(&h[4], node->od->signature);
     co_put_u32(&h[8], w.pos);
     co_put_u32(&h[12], w.crc);
-    const bool staged = w.ok && node->port->nvm_write(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) == CO_OK;
-    return commit_store(node, CO_NVM_PARAMS, HEADER_LEN + w.pos, staged);
+    return commit_store(node, CO_NVM_PARAMS, h, HEADER_LEN, HEADER_LEN + w.pos, w.ok);
 }
 
 uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
@@ -332,24 +333,31 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
 
 #define LSS_BLOB_LEN 12U
 
-static bool stage_lss(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
+static void lss_blob(uint8_t b[LSS_BLOB_LEN], uint8_t node_id, uint8_t bit_timing)
 {
-    uint8_t b[LSS_BLOB_LEN] = {'C', 'O', 'L', '1', node_id, bit_timing, 0U, 0U, 0U, 0U, 0U, 0U};
+    memcpy(b, "COL1", 4U);
+    b[4] = node_id;
+    b[5] = bit_timing;
+    b[6] = 0U;
+    b[7] = 0U;
     co_put_u32(&b[8], co_crc32(0U, b, 8U));
-    return node->port->nvm_write(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) == CO_OK;
 }
 
 co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 {
+    uint8_t b[LSS_BLOB_LEN];
     if (!have_write(node) || !stage_device_areas(node, CO_NVM_LSS, 0x7E5U, 0x17U)) {
         return CO_ERR_IO;
     }
-    return commit_store(node, CO_NVM_LSS, LSS_BLOB_LEN, stage_lss(node, node_id, bit_timing));
+    lss_blob(b, node_id, bit_timing);
+    return commit_store(node, CO_NVM_LSS, b, sizeof b, sizeof b, true);
 }
 
 co_status_t co_lss_stage(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 {
-    if (!have_write(node) || !stage_lss(node, node_id, bit_timing)) {
+    uint8_t b[LSS_BLOB_LEN];
+    lss_blob(b, node_id, bit_timing);
+    if (!have_write(node) || node->port->nvm_write(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) != CO_OK) {
         return CO_ERR_IO;
     }
     return node->port->nvm_commit(node->port_ctx, CO_NVM_LSS, LSS_BLOB_LEN | CO_NVM_MORE) == CO_OK ? CO_OK : CO_ERR_IO;
