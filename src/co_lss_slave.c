@@ -133,13 +133,15 @@ static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
     if (!next_in_sequence(&l->ident_step, step)) {
         return;
     }
-    if (step == 2U || step == 4U) {
+    if (step != 3U && step != 5U) { /* not a high bound */
         l->ident_low = v;
-        return;
+        if (step >= 2U) {
+            return; /* a low bound: its high bound follows */
+        }
     }
-    const uint32_t low = step < 2U ? v : l->ident_low;
     const uint32_t id = identity(node, (uint8_t)((step + 1U) >> 1)); /* steps 0, 1, 3, 5: 0x1018 sub 1..4 */
-    l->ident_match = (step == 0U || l->ident_match) && low <= id && id <= v;
+    const bool in_range = l->ident_low <= id && id <= v;
+    l->ident_match = in_range && (step == 0U || l->ident_match);
     if (step == 5U) {
         l->ident_step = 0U;
         if (l->ident_match) {
