@@ -207,11 +207,11 @@ typedef struct blob_writer {
 /* Appends a record: head and value in one buffer, as record_reader_t.rec holds it. */
 static void writer_put(blob_writer_t *w, const uint8_t *rec)
 {
-    const uint32_t size = RECORD_HEAD + (uint32_t)rec[3];
+    const size_t size = RECORD_HEAD + (size_t)rec[3];
     w->ok = w->ok &&
             w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, rec, size) == CO_OK;
     w->crc = co_crc32(w->crc, rec, size);
-    w->pos += size;
+    w->pos += (uint32_t)size;
 }
 
 /* True when a row holds its node-ID-relative default: not stored, so a new node-ID moves it along. While the node-ID
