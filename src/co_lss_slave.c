@@ -56,10 +56,7 @@ bool co_lss_set_pending_bit_timing(co_node_t *node, uint8_t index)
 
 co_status_t co_lss_store(co_node_t *node)
 {
-    if (node->port->nvm_write == NULL || node->port->nvm_commit == NULL) {
-        return CO_ERR_IO;
-    }
-    return co_store_lss_save(node, node->lss.pending_node_id, node->lss.pending_bit_timing);
+    return co_store_lss_save(node, node->lss.pending_node_id, node->lss.pending_bit_timing); /* CO_ERR_IO without NVM */
 }
 
 co_status_t co_lss_apply_bit_timing(co_node_t *node)
