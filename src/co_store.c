@@ -19,6 +19,8 @@
 
 #define SIG_SAVE 0x65766173UL /* "save" */
 #define SIG_LOAD 0x64616F6CUL /* "load" */
+#define PARAMS_MAGIC 0x31534F43UL /* "COS1" */
+#define LSS_MAGIC 0x314C4F43UL    /* "COL1" */
 #define HEADER_LEN 16U
 #define PAYLOAD_MAX 0x10000UL
 #define RECORD_HEAD 4U
@@ -70,7 +72,7 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
         return st;
     }
     const uint32_t payload = co_get_u32(&h[8]);
-    if (memcmp(h, "COS1", 4U) != 0 || payload > PAYLOAD_MAX) {
+    if (co_get_u32(h) != PARAMS_MAGIC || payload > PAYLOAD_MAX) {
         return CO_NVM_CORRUPT;
     }
     uint32_t crc = 0U;
@@ -306,7 +308,7 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
         }
     }
     uint8_t h[HEADER_LEN];
-    memcpy(h, "COS1", 4U);
+    co_put_u32(h, PARAMS_MAGIC);
     co_put_u32(&h[4], node->od->signature);
     co_put_u32(&h[8], w.pos);
     co_put_u32(&h[12], w.crc);
@@ -335,7 +337,7 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
 
 static void lss_blob(uint8_t b[LSS_BLOB_LEN], uint8_t node_id, uint8_t bit_timing)
 {
-    memcpy(b, "COL1", 4U);
+    co_put_u32(b, LSS_MAGIC);
     b[4] = node_id;
     b[5] = bit_timing;
     b[6] = 0U;
@@ -370,7 +372,7 @@ co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bi
     if (st != CO_NVM_LOADED) {
         return st;
     }
-    if (memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
+    if (co_get_u32(b) != LSS_MAGIC || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
         return CO_NVM_CORRUPT;
     }
     /* A valid CRC over values this node never writes is not ours: a node-ID out of range, "unconfigured" where LSS
