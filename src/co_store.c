@@ -239,8 +239,12 @@ static void discard_store(co_node_t *node, co_nvm_area_t own)
     (void)node->port->nvm_commit(node->port_ctx, own, CO_NVM_DISCARD);
 }
 
+/* The start of a store: false when there is no storage or the device's part failed (then nothing is kept). */
 static bool stage_device_areas(co_node_t *node, co_nvm_area_t own, uint16_t index, uint8_t sub)
 {
+    if (!have_write(node)) {
+        return false; /* nothing to discard */
+    }
     const co_hooks_t *h = node->hooks;
     if (h == NULL || h->on_store == NULL || h->on_store(node->hooks_ctx, node, index, sub) == CO_OK) {
         return true;
@@ -325,7 +329,7 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
         return CO_ABORT_STORE; /* wrong signature */
     }
     uint32_t r = CO_ABORT_NONE;
-    const co_status_t st = have_write(node) ? rewrite(node, e->sub, save) : CO_ERR_IO;
+    const co_status_t st = rewrite(node, e->sub, save);
     if (st != CO_OK) {
         r = st == CO_ERR_RANGE ? CO_ABORT_STORE : CO_ABORT_HARDWARE; /* a value that could not be loaded: 0x08000020 */
     }
@@ -348,7 +352,7 @@ static void lss_blob(uint8_t b[LSS_BLOB_LEN], uint8_t node_id, uint8_t bit_timin
 co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 {
     uint8_t b[LSS_BLOB_LEN];
-    if (!have_write(node) || !stage_device_areas(node, CO_NVM_LSS, 0x7E5U, 0x17U)) {
+    if (!stage_device_areas(node, CO_NVM_LSS, 0x7E5U, 0x17U)) {
         return CO_ERR_IO;
     }
     lss_blob(b, node_id, bit_timing);
