@@ -266,15 +266,16 @@ static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, const uint8_
 }
 
 /* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay).
- * CO_ERR_RANGE: a value to save is one its load would refuse (co_od_check_stored: a value the application wrote
- * past the object's limits, which only a local write can do); nothing of the store is kept, rather than a save
- * confirmed now and loaded as defaults at the next start. */
-static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
+ * Returns the store's abort code: CO_ABORT_HARDWARE when there is no storage or the port failed; CO_ABORT_STORE
+ * (0x08000020) when a value to save is one its load would refuse (co_od_check_stored: a value the application
+ * wrote past the object's limits, which only a local write can do): nothing of the store is kept, rather than a
+ * save confirmed now and loaded as defaults at the next start. */
+static uint32_t rewrite(co_node_t *node, uint8_t group, bool save)
 {
     record_reader_t old;
     blob_writer_t w = {node, 0U, 0U, true};
     if (!stage_device_areas(node, CO_NVM_PARAMS, save ? 0x1010U : 0x1011U, group)) {
-        return CO_ERR_IO;
+        return CO_ABORT_HARDWARE;
     }
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
     for (uint16_t i = 0U; i < node->od->count; i++) {
@@ -299,7 +300,7 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
                     if (refused != CO_ABORT_NONE && refused != CO_ABORT_NO_SUBINDEX) {
                         co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 1U, refused);
                         discard_store(node, CO_NVM_PARAMS);
-                        return CO_ERR_RANGE;
+                        return CO_ABORT_STORE;
                     }
                     co_put_u16(rec, e->index);
                     rec[2] = e->sub;
@@ -316,7 +317,8 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
     co_put_u32(&h[4], node->od->signature);
     co_put_u32(&h[8], w.pos);
     co_put_u32(&h[12], w.crc);
-    return commit_store(node, CO_NVM_PARAMS, h, HEADER_LEN, HEADER_LEN + w.pos, w.ok);
+    const co_status_t st = commit_store(node, CO_NVM_PARAMS, h, HEADER_LEN, HEADER_LEN + w.pos, w.ok);
+    return st == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
 }
 
 uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
@@ -328,11 +330,7 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
     if (co_get_u32(data) != (save ? SIG_SAVE : SIG_LOAD)) {
         return CO_ABORT_STORE; /* wrong signature */
     }
-    uint32_t r = CO_ABORT_NONE;
-    const co_status_t st = rewrite(node, e->sub, save);
-    if (st != CO_OK) {
-        r = st == CO_ERR_RANGE ? CO_ABORT_STORE : CO_ABORT_HARDWARE; /* a value that could not be loaded: 0x08000020 */
-    }
+    const uint32_t r = rewrite(node, e->sub, save);
     co_node_event(node, save ? CO_EV_STORE : CO_EV_RESTORE, e->index, e->sub, 0U, r);
     return r;
 }
