@@ -6,16 +6,8 @@
 
 static uint32_t period_us(const co_node_t *node) { return (uint32_t)node->hb.period_ms * 1000U; }
 
-/* 0x1017 took the value ms: a new period starts now. */
-static void start(co_node_t *node, uint32_t ms)
-{
-    node->hb.period_ms = (uint16_t)ms;
-    const uint32_t p = period_us(node);
-    node->hb.due = p != 0U ? co_time_after(node->now, p) : CO_NEVER;
-    co_node_due(node, node->hb.due);
-}
-
-void co_hb_reset(co_node_t *node) { start(node, co_od_u32_or(node, 0x1017U, 0U, 0U)); }
+/* A reset takes 0x1017 as a write of it would: one path, so the period's start is one copy of the code. */
+void co_hb_reset(co_node_t *node) { co_hb_written(node, NULL); }
 
 co_time_us_t co_hb_process(co_node_t *node)
 {
@@ -41,4 +33,12 @@ uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_
     return CO_ABORT_NONE; /* range limits come from the OD; device-specific steps from the device hook */
 }
 
-void co_hb_written(co_node_t *node, const co_od_entry_t *e) { start(node, co_od_entry_u32(node, e)); }
+/* 0x1017 took a value (e NULL: at a reset, the dictionary's): a new period starts now. */
+void co_hb_written(co_node_t *node, const co_od_entry_t *e)
+{
+    const uint32_t ms = e != NULL ? co_od_entry_u32(node, e) : co_od_u32_or(node, 0x1017U, 0U, 0U);
+    node->hb.period_ms = (uint16_t)ms;
+    const uint32_t p = period_us(node);
+    node->hb.due = p != 0U ? co_time_after(node->now, p) : CO_NEVER;
+    co_node_due(node, node->hb.due);
+}

@@ -13,13 +13,9 @@ static uint32_t identity(const co_node_t *node, uint8_t i)
     return co_od_u32_or(node, 0x1018U, (uint8_t)(i + 1U), 0U);
 }
 
-static void reply(co_node_t *node, uint8_t cs, uint8_t b1, uint8_t b2)
-{
-    const co_frame_t f = {0x7E4U, 8U, 0U, {cs, b1, b2, 0U, 0U, 0U, 0U, 0U}};
-    co_node_send(node, &f);
-}
-
-static void reply_u32(co_node_t *node, uint8_t cs, uint32_t v)
+/* Every answer is cs and at most a 32-bit number in bytes 1..4 (an error code in byte 1, an identity number, the
+ * node-ID), the rest zero: one frame builder for all of them. */
+static void reply(co_node_t *node, uint8_t cs, uint32_t v)
 {
     co_frame_t f = {0x7E4U, 8U, 0U, {cs, 0U, 0U, 0U, 0U, 0U, 0U, 0U}};
     co_put_u32(&f.data[1], v);
@@ -60,10 +56,7 @@ bool co_lss_set_pending_bit_timing(co_node_t *node, uint8_t index)
 
 co_status_t co_lss_store(co_node_t *node)
 {
-    if (node->port->nvm_write == NULL || node->port->nvm_commit == NULL) {
-        return CO_ERR_IO;
-    }
-    return co_store_lss_save(node, node->lss.pending_node_id, node->lss.pending_bit_timing);
+    return co_store_lss_save(node, node->lss.pending_node_id, node->lss.pending_bit_timing); /* CO_ERR_IO without NVM */
 }
 
 co_status_t co_lss_apply_bit_timing(co_node_t *node)
@@ -97,68 +90,67 @@ static void switch_global(co_node_t *node, uint8_t mode)
     l->select_step = 0U;
 }
 
+/* Steps of a sequence come in order, the first at any time; any other frame of it starts the sequence again.
+ * True when step is the one expected (the next is then expected). */
+static bool next_in_sequence(uint8_t *expected, uint8_t step)
+{
+    if (step != 0U && step != *expected) {
+        *expected = 0U;
+        return false;
+    }
+    *expected = (uint8_t)(step + 1U);
+    return true;
+}
+
+/* Switch state selective, cs 0x40..0x43: vendor, product, revision, serial. A number that is not ours ends the
+ * sequence at once: its later frames are then out of order and answered by nothing, as a full sequence with one
+ * wrong number would be. */
 static void switch_selective(co_node_t *node, uint8_t cs, uint32_t v)
 {
     co_lss_slave_t *l = &node->lss;
     const uint8_t step = (uint8_t)(cs - 0x40U);
-    if (l->state != LSS_WAITING) {
+    if (l->state != LSS_WAITING || !next_in_sequence(&l->select_step, step)) {
         return;
     }
-    if (step != 0U && step != l->select_step) {
-        l->select_step = 0U; /* out of order: start again */
-        return;
-    }
-    l->select[step] = v;
-    l->select_step = (uint8_t)(step + 1U);
-    if (step == 3U) {
+    if (v != identity(node, step)) {
         l->select_step = 0U;
-        for (uint8_t i = 0U; i < 4U; i++) {
-            if (l->select[i] != identity(node, i)) {
-                return;
-            }
-        }
+    } else if (step == 3U) {
+        l->select_step = 0U;
         l->state = LSS_CONFIGURATION;
-        reply(node, 0x44U, 0U, 0U);
+        reply(node, 0x44U, 0U);
     }
 }
 
+/* Identify remote slave, cs 0x46..0x4B in order: vendor, product, revision low/high, serial low/high. An exact number
+ * (vendor, product) is checked as the range [v, v]; the low bound of a range is kept until its high bound comes. */
 static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
 {
     co_lss_slave_t *l = &node->lss;
     const uint8_t step = (uint8_t)(cs - 0x46U);
-    if (step != 0U && step != l->ident_step) {
-        l->ident_step = 0U;
+    if (!next_in_sequence(&l->ident_step, step)) {
         return;
     }
-    l->ident_step = (uint8_t)(step + 1U);
-    switch (step) {
-    case 0:
-        l->ident_match = v == identity(node, 0U);
-        break;
-    case 1:
-        l->ident_match = l->ident_match && v == identity(node, 1U);
-        break;
-    case 2:
-    case 4:
+    if (step != 3U && step != 5U) { /* not a high bound */
         l->ident_low = v;
-        break;
-    case 3:
-        l->ident_match = l->ident_match && l->ident_low <= identity(node, 2U) && identity(node, 2U) <= v;
-        break;
-    default:
-        l->ident_step = 0U;
-        if (l->ident_match && l->ident_low <= identity(node, 3U) && identity(node, 3U) <= v) {
-            reply(node, 0x4FU, 0U, 0U);
+        if (step >= 2U) {
+            return; /* a low bound: its high bound follows */
         }
-        break;
+    }
+    const uint32_t id = identity(node, (uint8_t)((step + 1U) >> 1)); /* steps 0, 1, 3, 5: 0x1018 sub 1..4 */
+    const bool in_range = l->ident_low <= id && id <= v;
+    l->ident_match = in_range && (step == 0U || l->ident_match);
+    if (step == 5U) {
+        l->ident_step = 0U;
+        if (l->ident_match) {
+            reply(node, 0x4FU, 0U);
+        }
     }
 }
 
 #if CO_CONFIG_LSS_FASTSCAN
-static void fastscan(co_node_t *node, const uint8_t *d)
+static void fastscan(co_node_t *node, const uint8_t *d, uint32_t id_number)
 {
     co_lss_slave_t *l = &node->lss;
-    const uint32_t id_number = co_get_u32(&d[1]);
     const uint8_t bit_checked = d[5];
     const uint8_t lss_sub = d[6];
     const uint8_t lss_next = d[7];
@@ -167,50 +159,46 @@ static void fastscan(co_node_t *node, const uint8_t *d)
         return;
     }
     if (bit_checked == 0x80U) {
-        l->fastscan_pos = 0U;
-        reply(node, 0x4FU, 0U, 0U);
-        return;
-    }
-    if (bit_checked > 31U || lss_sub > 3U || lss_next > 3U || lss_sub != l->fastscan_pos) {
-        return;
-    }
-    const uint32_t mask = (uint32_t)(UINT32_MAX << bit_checked);
-    if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
-        return;
-    }
-    reply(node, 0x4FU, 0U, 0U);
-    if (bit_checked == 0U) {
-        l->fastscan_pos = lss_next;
-        if (lss_next < lss_sub) {
-            l->state = LSS_CONFIGURATION; /* all four numbers matched */
-            l->fastscan_pos = 0U;
+        l->fastscan_pos = 0U; /* a new scan: every slave taking part answers */
+    } else {
+        /* lss_sub is checked by its equality with fastscan_pos, which is never above 3 */
+        if (bit_checked > 31U || lss_next > 3U || lss_sub != l->fastscan_pos) {
+            return;
+        }
+        const uint32_t mask = (uint32_t)(UINT32_MAX << bit_checked);
+        if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
+            return;
+        }
+        if (bit_checked == 0U) {
+            l->fastscan_pos = lss_next;
+            if (lss_next < lss_sub) {
+                l->state = LSS_CONFIGURATION; /* all four numbers matched */
+                l->fastscan_pos = 0U;
+            }
         }
     }
+    reply(node, 0x4FU, 0U);
 }
 #endif
 
+/* The configuration services; all but activate bit timing answer with cs and one number (an error code, an identity
+ * number, the node-ID). */
 static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
 {
     co_lss_slave_t *l = &node->lss;
+    uint32_t answer = 0U;
     switch (cs) {
-    case 0x11: {
-        const uint8_t id = d[1];
-        const bool ok = (id >= 1U && id <= 127U) ||
-                        (id == CO_NODE_ID_UNCONFIGURED && (node->options & CO_OPT_LSS_NO_UNCONFIGURE) == 0U);
-        if (ok) {
-            l->pending_node_id = id;
-            co_node_event(node, CO_EV_LSS_NODE_ID, 0U, 0U, id, 0U);
+    case 0x11:   /* configure node-ID: d[1] */
+    case 0x13: { /* configure bit timing: d[1] the table (0: CiA 301's), d[2] the index */
+        const bool node_id = cs == 0x11U;
+        const uint8_t value = node_id ? d[1] : d[2];
+        const bool ok = node_id ? co_lss_set_pending_node_id(node, value)
+                                : d[1] == 0U && co_lss_set_pending_bit_timing(node, value);
+        if (!ok) {
+            answer = 1U; /* out of range, not supported */
+            break;
         }
-        reply(node, 0x11U, (uint8_t)(ok ? 0U : 1U), 0U);
-        break;
-    }
-    case 0x13: {
-        const bool ok = d[1] == 0U && d[2] < CO_LSS_BIT_TIMING_COUNT && node->bit_rates_kbit[d[2]] != 0U;
-        if (ok) {
-            l->pending_bit_timing = d[2];
-            co_node_event(node, CO_EV_LSS_BIT_TIMING, 0U, 0U, d[2], 0U);
-        }
-        reply(node, 0x13U, (uint8_t)(ok ? 0U : 1U), 0U);
+        co_node_event(node, node_id ? CO_EV_LSS_NODE_ID : CO_EV_LSS_BIT_TIMING, 0U, 0U, value, 0U);
         break;
     }
     case 0x15: {
@@ -218,31 +206,29 @@ static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
         l->switch_pending = true;
         l->switch_at = co_time_after(node->now, delay);
         l->silent_until = co_time_after(node->now, 2U * delay);
-        break;
+        return; /* no answer */
     }
-    case 0x17: {
-        uint8_t err = 0U;
+    case 0x17:
         if (node->port->nvm_write == NULL || node->port->nvm_commit == NULL) {
-            err = 1U; /* storing not supported */
+            answer = 1U; /* storing not supported */
         } else if (co_store_lss_save(node, l->pending_node_id, l->pending_bit_timing) != CO_OK) {
-            err = 2U; /* storage media access error */
+            answer = 2U; /* storage media access error */
         }
-        co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, err);
-        reply(node, 0x17U, err, 0U);
+        co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, answer);
         break;
-    }
     case 0x5A:
     case 0x5B:
     case 0x5C:
     case 0x5D:
-        reply_u32(node, cs, identity(node, (uint8_t)(cs - 0x5AU)));
+        answer = identity(node, (uint8_t)(cs - 0x5AU));
         break;
     case 0x5E:
-        reply(node, 0x5EU, node->node_id, 0U);
+        answer = node->node_id;
         break;
     default:
-        break;
+        return;
     }
+    reply(node, cs, answer);
 }
 
 void co_lss_rx(co_node_t *node, const co_frame_t *f)
@@ -260,11 +246,11 @@ void co_lss_rx(co_node_t *node, const co_frame_t *f)
         identify_remote(node, cs, v);
     } else if (cs == 0x4CU) {
         if (node->node_id == CO_NODE_ID_UNCONFIGURED) {
-            reply(node, 0x50U, 0U, 0U);
+            reply(node, 0x50U, 0U);
         }
 #if CO_CONFIG_LSS_FASTSCAN
     } else if (cs == 0x51U) {
-        fastscan(node, f->data);
+        fastscan(node, f->data, v);
 #endif
     } else if (node->lss.state == LSS_CONFIGURATION) {
         configure(node, cs, f->data);

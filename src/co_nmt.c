@@ -13,7 +13,13 @@ void co_nmt_rx(co_node_t *node, const co_frame_t *f)
     if (f->data[1] != 0U && f->data[1] != node->node_id) {
         return;
     }
-    switch (f->data[0]) {
+    const uint8_t cmd = f->data[0];
+    if (cmd == 0x81U || cmd == 0x82U) {
+        /* CO_RESET_APPLICATION = 0 for 0x81, CO_RESET_COMMUNICATION = 1 for 0x82 */
+        co_node_reset(node, (co_reset_t)(cmd - 0x81U), node->now);
+        return;
+    }
+    switch (cmd) {
     case 0x01:
         co_node_set_state(node, CO_NMT_OPERATIONAL);
         break;
@@ -22,12 +28,6 @@ void co_nmt_rx(co_node_t *node, const co_frame_t *f)
         break;
     case 0x80:
         co_node_set_state(node, CO_NMT_PRE_OPERATIONAL);
-        break;
-    case 0x81:
-        co_node_reset(node, CO_RESET_APPLICATION, node->now);
-        break;
-    case 0x82:
-        co_node_reset(node, CO_RESET_COMMUNICATION, node->now);
         break;
     default:
         break; /* unknown command: ignored, no state change */

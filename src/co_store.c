@@ -19,6 +19,8 @@
 
 #define SIG_SAVE 0x65766173UL /* "save" */
 #define SIG_LOAD 0x64616F6CUL /* "load" */
+#define PARAMS_MAGIC 0x31534F43UL /* "COS1" */
+#define LSS_MAGIC 0x314C4F43UL    /* "COL1" */
 #define HEADER_LEN 16U
 #define PAYLOAD_MAX 0x10000UL
 #define RECORD_HEAD 4U
@@ -28,7 +30,7 @@ uint32_t co_crc32(uint32_t crc, const uint8_t *data, size_t len)
     crc = ~crc;
     for (size_t i = 0U; i < len; i++) {
         crc ^= data[i];
-        for (uint8_t b = 0U; b < 8U; b++) {
+        for (unsigned b = 0U; b < 8U; b++) {
             crc = (crc >> 1) ^ (0xEDB88320UL & (0U - (crc & 1U)));
         }
     }
@@ -41,13 +43,20 @@ static bool have_write(const co_node_t *node)
     return node->port->nvm_write != NULL && node->port->nvm_commit != NULL;
 }
 
-/* A read of a blob's header failed with st: nothing is stored (CO_ERR_NO_DATA and not even one byte there), or
- * a blob shorter than its header is (a port that can tell answers other than CO_ERR_NO_DATA, e.g. for an
- * empty file; one that cannot is asked for a single byte). */
-static co_nvm_status_t short_blob(co_node_t *node, co_nvm_area_t area, co_status_t st)
+/* Reads the first len bytes of an area's blob (its header): CO_NVM_LOADED when they are there. Otherwise nothing is
+ * stored (no storage, or CO_ERR_NO_DATA and not even one byte there), or the blob is shorter than its header (a
+ * port that can tell answers other than CO_ERR_NO_DATA, e.g. for an empty file; one that cannot is asked for a
+ * single byte). */
+static co_nvm_status_t read_header(co_node_t *node, co_nvm_area_t area, uint8_t *h, size_t len)
 {
-    uint8_t b;
-    if (st != CO_ERR_NO_DATA || node->port->nvm_read(node->port_ctx, area, 0U, &b, 1U) == CO_OK) {
+    if (!have_read(node)) {
+        return CO_NVM_NONE;
+    }
+    const co_status_t st = node->port->nvm_read(node->port_ctx, area, 0U, h, len);
+    if (st == CO_OK) {
+        return CO_NVM_LOADED;
+    }
+    if (st != CO_ERR_NO_DATA || node->port->nvm_read(node->port_ctx, area, 0U, h, 1U) == CO_OK) {
         return CO_NVM_CORRUPT;
     }
     return CO_NVM_NONE;
@@ -58,15 +67,12 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
 {
     uint8_t h[HEADER_LEN];
     *len = 0U;
-    if (!have_read(node)) {
-        return CO_NVM_NONE;
-    }
-    const co_status_t st = node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN);
-    if (st != CO_OK) {
-        return short_blob(node, CO_NVM_PARAMS, st);
+    const co_nvm_status_t st = read_header(node, CO_NVM_PARAMS, h, HEADER_LEN);
+    if (st != CO_NVM_LOADED) {
+        return st;
     }
     const uint32_t payload = co_get_u32(&h[8]);
-    if (memcmp(h, "COS1", 4U) != 0 || payload > PAYLOAD_MAX) {
+    if (co_get_u32(h) != PARAMS_MAGIC || payload > PAYLOAD_MAX) {
         return CO_NVM_CORRUPT;
     }
     uint32_t crc = 0U;
@@ -89,43 +95,41 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
     return CO_NVM_LOADED;
 }
 
-/* Sequential reader of the stored records. */
+#define READER_END UINT32_MAX /* the key past the last record: above every index << 8 | sub */
+
+/* Sequential reader of the stored records. A record is kept as stored, head and value in one buffer: a save
+ * copies it with one write. */
 typedef struct record_reader {
     co_node_t *node;
     uint32_t pos;
     uint32_t end;
-    uint16_t index;
-    uint8_t sub;
-    uint8_t len;
-    uint8_t value[255];
-    bool valid;
+    uint32_t key; /* index << 8 | sub of the record in rec; READER_END: none (the end, or a record cut short) */
+    uint8_t rec[RECORD_HEAD + 255U];
 } record_reader_t;
 
 static void reader_next(record_reader_t *r)
 {
-    uint8_t head[RECORD_HEAD];
-    r->valid = false;
+    uint8_t *rec = r->rec;
+    r->key = READER_END;
     if (r->pos + RECORD_HEAD > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos, head, RECORD_HEAD) != CO_OK) {
+        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos, rec, RECORD_HEAD) != CO_OK) {
         return;
     }
-    r->index = co_get_u16(head);
-    r->sub = head[2];
-    r->len = head[3];
-    if (r->pos + RECORD_HEAD + r->len > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos + RECORD_HEAD, r->value,
-                                r->len) != CO_OK) {
+    const uint32_t size = RECORD_HEAD + (uint32_t)rec[3];
+    if (r->pos + size > r->end ||
+        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos + RECORD_HEAD,
+                                &rec[RECORD_HEAD], rec[3]) != CO_OK) {
         return;
     }
-    r->pos += RECORD_HEAD + r->len;
-    r->valid = true;
+    r->pos += size;
+    r->key = ((uint32_t)co_get_u16(rec) << 8) | rec[2];
 }
 
 static co_nvm_status_t reader_open(record_reader_t *r, co_node_t *node)
 {
     r->node = node;
     r->pos = 0U;
-    r->valid = false;
+    r->key = READER_END;
     const co_nvm_status_t st = params_check(node, &r->end);
     if (st == CO_NVM_LOADED) {
         reader_next(r);
@@ -137,10 +141,10 @@ static co_nvm_status_t reader_open(record_reader_t *r, co_node_t *node)
 static bool reader_seek(record_reader_t *r, uint16_t index, uint8_t sub)
 {
     const uint32_t key = ((uint32_t)index << 8) | sub;
-    while (r->valid && (((uint32_t)r->index << 8) | r->sub) < key) {
+    while (r->key < key) {
         reader_next(r);
     }
-    return r->valid && r->index == index && r->sub == sub;
+    return r->key == key;
 }
 
 /* Loads the records of [first, last] in index order, each checked as a write of it would be (co_od_check_stored:
@@ -153,20 +157,23 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     record_reader_t local;
     node->nvm_status = reader_open(&local, node);
-    for (; local.valid; reader_next(&local)) {
-        if (local.index < first || local.index > last) {
+    for (; local.key != READER_END; reader_next(&local)) {
+        const uint16_t index = (uint16_t)(local.key >> 8);
+        const uint8_t len = local.rec[3];
+        const uint8_t *value = &local.rec[RECORD_HEAD];
+        if (index < first || index > last) {
             continue;
         }
         co_od_entry_t one;
-        const co_od_entry_t *e = co_od_find(node->od, local.index, local.sub, &one);
+        const co_od_entry_t *e = co_od_find(node->od, index, (uint8_t)local.key, &one);
         if (e == NULL || (e->flags & CO_OD_STORE) == 0U) {
             continue;
         }
         const uint16_t fixed = co_od_type_size(e->type);
-        if ((fixed != 0U && local.len != fixed) || local.len > e->size) {
+        if ((fixed != 0U && len != fixed) || len > e->size) {
             continue;
         }
-        const uint32_t r = co_od_check_stored(node, e, local.value, local.len);
+        const uint32_t r = co_od_check_stored(node, e, value, len);
         if (r == CO_ABORT_NO_SUBINDEX) {
             /* The device says this node has no such sub-index (a PRO IONIZER variant hides rows of others): skipped
              * like a row the OD lacks. A save writes every stored row, so refusing here refused every save of such
@@ -179,22 +186,16 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
             node->nvm_status = CO_NVM_REFUSED;
             return;
         }
-        co_od_store_value(node, e, local.value, local.len);
+        co_od_store_value(node, e, value, len);
     }
 }
 
+/* The groups of 0x1010/0x1011 sub 2..4 as sets of the index's top hex digit: 2 = 0x1000-0x1FFF, 3 = 0x6000-0x9FFF,
+ * 4 = 0x2000-0x5FFF; sub 1 and others: every index. */
 static bool in_group(uint8_t sub, uint16_t index)
 {
-    switch (sub) {
-    case 2:
-        return index >= 0x1000U && index <= 0x1FFFU;
-    case 3:
-        return index >= 0x6000U && index <= 0x9FFFU;
-    case 4:
-        return index >= 0x2000U && index <= 0x5FFFU;
-    default:
-        return true;
-    }
+    static const uint16_t top_digits[3] = {0x0002U, 0x03C0U, 0x003CU};
+    return sub < 2U || sub > 4U || ((top_digits[sub - 2U] >> (index >> 12)) & 1U) != 0U;
 }
 
 /* Streams records to the staging area and keeps the running CRC. */
@@ -205,21 +206,14 @@ typedef struct blob_writer {
     bool ok;
 } blob_writer_t;
 
-static void writer_put(blob_writer_t *w, uint16_t index, uint8_t sub, const uint8_t *value, uint8_t len)
+/* Appends a record: head and value in one buffer, as record_reader_t.rec holds it. */
+static void writer_put(blob_writer_t *w, const uint8_t *rec)
 {
-    uint8_t head[RECORD_HEAD];
-    co_put_u16(head, index);
-    head[2] = sub;
-    head[3] = len;
-    if (!w->ok) {
-        return;
-    }
-    w->ok = w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, head, RECORD_HEAD) == CO_OK &&
-            w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos + RECORD_HEAD, value, len) ==
-                CO_OK;
-    w->crc = co_crc32(w->crc, head, RECORD_HEAD);
-    w->crc = co_crc32(w->crc, value, len);
-    w->pos += RECORD_HEAD + (uint32_t)len;
+    const size_t size = RECORD_HEAD + (size_t)rec[3];
+    w->ok = w->ok &&
+            w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, rec, size) == CO_OK;
+    w->crc = co_crc32(w->crc, rec, size);
+    w->pos += (uint32_t)size;
 }
 
 /* True when a row holds its node-ID-relative default: not stored, so a new node-ID moves it along. While the node-ID
@@ -245,8 +239,12 @@ static void discard_store(co_node_t *node, co_nvm_area_t own)
     (void)node->port->nvm_commit(node->port_ctx, own, CO_NVM_DISCARD);
 }
 
+/* The start of a store: false when there is no storage or the device's part failed (then nothing is kept). */
 static bool stage_device_areas(co_node_t *node, co_nvm_area_t own, uint16_t index, uint8_t sub)
 {
+    if (!have_write(node)) {
+        return false; /* nothing to discard */
+    }
     const co_hooks_t *h = node->hooks;
     if (h == NULL || h->on_store == NULL || h->on_store(node->hooks_ctx, node, index, sub) == CO_OK) {
         return true;
@@ -255,10 +253,12 @@ static bool stage_device_areas(co_node_t *node, co_nvm_area_t own, uint16_t inde
     return false;
 }
 
-/* The last commit of a store; staged_ok false: staging the core's area failed, the store is dropped. */
-static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, uint32_t total_len, bool staged_ok)
+/* The last commit of a store: the core's area gets its header (head_len bytes at offset 0; whatever follows it is
+ * staged: staged_ok) and is committed with total_len bytes. If anything of it failed, the store is dropped. */
+static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, const uint8_t *head, size_t head_len,
+                                uint32_t total_len, bool staged_ok)
 {
-    if (!staged_ok) {
+    if (!staged_ok || node->port->nvm_write(node->port_ctx, own, 0U, head, head_len) != CO_OK) {
         discard_store(node, own);
         return CO_ERR_IO;
     }
@@ -266,15 +266,16 @@ static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, uint32_t tot
 }
 
 /* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay).
- * CO_ERR_RANGE: a value to save is one its load would refuse (co_od_check_stored: a value the application wrote
- * past the object's limits, which only a local write can do); nothing of the store is kept, rather than a save
- * confirmed now and loaded as defaults at the next start. */
-static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
+ * Returns the store's abort code: CO_ABORT_HARDWARE when there is no storage or the port failed; CO_ABORT_STORE
+ * (0x08000020) when a value to save is one its load would refuse (co_od_check_stored: a value the application
+ * wrote past the object's limits, which only a local write can do): nothing of the store is kept, rather than a
+ * save confirmed now and loaded as defaults at the next start. */
+static uint32_t rewrite(co_node_t *node, uint8_t group, bool save)
 {
     record_reader_t old;
     blob_writer_t w = {node, 0U, 0U, true};
     if (!stage_device_areas(node, CO_NVM_PARAMS, save ? 0x1010U : 0x1011U, group)) {
-        return CO_ERR_IO;
+        return CO_ABORT_HARDWARE;
     }
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
     for (uint16_t i = 0U; i < node->od->count; i++) {
@@ -286,33 +287,38 @@ static co_status_t rewrite(co_node_t *node, uint8_t group, bool save)
             co_od_entry_t one;
             const co_od_entry_t *e = co_od_entry_at(row, k, &one);
             const bool stored = reader_seek(&old, e->index, e->sub);
-            if (save && in_group(group, e->index)) {
+            const bool grouped = in_group(group, e->index);
+            if (save && grouped) {
                 if (!at_relative_default(node, e)) {
-                    uint8_t value[255];
-                    const size_t n = co_od_sample(node, e, value, sizeof value);
+                    uint8_t rec[RECORD_HEAD + 255U];
+                    uint8_t *value = &rec[RECORD_HEAD];
+                    const size_t n = co_od_sample(node, e, value, 255U);
                     /* As the load will check it (a sub-index the node hides is skipped there); a check that
                      * depends on another stored value sees the present one here, the loaded one there: the same
                      * for every value saved before it in index order. */
                     const uint32_t refused = co_od_check_stored(node, e, value, n);
                     if (refused != CO_ABORT_NONE && refused != CO_ABORT_NO_SUBINDEX) {
                         co_node_event(node, CO_EV_NVM_REFUSED, e->index, e->sub, 1U, refused);
-                        (void)commit_store(node, CO_NVM_PARAMS, 0U, false);
-                        return CO_ERR_RANGE;
+                        discard_store(node, CO_NVM_PARAMS);
+                        return CO_ABORT_STORE;
                     }
-                    writer_put(&w, e->index, e->sub, value, (uint8_t)n);
+                    co_put_u16(rec, e->index);
+                    rec[2] = e->sub;
+                    rec[3] = (uint8_t)n;
+                    writer_put(&w, rec);
                 }
-            } else if (stored && (save || !in_group(group, e->index) || (e->flags & CO_OD_KEEP) != 0U)) {
-                writer_put(&w, e->index, e->sub, old.value, old.len);
+            } else if (stored && (save || !grouped || (e->flags & CO_OD_KEEP) != 0U)) {
+                writer_put(&w, old.rec);
             }
         }
     }
     uint8_t h[HEADER_LEN];
-    memcpy(h, "COS1", 4U);
+    co_put_u32(h, PARAMS_MAGIC);
     co_put_u32(&h[4], node->od->signature);
     co_put_u32(&h[8], w.pos);
     co_put_u32(&h[12], w.crc);
-    const bool staged = w.ok && node->port->nvm_write(node->port_ctx, CO_NVM_PARAMS, 0U, h, HEADER_LEN) == CO_OK;
-    return commit_store(node, CO_NVM_PARAMS, HEADER_LEN + w.pos, staged);
+    const co_status_t st = commit_store(node, CO_NVM_PARAMS, h, HEADER_LEN, HEADER_LEN + w.pos, w.ok);
+    return st == CO_OK ? CO_ABORT_NONE : CO_ABORT_HARDWARE;
 }
 
 uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
@@ -324,35 +330,38 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
     if (co_get_u32(data) != (save ? SIG_SAVE : SIG_LOAD)) {
         return CO_ABORT_STORE; /* wrong signature */
     }
-    uint32_t r = CO_ABORT_NONE;
-    const co_status_t st = have_write(node) ? rewrite(node, e->sub, save) : CO_ERR_IO;
-    if (st != CO_OK) {
-        r = st == CO_ERR_RANGE ? CO_ABORT_STORE : CO_ABORT_HARDWARE; /* a value that could not be loaded: 0x08000020 */
-    }
+    const uint32_t r = rewrite(node, e->sub, save);
     co_node_event(node, save ? CO_EV_STORE : CO_EV_RESTORE, e->index, e->sub, 0U, r);
     return r;
 }
 
 #define LSS_BLOB_LEN 12U
 
-static bool stage_lss(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
+static void lss_blob(uint8_t b[LSS_BLOB_LEN], uint8_t node_id, uint8_t bit_timing)
 {
-    uint8_t b[LSS_BLOB_LEN] = {'C', 'O', 'L', '1', node_id, bit_timing, 0U, 0U, 0U, 0U, 0U, 0U};
+    co_put_u32(b, LSS_MAGIC);
+    b[4] = node_id;
+    b[5] = bit_timing;
+    b[6] = 0U;
+    b[7] = 0U;
     co_put_u32(&b[8], co_crc32(0U, b, 8U));
-    return node->port->nvm_write(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) == CO_OK;
 }
 
 co_status_t co_store_lss_save(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 {
-    if (!have_write(node) || !stage_device_areas(node, CO_NVM_LSS, 0x7E5U, 0x17U)) {
+    uint8_t b[LSS_BLOB_LEN];
+    if (!stage_device_areas(node, CO_NVM_LSS, 0x7E5U, 0x17U)) {
         return CO_ERR_IO;
     }
-    return commit_store(node, CO_NVM_LSS, LSS_BLOB_LEN, stage_lss(node, node_id, bit_timing));
+    lss_blob(b, node_id, bit_timing);
+    return commit_store(node, CO_NVM_LSS, b, sizeof b, sizeof b, true);
 }
 
 co_status_t co_lss_stage(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 {
-    if (!have_write(node) || !stage_lss(node, node_id, bit_timing)) {
+    uint8_t b[LSS_BLOB_LEN];
+    lss_blob(b, node_id, bit_timing);
+    if (!have_write(node) || node->port->nvm_write(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b) != CO_OK) {
         return CO_ERR_IO;
     }
     return node->port->nvm_commit(node->port_ctx, CO_NVM_LSS, LSS_BLOB_LEN | CO_NVM_MORE) == CO_OK ? CO_OK : CO_ERR_IO;
@@ -361,23 +370,19 @@ co_status_t co_lss_stage(co_node_t *node, uint8_t node_id, uint8_t bit_timing)
 co_nvm_status_t co_store_lss_load(co_node_t *node, uint8_t *node_id, uint8_t *bit_timing)
 {
     uint8_t b[LSS_BLOB_LEN];
-    if (!have_read(node)) {
-        return CO_NVM_NONE;
+    const co_nvm_status_t st = read_header(node, CO_NVM_LSS, b, sizeof b);
+    if (st != CO_NVM_LOADED) {
+        return st;
     }
-    const co_status_t st = node->port->nvm_read(node->port_ctx, CO_NVM_LSS, 0U, b, sizeof b);
-    if (st != CO_OK) {
-        return short_blob(node, CO_NVM_LSS, st);
-    }
-    if (memcmp(b, "COL1", 4U) != 0 || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
+    if (co_get_u32(b) != LSS_MAGIC || co_get_u32(&b[8]) != co_crc32(0U, b, 8U)) {
         return CO_NVM_CORRUPT;
     }
     /* A valid CRC over values this node never writes is not ours: a node-ID out of range, "unconfigured" where LSS
-     * may not unconfigure, a bit timing outside the table or not in the device's (co_lss_set_pending_bit_timing
-     * refuses it). Loaded, a Buerkert showed them in its stored 0x2001:01/02, and the next load of its parameters
-     * refused them, and so every value saved (found by tests/fuzz/target_nvm_file.c). */
-    const bool unconfigured_ok = (node->options & CO_OPT_LSS_NO_UNCONFIGURE) == 0U;
-    if (((b[4] < 1U || b[4] > 127U) && (b[4] != CO_NODE_ID_UNCONFIGURED || !unconfigured_ok)) ||
-        b[5] >= CO_LSS_BIT_TIMING_COUNT || node->bit_rates_kbit[b[5]] == 0U) {
+     * may not unconfigure, a bit timing outside the table or not in the device's: what LSS configure refuses.
+     * Loaded, a Buerkert showed them in its stored 0x2001:01/02, and the next load of its parameters refused them,
+     * and so every value saved (found by tests/fuzz/target_nvm_file.c). The checks are LSS's own setters: the
+     * pending values they set are the ones co_lss_init sets after this load (the node's node-ID and bit timing). */
+    if (!co_lss_set_pending_node_id(node, b[4]) || !co_lss_set_pending_bit_timing(node, b[5])) {
         return CO_NVM_CORRUPT;
     }
     *node_id = b[4];

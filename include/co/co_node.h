@@ -350,7 +350,6 @@ typedef struct co_lss_slave {
     uint32_t ident_low;
     co_time_us_t switch_at;
     co_time_us_t silent_until;  /**< No frame is sent before this time (activate bit timing). */
-    uint32_t select[4];
 } co_lss_slave_t;
 
 /** Kinds of received frames (co_rx_route_t.target >> 12). */

@@ -528,6 +528,23 @@ static void selective_wrong_vendor_product_revision(void)
     }
 }
 
+/* A wrong number ends its sequence; a new one started at 0x40 at any point is taken. */
+static void selective_wrong_number_then_a_new_sequence(void)
+{
+    lss_u32(0x40, 0x24FU);
+    lss_u32(0x41, 0x1234U);
+    lss_u32(0x42, 0x00010002UL);
+    lss_u32(0x43, 0x00ABCDEFUL);
+    EXPECT_NONE();
+    lss_u32(0x40, 0x24EU);
+    lss_u32(0x41, 0x1235U);
+    lss_u32(0x40, 0x24EU);
+    lss_u32(0x41, 0x1234U);
+    lss_u32(0x42, 0x00010002UL);
+    lss_u32(0x43, 0x00ABCDEFUL);
+    EXPECT_LSS(0x44, 0, 0, 0, 0, 0, 0, 0);
+}
+
 static void selective_ignored_in_configuration(void)
 {
     to_configuration();
@@ -1022,6 +1039,7 @@ int main(void)
     RUN_TEST(switch_global_back_to_waiting_and_bad_mode);
     RUN_TEST(selective_out_of_order_gives_no_answer);
     RUN_TEST(selective_wrong_vendor_product_revision);
+    RUN_TEST(selective_wrong_number_then_a_new_sequence);
     RUN_TEST(selective_ignored_in_configuration);
     RUN_TEST(configuration_services_ignored_in_waiting);
     RUN_TEST(lss_works_in_stopped_and_operational);
