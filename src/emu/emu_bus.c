@@ -141,7 +141,7 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
     return r < next ? r : next;
 }
 
-void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
+co_time_us_t bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
 {
     co_frame_t f;
     for (unsigned k = 0U; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
@@ -169,6 +169,7 @@ void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
             }
         }
     }
+    return now;
 }
 
 void bus_tx_ready(emu_bus_t *b)

@@ -33,8 +33,9 @@ co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f);
 co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending);
 
 /** Reads what the interface has (at most 1024 frames) and gives each frame to the nodes that take it; stops early
- *  once the clock reaches due (the earliest deadline of the loop), so that timers run between frames of a flood. */
-void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due);
+ *  once the clock reaches due (the earliest deadline of the loop), so that timers run between frames of a flood.
+ *  Returns the time it last read from the clock: now, or later when it read more than one batch. */
+co_time_us_t bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due);
 
 /** The interface has room again: the nodes with queued frames retry in the next pass. */
 void bus_tx_ready(emu_bus_t *b);

@@ -97,38 +97,52 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
     return 0;
 }
 
+/* Control sockets listening or connected: only then has a pass their flushing, polling and servicing to do. */
+static bool sockets_in_use(const emu_sockets_t *k)
+{
+    return k->unix_fd >= 0 || k->tcp_fd >= 0 || k->n_clients > 0U;
+}
+
 int runtime_loop(emu_t *emu)
 {
     /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients, the web */
     struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1];
+    /* One clock read per wake-up serves its frames, the script and the nodes; it is read again where a pass did work
+     * of unknown length (commands, sessions, a flood of frames) and before sleeping, so that the sleep ends at the
+     * deadline and not late by this pass's work. */
+    co_time_us_t now = socketcan_now_us();
     while (!emu->quit && stop_signal == 0) {
-        /* Read afresh: the time of the last wake-up would be late by this pass's reading and commands, and a deadline
-         * that fell in between would cost another whole pass (with 127 nodes, more than the clock read saves). */
-        co_time_us_t now = socketcan_now_us();
         char line[COMMAND_LINE_MAX + 1];
         /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
+        bool scripted = false;
         while (!emu->quit && script_next_at(&emu->script) <= now - emu->start &&
                script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
             run_command(emu, line);
+            scripted = true;
+        }
+        if (scripted) {
+            now = socketcan_now_us(); /* the nodes run at the time after the commands, which may have taken long */
         }
         co_time_us_t next = CO_NEVER;
-        nfds_t nfds = 0U;
         for (size_t i = 0U; i < emu->n_buses; i++) {
             emu_bus_t *b = emu->buses[i];
             bool tx_pending = false;
             const co_time_us_t t = bus_run(b, now, &tx_pending);
             next = t < next ? t : next;
-            pfd[nfds].fd = b->can.fd; /* -1 while the interface is gone: poll ignores it */
-            pfd[nfds].events = socketcan_poll_events(&b->can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
-            pfd[nfds].revents = 0;
-            nfds++;
+            pfd[i].fd = b->can.fd; /* -1 while the interface is gone: poll ignores it */
+            pfd[i].events = socketcan_poll_events(&b->can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
+            pfd[i].revents = 0;
         }
+        nfds_t nfds = (nfds_t)emu->n_buses;
         const co_time_us_t script_at = script_next_at(&emu->script);
         if (script_at != CO_NEVER && emu->start + script_at < next) {
             next = emu->start + script_at;
         }
         output_flush(); /* what this pass logged and replied, as far as the readers take it */
-        sockets_flush(&emu->sockets);
+        const bool sockets = sockets_in_use(&emu->sockets);
+        if (sockets) {
+            sockets_flush(&emu->sockets);
+        }
         const nfds_t stdin_index = emu->control.open ? nfds : 0U;
         if (emu->control.open) {
             pfd[nfds].fd = STDIN_FILENO;
@@ -138,7 +152,9 @@ int runtime_loop(emu_t *emu)
         }
         nfds += output_poll_fds(&pfd[nfds]); /* POLLOUT wakes the loop to write more: the next pass does */
         const nfds_t sockets_index = nfds;
-        nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
+        if (sockets) {
+            nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
+        }
         const nfds_t web_index = nfds;
         now = socketcan_now_us();
         if (emu->web.daemon != NULL) { /* without --web a pass pays for neither call */
@@ -155,6 +171,7 @@ int runtime_loop(emu_t *emu)
         const int ready = ppoll(pfd, nfds, timeout, NULL);
         if (ready < 0) {
             if (errno == EINTR) {
+                now = socketcan_now_us();
                 continue;
             }
             output_error("poll: %s", strerror(errno));
@@ -163,18 +180,27 @@ int runtime_loop(emu_t *emu)
         now = socketcan_now_us();
         for (size_t i = 0U; i < emu->n_buses; i++) {
             if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
-                bus_receive(emu->buses[i], now, next);
+                now = bus_receive(emu->buses[i], now, next);
             }
             if ((pfd[i].revents & POLLOUT) != 0) {
                 bus_tx_ready(emu->buses[i]); /* room in the socket's buffer: nodes with queued frames retry now */
             }
         }
+        bool commands = false; /* work of unknown length: the clock is read again after it */
         if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
             control_read(emu);
+            commands = true;
         }
-        sockets_service(emu, &emu->sockets, &pfd[sockets_index], web_index - sockets_index);
+        if (sockets) {
+            sockets_service(emu, &emu->sockets, &pfd[sockets_index], web_index - sockets_index);
+            commands = true;
+        }
         if (emu->web.daemon != NULL) {
             web_service(emu, &emu->web, &pfd[web_index], nfds - web_index, now);
+            commands = true;
+        }
+        if (commands) {
+            now = socketcan_now_us();
         }
     }
     return 0;

@@ -18,13 +18,6 @@
 
 #define REOPEN_INTERVAL_US 500000U
 
-co_time_us_t socketcan_now_us(void)
-{
-    struct timespec ts;
-    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (co_time_us_t)ts.tv_sec * 1000000U + (co_time_us_t)ts.tv_nsec / 1000U;
-}
-
 static void logf_(socketcan_t *c, const char *fmt, const char *detail)
 {
     if (c->log != NULL) {
@@ -229,6 +222,7 @@ static void went_away(socketcan_t *c, int e)
     socketcan_close(c);
     c->gone = true;
     c->next_reopen = 0U;
+    c->service_at = 0U;
 }
 
 co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
@@ -303,6 +297,9 @@ static __attribute__((noinline)) void error_frame(socketcan_t *c, const struct c
     } else {
         c->error_frames_unlogged++; /* summed up by socketcan_service at the end of the second */
         (void)memcpy(c->error_last, detail, sizeof detail);
+        if (c->error_window_end < c->service_next) {
+            c->service_next = c->error_window_end; /* the summary wakes the loop, even on a bus gone quiet */
+        }
     }
 }
 
@@ -363,7 +360,12 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             /* Not on any frame: frames received before the interface went down may still be queued. */
             set_up(c);
         }
-        c->rx_since_query = true;
+        if (!c->rx_since_query) {
+            /* The drop count is to be asked for at rx_next_query: socketcan_service runs and wakes the loop then. */
+            c->rx_since_query = true;
+            c->service_at = c->rx_next_query < c->service_at ? c->rx_next_query : c->service_at;
+            c->service_next = c->rx_next_query < c->service_next ? c->rx_next_query : c->service_next;
+        }
         if ((cf->can_id & CAN_ERR_FLAG) != 0U) {
             error_frame(c, cf);
             continue;
@@ -377,7 +379,8 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
     }
 }
 
-co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
+/* socketcan_service() proper; returns the next time it wants to run (a wake-up), or CO_NEVER. */
+static co_time_us_t service(socketcan_t *c, co_time_us_t now)
 {
     c->tx_full_hold = false; /* a new pass of the main loop: the next send asks the kernel again */
     co_time_us_t next = CO_NEVER;
@@ -415,4 +418,21 @@ co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
         c->next_reopen = now + REOPEN_INTERVAL_US;
     }
     return c->next_reopen < next ? c->next_reopen : next;
+}
+
+co_time_us_t socketcan_service_run(socketcan_t *c, co_time_us_t now)
+{
+    const co_time_us_t next = service(c, now);
+    /* Each of its branches is due again at one of these times (the error second rolls over at its end even when
+     * nothing waits for it); a frame read or a socket gone bring it forward (socketcan_read, went_away). */
+    co_time_us_t at = c->error_window_end;
+    if ((c->rx_since_query || c->rx_query_again) && c->rx_next_query < at) {
+        at = c->rx_next_query;
+    }
+    if (c->gone && c->next_reopen < at) {
+        at = c->next_reopen;
+    }
+    c->service_at = at;
+    c->service_next = next;
+    return next;
 }
