@@ -2,6 +2,7 @@
 #define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
 #include "emu_bus.h"
 
+#include <poll.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -23,6 +24,9 @@ int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t 
     b->local_count = 0U;
     b->local_lost = 0UL;
     b->log_level = log_level;
+    b->any_dirty = false;
+    b->nodes_next = 0U; /* the first pass is a full one */
+    b->tx_pending = false;
     return socketcan_open(&b->can, ifname, can_log, b, err, errlen);
 }
 
@@ -51,20 +55,23 @@ void bus_routes_update(emu_bus_t *b, const emu_node_t *n)
     }
 }
 
-/* Gives a frame to the nodes that take its CAN-ID (but its sender's): the core would ignore it everywhere else. */
-static void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_time_us_t now)
+/* Gives a frame to the nodes that take its CAN-ID (but its sender's): the core would ignore it everywhere else.
+ * Inline: every frame read and every frame between local nodes comes this way. */
+static inline void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_time_us_t now)
 {
     if ((f->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) != 0U || f->id > 0x7FFU) {
         return; /* CANopen nodes take 11-bit frames only */
     }
-    for (size_t w = 0U; w < 2U; w++) {
+    const size_t words = (b->n_nodes + 63U) / 64U; /* one with up to 64 nodes on the bus */
+    for (size_t w = 0U; w < words; w++) {
         uint64_t bits = b->takes[f->id][w]; /* a copy: a node's reset may change the table meanwhile */
         while (bits != 0U) {
             const size_t i = w * 64U + (size_t)__builtin_ctzll(bits);
             bits &= bits - 1U;
-            if (i != sender && i < b->n_nodes && (faults_none(&b->nodes[i]->faults) || faults_rx(b->nodes[i], f, now)) &&
-                device_rx(&b->nodes[i]->dev, f, now)) {
-                b->nodes[i]->dirty = true;
+            emu_node_t *n = b->nodes[i];
+            if (i != sender && i < b->n_nodes && (faults_none(&n->faults) || faults_rx(n, f, now)) &&
+                device_rx(&n->dev, f, now)) {
+                node_mark_dirty(n);
             }
         }
     }
@@ -80,17 +87,16 @@ static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_
     logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&from->dev.node), (unsigned)f->id, hex);
 }
 
-co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
+/* What a sent frame means beyond the interface: an event, the sender's heartbeat age, the copy for the other
+ * local nodes, the -v line. */
+static void sent(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
 {
-    const co_status_t st = socketcan_send(&b->can, f);
-    if (st == CO_OK) {
-        const co_time_us_t at = from->dev.now != 0U ? from->dev.now : socketcan_now_us();
-        events_frame(b, from, f, at);
-        if (f->id == 0x700U + (uint32_t)from->dev.node.node_id) {
-            from->last_heartbeat = at; /* its age in show: what a master's heartbeat consumer would see */
-        }
+    const co_time_us_t at = from->dev.now != 0U ? from->dev.now : socketcan_now_us();
+    events_frame(b, from, f, at);
+    if (f->id == 0x700U + (uint32_t)from->dev.node.node_id) {
+        from->last_heartbeat = at; /* its age in show: what a master's heartbeat consumer would see */
     }
-    if (st == CO_OK && b->n_nodes > 1U) {
+    if (b->n_nodes > 1U) {
         if (b->local_count == LOCAL_QUEUE_LEN) {
             b->local_lost++; /* the other local nodes miss this frame; counted, reported at exit */
         } else {
@@ -100,15 +106,56 @@ co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
             b->local_count++;
         }
     }
-    if (st == CO_OK && b->log_level >= LOG_VERBOSE) {
+    if (b->log_level >= LOG_VERBOSE) {
         log_sent(from, f);
+    }
+}
+
+co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
+{
+    const co_status_t st = socketcan_send(&b->can, f);
+    if (st == CO_OK) {
+        sent(b, from, f);
     }
     return st;
 }
 
-co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
+/* The faults' part of a node's frame: out of line, a node without faults never comes here. */
+static __attribute__((noinline)) co_status_t send_through_faults(emu_node_t *n, const co_frame_t *f)
+{
+    co_frame_t frame = *f;
+    switch (faults_tx(n, &frame, n->dev.now)) {
+    case FAULT_TX_DROP:
+        return CO_OK; /* lost on the way, as on a bus that never carried it */
+    case FAULT_TX_HELD:
+        return CO_OK; /* bus_run asks faults_run when it is due */
+    default:
+        return bus_send(n->bus, n, &frame);
+    }
+}
+
+co_status_t bus_node_send(void *ctx, const co_frame_t *f)
+{
+    emu_node_t *n = (emu_node_t *)ctx;
+    /* A store is durable before the core answers it: the port's last commit of the store does it (nvm_file.h). */
+    if (!faults_none(&n->faults)) {
+        return send_through_faults(n, f);
+    }
+    emu_bus_t *b = n->bus;
+    const co_status_t st = socketcan_send(&b->can, f);
+    if (st == CO_OK) {
+        sent(b, n, f);
+    }
+    return st;
+}
+
+/* Offers the local frames to the other nodes and processes every node that is dirty or due, until no local frame
+ * waits: the pass bus_run's gating lets through. */
+static co_time_us_t run_nodes(emu_bus_t *b, co_time_us_t now)
 {
     co_time_us_t next = CO_NEVER;
+    bool tx_pending = false;
+    b->any_dirty = false; /* a node marked during the pass keeps it set: the next pass is a full one again */
     do {
         while (b->local_count > 0U) {
             const local_frame_t l = b->local[b->local_head];
@@ -119,7 +166,7 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
         /* Only nodes that are due or were concerned by a frame or a command run: with 127 nodes on one bus,
          * processing every node at every wake-up cost O(nodes^2) per second (docs/performance.md). */
         next = CO_NEVER;
-        *tx_pending = false;
+        tx_pending = false;
         for (size_t i = 0U; i < b->n_nodes; i++) {
             emu_node_t *n = b->nodes[i];
             if (n->dirty || now >= n->deadline) {
@@ -134,14 +181,27 @@ co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
                 n->deadline = held < d ? held : d;
             }
             next = n->deadline < next ? n->deadline : next;
-            *tx_pending = *tx_pending || n->dev.node.txq.count > 0U;
+            tx_pending = tx_pending || n->dev.node.txq.count > 0U;
         }
     } while (b->local_count > 0U); /* the others may have answered: loop until quiet */
+    b->nodes_next = next;
+    b->tx_pending = tx_pending;
+    return next;
+}
+
+static inline co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
+{
+    /* Deadline gating: with no local frame waiting, no node dirty and none due, a pass over the nodes would change
+     * nothing (a node's deadline moves only when it is processed) and find what the last one found. */
+    const co_time_us_t next = b->local_count == 0U && !b->any_dirty && now < b->nodes_next ? b->nodes_next
+                                                                                          : run_nodes(b, now);
+    *tx_pending = b->tx_pending;
     const co_time_us_t r = socketcan_service(&b->can, now);
     return r < next ? r : next;
 }
 
-co_time_us_t bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
+/* Reads what the interface has; returns the time it last read from the clock (now, later after a flood). */
+static inline co_time_us_t bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
 {
     co_frame_t f;
     for (unsigned k = 0U; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
@@ -172,14 +232,26 @@ co_time_us_t bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
     return now;
 }
 
-void bus_tx_ready(emu_bus_t *b)
+/* Room in the socket's buffer again: the nodes with queued frames retry in this pass. Without this the loop would
+ * poll again, get POLLOUT at once, and spin until the nodes' retry deadline. */
+static void tx_ready(emu_bus_t *b)
 {
-    /* Without this the loop would poll again, get POLLOUT at once, and spin until the nodes' retry deadline. */
     for (size_t i = 0U; i < b->n_nodes; i++) {
         if (b->nodes[i]->dev.node.txq.count > 0U) {
-            b->nodes[i]->dirty = true;
+            node_mark_dirty(b->nodes[i]);
         }
     }
+}
+
+co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us_t due, bool *tx_pending)
+{
+    if ((revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
+        *now = bus_receive(b, *now, due);
+    }
+    if ((revents & POLLOUT) != 0) {
+        tx_ready(b);
+    }
+    return bus_run(b, *now, tx_pending);
 }
 
 void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost)

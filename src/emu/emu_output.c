@@ -283,10 +283,10 @@ static bool write_some(output_stream_t *s)
     return false;
 }
 
-void output_flush(void)
+bool output_flush(void)
 {
     if (!output_busy) {
-        return; /* the common pass: nothing written, nothing held back */
+        return false; /* the common pass: nothing written, nothing held back */
     }
     for (int i = 0; i < N_STREAMS; i++) {
         output_stream_t *s = &streams[i];
@@ -301,6 +301,7 @@ void output_flush(void)
         idle = idle && streams[i].len == 0U && !streams[i].dropping && streams[i].dropped_lines == 0U;
     }
     output_busy = !idle;
+    return output_busy;
 }
 
 nfds_t output_poll_fds(struct pollfd *pfd)
@@ -334,7 +335,7 @@ static bool anything_waiting(void)
 static void drain_until(co_time_us_t deadline)
 {
     for (;;) {
-        output_flush();
+        (void)output_flush();
         const co_time_us_t now = socketcan_now_us();
         if (!anything_waiting() || now >= deadline) {
             return;
