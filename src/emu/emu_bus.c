@@ -55,6 +55,21 @@ void bus_routes_update(emu_bus_t *b, const emu_node_t *n)
     }
 }
 
+/* Gives a frame to the nodes of one word of the routing table (bits: the nodes base + 0..63 that take it). */
+static inline void deliver_word(emu_bus_t *b, const co_frame_t *f, size_t base, uint64_t bits, size_t sender,
+                                co_time_us_t now)
+{
+    while (bits != 0U) {
+        const size_t i = base + (size_t)__builtin_ctzll(bits);
+        bits &= bits - 1U;
+        emu_node_t *n = b->nodes[i];
+        if (i != sender && i < b->n_nodes && (faults_none(&n->faults) || faults_rx(n, f, now)) &&
+            device_rx(&n->dev, f, now)) {
+            node_mark_dirty(n);
+        }
+    }
+}
+
 /* Gives a frame to the nodes that take its CAN-ID (but its sender's): the core would ignore it everywhere else.
  * Inline: every frame read and every frame between local nodes comes this way. */
 static inline void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_time_us_t now)
@@ -62,19 +77,9 @@ static inline void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_
     if ((f->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) != 0U || f->id > 0x7FFU) {
         return; /* CANopen nodes take 11-bit frames only */
     }
-    const size_t words = (b->n_nodes + 63U) / 64U; /* one with up to 64 nodes on the bus */
-    for (size_t w = 0U; w < words; w++) {
-        uint64_t bits = b->takes[f->id][w]; /* a copy: a node's reset may change the table meanwhile */
-        while (bits != 0U) {
-            const size_t i = w * 64U + (size_t)__builtin_ctzll(bits);
-            bits &= bits - 1U;
-            emu_node_t *n = b->nodes[i];
-            if (i != sender && i < b->n_nodes && (faults_none(&n->faults) || faults_rx(n, f, now)) &&
-                device_rx(&n->dev, f, now)) {
-                node_mark_dirty(n);
-            }
-        }
-    }
+    /* each word copied as it is taken: a node's reset may change the table meanwhile */
+    deliver_word(b, f, 0U, b->takes[f->id][0], sender, now);
+    deliver_word(b, f, 64U, b->takes[f->id][1], sender, now); /* nodes 64..126 */
 }
 
 /* Out of line: -v only; its buffer would otherwise cost every frame sent a larger stack frame. */
@@ -89,7 +94,7 @@ static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_
 
 /* What a sent frame means beyond the interface: an event, the sender's heartbeat age, the copy for the other
  * local nodes, the -v line. */
-static void sent(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
+static inline __attribute__((always_inline)) void sent(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
 {
     const co_time_us_t at = from->dev.now != 0U ? from->dev.now : socketcan_now_us();
     events_frame(b, from, f, at);

@@ -232,19 +232,16 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
         c->lost_while_down++;
         return CO_ERR_IO;
     }
-    struct can_frame cf;
-    memset(&cf, 0, sizeof cf);
-    cf.can_id = frame->id & CAN_SFF_MASK;
-    if ((frame->flags & CO_FRAME_RTR) != 0U) {
-        cf.can_id |= CAN_RTR_FLAG;
-    }
-    cf.can_dlc = frame->len;
-    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
     if (c->tx_full_hold) {
         /* The queue was full earlier in this pass of the main loop: with many nodes on one socket, each
          * retrying its frame every CO_TX_RETRY_US, asking again would cost one failing system call per node. */
         return CO_ERR_BUSY;
     }
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = (frame->id & CAN_SFF_MASK) | ((frame->flags & CO_FRAME_RTR) != 0U ? CAN_RTR_FLAG : 0U);
+    cf.can_dlc = frame->len;
+    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
     ssize_t n = write(c->fd, &cf, sizeof cf);
     if (n < 0 && errno == ENETDOWN && iface_up(c)) {
         /* A socket error is delivered once, to the next read or write, whenever that comes: this ENETDOWN can
@@ -329,31 +326,39 @@ static void rx_setup(socketcan_t *c)
     }
 }
 
+/* Reads ahead what the kernel has, up to SOCKETCAN_RX_BATCH frames (one system call): their count, or what
+ * socketcan_read answers when there is none (0: nothing waits, -1: the interface went away). */
+static int rx_refill(socketcan_t *c)
+{
+    if (c->fd < 0) {
+        return 0;
+    }
+    if (c->rx_msgs[0].msg_hdr.msg_iov != &c->rx_iov[0]) {
+        rx_setup(c);
+    }
+    /* Fewer than asked for: the queue ran empty (or an error came after the first frames, which the next call
+     * returns). */
+    const int n = recvmmsg(c->fd, c->rx_msgs, SOCKETCAN_RX_BATCH, MSG_DONTWAIT, NULL);
+    if (n < 0) {
+        return read_failed(c, errno);
+    }
+    c->rx_next = 0U;
+    c->rx_count = (unsigned)n;
+    c->rx_drained = (unsigned)n < SOCKETCAN_RX_BATCH;
+    return n;
+}
+
 int socketcan_read(socketcan_t *c, co_frame_t *frame)
 {
     for (;;) {
         if (c->rx_next == c->rx_count) {
-            if (c->fd < 0) {
-                return 0;
+            const int n = rx_refill(c);
+            if (n <= 0) {
+                return n;
             }
-            if (c->rx_msgs[0].msg_hdr.msg_iov != &c->rx_iov[0]) {
-                rx_setup(c);
-            }
-            /* Fewer than asked for: the queue ran empty (or an error came after the first frames, which the next
-             * call returns). */
-            const int n = recvmmsg(c->fd, c->rx_msgs, SOCKETCAN_RX_BATCH, MSG_DONTWAIT, NULL);
-            if (n < 0) {
-                return read_failed(c, errno);
-            }
-            c->rx_next = 0U;
-            c->rx_count = (unsigned)n;
-            c->rx_drained = (unsigned)n < SOCKETCAN_RX_BATCH;
-            continue;
         }
-        const struct can_frame *cf = &c->rx_frames[c->rx_next];
-        const unsigned len = c->rx_msgs[c->rx_next].msg_len;
-        c->rx_next++;
-        if (len != sizeof *cf) {
+        const unsigned k = c->rx_next++;
+        if (c->rx_msgs[k].msg_len != sizeof c->rx_frames[k]) {
             continue; /* not a classic CAN frame */
         }
         if (c->down && iface_up(c)) {
@@ -366,13 +371,15 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
             c->service_at = c->rx_next_query < c->service_at ? c->rx_next_query : c->service_at;
             c->service_next = c->rx_next_query < c->service_next ? c->rx_next_query : c->service_next;
         }
-        if ((cf->can_id & CAN_ERR_FLAG) != 0U) {
+        const struct can_frame *cf = &c->rx_frames[k];
+        const canid_t id = cf->can_id;
+        if ((id & CAN_ERR_FLAG) != 0U) {
             error_frame(c, cf);
             continue;
         }
-        frame->flags = (uint8_t)(((cf->can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
-                                 ((cf->can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
-        frame->id = (cf->can_id & CAN_EFF_FLAG) != 0U ? (cf->can_id & CAN_EFF_MASK) : (cf->can_id & CAN_SFF_MASK);
+        const bool eff = (id & CAN_EFF_FLAG) != 0U;
+        frame->id = id & (eff ? CAN_EFF_MASK : CAN_SFF_MASK);
+        frame->flags = (uint8_t)(((id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) | (eff ? CO_FRAME_EFF : 0U));
         frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
         memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
         return 1;
