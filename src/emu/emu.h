@@ -1,9 +1,9 @@
 /*
  * The canopen-emu runtime's state, shared by its modules. Where each concern lives:
  *   canopen_emu.c   main: the options, then emu_runtime
- *   emu_runtime.c   start (buses, nodes), the main loop (one poll for everything), the exit summary
+ *   emu_runtime.c   start (buses, nodes), the exit summary; emu_loop.c the main loop (one poll for everything)
  *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing each frame to
- *                   the nodes that take its CAN-ID
+ *                   the nodes that take its CAN-ID; emu_bus_pass.c a pass of the loop for it (frames in, nodes run)
  *   emu_node.c      one emulated node: the device, its port (CAN through its bus, NVM files)
  *   emu_faults.c    protocol faults injected between a node and its bus
  *   emu_events.c    what the nodes report (NMT changes, EMCY, aborts, stores...) turned into log lines
