@@ -2,7 +2,7 @@
 """The bus half of tools/bench: runs where vcan0 is up (inside one `tools/vcan-run` call) and writes one
 JSON file with every figure. Standard library only.
 
-    run_bus.py --bin DIR --emu PATH --work DIR --out FILE [--mode full|quick|smoke]
+    run_bus.py --bin DIR --emu PATH --work DIR --out FILE [--mode full|quick|smoke] [--only SECTION]
 
 Sections (docs/performance.md explains each): SDO round trip against bench-echo (the floor) and
 canopen-emu; heartbeat/TPDO periods next to the ideal generator; the heartbeat while a control client floods
@@ -461,6 +461,8 @@ def main():
     ap.add_argument("--work", required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--mode", choices=sorted(SIZES), default="full")
+    ap.add_argument("--only", choices=("rtt", "periods", "flood", "callgrind", "scale"),
+                    help="run this section alone (tools/bench --emu-instructions: callgrind)")
     args = ap.parse_args()
     args.bin = os.path.abspath(args.bin)
     args.emu = os.path.abspath(args.emu)
@@ -475,6 +477,8 @@ def main():
     if sz["callgrind"]:
         steps.append(("callgrind", callgrind))
     steps.append(("scale", scale))
+    if args.only:
+        steps = [(name, fn) for name, fn in steps if name == args.only]
     try:
         for name, fn in steps:
             t0 = time.monotonic()

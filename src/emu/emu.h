@@ -1,9 +1,9 @@
 /*
  * The canopen-emu runtime's state, shared by its modules. Where each concern lives:
  *   canopen_emu.c   main: the options, then emu_runtime
- *   emu_runtime.c   start (buses, nodes), the main loop (one poll for everything), the exit summary
+ *   emu_runtime.c   start (buses, nodes), the exit summary; emu_loop.c the main loop (one poll for everything)
  *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing each frame to
- *                   the nodes that take its CAN-ID
+ *                   the nodes that take its CAN-ID; emu_bus_pass.c a pass of the loop for it (frames in, nodes run)
  *   emu_node.c      one emulated node: the device, its port (CAN through its bus, NVM files)
  *   emu_faults.c    protocol faults injected between a node and its bus
  *   emu_events.c    what the nodes report (NMT changes, EMCY, aborts, stores...) turned into log lines
@@ -93,6 +93,12 @@ typedef struct emu_bus {
     unsigned long local_lost;
     int log_level;
     uint64_t takes[0x800][2]; /* bit i (word i / 64): node i takes frames on this CAN-ID (co_node_rx_ids) */
+    /* Deadline gating (bus_run): a node is dirty (any_dirty), or nodes_next (the earliest deadline of the nodes, as
+     * the last full pass left them) has come; otherwise a pass leaves the nodes alone. tx_pending: the last full
+     * pass found a node with frames the interface refused. */
+    bool any_dirty;
+    co_time_us_t nodes_next;
+    bool tx_pending;
     heard_node_t heard[128];  /* by node-ID; frames of this program's own nodes never come back to its socket */
 } emu_bus_t;
 
@@ -113,6 +119,13 @@ typedef struct emu {
     bool command_restricted; /* the command line running comes from a restricted session (emu_session_t) */
     bool quit;
 } emu_t;
+
+/** The node is to be processed before the loop sleeps: a frame concerned it, a command or a fault changed it. */
+static inline void node_mark_dirty(emu_node_t *n)
+{
+    n->dirty = true;
+    n->bus->any_dirty = true;
+}
 
 /** A time of the monotonic clock on the events' clock: µs since the emulator started (0 for a time before it). */
 static inline co_time_us_t emu_since_start(const emu_t *emu, co_time_us_t at)

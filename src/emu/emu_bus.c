@@ -23,6 +23,9 @@ int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t 
     b->local_count = 0U;
     b->local_lost = 0UL;
     b->log_level = log_level;
+    b->any_dirty = false;
+    b->nodes_next = 0U; /* the first pass is a full one */
+    b->tx_pending = false;
     return socketcan_open(&b->can, ifname, can_log, b, err, errlen);
 }
 
@@ -51,25 +54,6 @@ void bus_routes_update(emu_bus_t *b, const emu_node_t *n)
     }
 }
 
-/* Gives a frame to the nodes that take its CAN-ID (but its sender's): the core would ignore it everywhere else. */
-static void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_time_us_t now)
-{
-    if ((f->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) != 0U || f->id > 0x7FFU) {
-        return; /* CANopen nodes take 11-bit frames only */
-    }
-    for (size_t w = 0U; w < 2U; w++) {
-        uint64_t bits = b->takes[f->id][w]; /* a copy: a node's reset may change the table meanwhile */
-        while (bits != 0U) {
-            const size_t i = w * 64U + (size_t)__builtin_ctzll(bits);
-            bits &= bits - 1U;
-            if (i != sender && i < b->n_nodes && (faults_none(&b->nodes[i]->faults) || faults_rx(b->nodes[i], f, now)) &&
-                device_rx(&b->nodes[i]->dev, f, now)) {
-                b->nodes[i]->dirty = true;
-            }
-        }
-    }
-}
-
 /* Out of line: -v only; its buffer would otherwise cost every frame sent a larger stack frame. */
 static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_frame_t *f)
 {
@@ -80,17 +64,16 @@ static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_
     logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&from->dev.node), (unsigned)f->id, hex);
 }
 
-co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
+/* What a sent frame means beyond the interface: an event, the sender's heartbeat age, the copy for the other
+ * local nodes, the -v line. */
+static inline __attribute__((always_inline)) void frame_sent(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
 {
-    const co_status_t st = socketcan_send(&b->can, f);
-    if (st == CO_OK) {
-        const co_time_us_t at = from->dev.now != 0U ? from->dev.now : socketcan_now_us();
-        events_frame(b, from, f, at);
-        if (f->id == 0x700U + (uint32_t)from->dev.node.node_id) {
-            from->last_heartbeat = at; /* its age in show: what a master's heartbeat consumer would see */
-        }
+    const co_time_us_t at = from->dev.now != 0U ? from->dev.now : socketcan_now_us();
+    events_frame(b, from, f, at);
+    if (f->id == 0x700U + (uint32_t)from->dev.node.node_id) {
+        from->last_heartbeat = at; /* its age in show: what a master's heartbeat consumer would see */
     }
-    if (st == CO_OK && b->n_nodes > 1U) {
+    if (b->n_nodes > 1U) {
         if (b->local_count == LOCAL_QUEUE_LEN) {
             b->local_lost++; /* the other local nodes miss this frame; counted, reported at exit */
         } else {
@@ -100,85 +83,47 @@ co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
             b->local_count++;
         }
     }
-    if (st == CO_OK && b->log_level >= LOG_VERBOSE) {
+    if (b->log_level >= LOG_VERBOSE) {
         log_sent(from, f);
+    }
+}
+
+co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
+{
+    const co_status_t st = socketcan_send(&b->can, f);
+    if (st == CO_OK) {
+        frame_sent(b, from, f);
     }
     return st;
 }
 
-co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
+/* The faults' part of a node's frame: out of line, a node without faults never comes here. */
+static __attribute__((noinline)) co_status_t send_through_faults(emu_node_t *n, const co_frame_t *f)
 {
-    co_time_us_t next = CO_NEVER;
-    do {
-        while (b->local_count > 0U) {
-            const local_frame_t l = b->local[b->local_head];
-            b->local_head = (b->local_head + 1U) % LOCAL_QUEUE_LEN;
-            b->local_count--;
-            deliver(b, &l.frame, l.sender, now);
-        }
-        /* Only nodes that are due or were concerned by a frame or a command run: with 127 nodes on one bus,
-         * processing every node at every wake-up cost O(nodes^2) per second (docs/performance.md). */
-        next = CO_NEVER;
-        *tx_pending = false;
-        for (size_t i = 0U; i < b->n_nodes; i++) {
-            emu_node_t *n = b->nodes[i];
-            if (n->dirty || now >= n->deadline) {
-                n->dirty = false;
-                co_time_us_t d = device_process(&n->dev, now);
-                /* frames held back (this pass's too), a bus-off's end */
-                const co_time_us_t held = faults_none(&n->faults) ? CO_NEVER : faults_run(n, now);
-                if (n->dirty) {
-                    n->dirty = false;
-                    d = device_process(&n->dev, now); /* the faults changed the node: a recovery EMCY goes out now */
-                }
-                n->deadline = held < d ? held : d;
-            }
-            next = n->deadline < next ? n->deadline : next;
-            *tx_pending = *tx_pending || n->dev.node.txq.count > 0U;
-        }
-    } while (b->local_count > 0U); /* the others may have answered: loop until quiet */
-    const co_time_us_t r = socketcan_service(&b->can, now);
-    return r < next ? r : next;
-}
-
-void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
-{
-    co_frame_t f;
-    for (unsigned k = 0U; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
-        if (b->log_level >= LOG_VERBOSE) {
-            logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
-        }
-        events_frame(b, NULL, &f, now);
-        if ((f.id & 0x780U) == 0x700U && f.id != 0x700U && f.len >= 1U &&
-            (f.flags & (CO_FRAME_RTR | CO_FRAME_EFF | CO_FRAME_ERR)) == 0U) {
-            /* another node's heartbeat, boot-up or guarding answer: the overview lists the nodes heard */
-            b->heard[f.id & 0x7FU] = (heard_node_t){now, (uint8_t)(f.data[0] & 0x7FU)};
-        }
-        deliver(b, &f, MAX_NODES, now);
-        /* Clients that send a request as soon as an answer is out keep the socket from running dry: without this a
-         * flood could hold every heartbeat back until 1024 frames were read (a 350 ms gap failed test_bus_faults'
-         * flood test in a loaded run). Looked at once a read-ahead batch is used up, where stopping loses nothing;
-         * a batch that emptied the kernel's queue ends the reading without another call. */
-        if (socketcan_read_ahead_empty(&b->can)) {
-            if (socketcan_read_drained(&b->can)) {
-                break;
-            }
-            now = socketcan_now_us();
-            if (now >= due) {
-                break;
-            }
-        }
+    co_frame_t frame = *f;
+    switch (faults_tx(n, &frame, n->dev.now)) {
+    case FAULT_TX_DROP:
+        return CO_OK; /* lost on the way, as on a bus that never carried it */
+    case FAULT_TX_HELD:
+        return CO_OK; /* bus_run asks faults_run when it is due */
+    default:
+        return bus_send(n->bus, n, &frame);
     }
 }
 
-void bus_tx_ready(emu_bus_t *b)
+co_status_t bus_node_send(void *ctx, const co_frame_t *f)
 {
-    /* Without this the loop would poll again, get POLLOUT at once, and spin until the nodes' retry deadline. */
-    for (size_t i = 0U; i < b->n_nodes; i++) {
-        if (b->nodes[i]->dev.node.txq.count > 0U) {
-            b->nodes[i]->dirty = true;
-        }
+    emu_node_t *n = (emu_node_t *)ctx;
+    /* A store is durable before the core answers it: the port's last commit of the store does it (nvm_file.h). */
+    if (!faults_none(&n->faults)) {
+        return send_through_faults(n, f);
     }
+    emu_bus_t *b = n->bus;
+    const co_status_t st = socketcan_send(&b->can, f);
+    if (st == CO_OK) {
+        frame_sent(b, n, f);
+    }
+    return st;
 }
 
 void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost)

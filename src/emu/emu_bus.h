@@ -27,17 +27,18 @@ void bus_routes_remove(emu_bus_t *b, const emu_node_t *n);
 /** A node's frame: onto the interface, and, once sent, queued for the bus's other nodes. */
 co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f);
 
-/** Offers the queued frames of local nodes to the others, then processes every node that is due or was concerned
- *  by a frame or a command, until no local frame waits. Returns the earliest deadline of its nodes and of the
- *  interface; *tx_pending tells whether a node has frames the interface did not take yet. */
-co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending);
+/** co_port_t.send of every node (ctx: its emu_node_t): bus_send, through the node's faults when it has any
+ *  (emu_faults.h: a frame may be dropped, changed or held back). */
+co_status_t bus_node_send(void *ctx, const co_frame_t *f);
 
-/** Reads what the interface has (at most 1024 frames) and gives each frame to the nodes that take it; stops early
- *  once the clock reaches due (the earliest deadline of the loop), so that timers run between frames of a flood. */
-void bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due);
-
-/** The interface has room again: the nodes with queued frames retry in the next pass. */
-void bus_tx_ready(emu_bus_t *b);
+/** One pass of the main loop for the bus. First what woke it (revents of its socket): reads what the interface has (at
+ *  most 1024 frames) and gives each frame to the nodes that take it, stopping early once the clock reaches due (the
+ *  loop's earliest deadline) so that timers run between frames of a flood; after POLLOUT, the nodes with queued
+ *  frames retry. Then offers the queued frames of local nodes to the others and processes every node that is due or
+ *  was concerned by a frame or a command, until no local frame waits. *now: the time of the pass, read again after
+ *  each batch of a flood. Returns the earliest deadline of its nodes and of the interface; *tx_pending tells whether a
+ *  node has frames the interface did not take yet. */
+co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us_t due, bool *tx_pending);
 
 /** The exit report of the bus (its lost frames), its counts added to sent, dropped and rx_lost; closes the socket. */
 void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost);

@@ -250,7 +250,7 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         }
         emu->in_command = false;
         argv[1] = saved;
-        n->dirty = true;
+        node_mark_dirty(n);
         if (r == DEVICE_CMD_UNKNOWN) {
             reply("node %u: error: unknown command '%s' (try help %u)", co_node_id(&n->dev.node), cmd,
                   co_node_id(&n->dev.node));

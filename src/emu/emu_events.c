@@ -291,8 +291,8 @@ void events_interface(emu_bus_t *bus, const char *line)
 }
 
 /* Out of line: its buffers would otherwise make every frame pay for a stack frame nobody uses. */
-static __attribute__((noinline)) void frame_event(emu_t *emu, emu_bus_t *bus, const emu_node_t *from,
-                                                  const co_frame_t *f, co_time_us_t at)
+__attribute__((noinline)) void events_frame_publish(emu_t *emu, emu_bus_t *bus, const emu_node_t *from,
+                                                    const co_frame_t *f, co_time_us_t at)
 {
     if (!anyone_wants(emu, EVENT_FRAME, from != NULL ? co_node_id(&from->dev.node) : 0U, bus, f->id)) {
         return; /* nothing is built for a frame nobody's filter takes */
@@ -312,12 +312,4 @@ static __attribute__((noinline)) void frame_event(emu_t *emu, emu_bus_t *bus, co
     (void)snprintf(text, sizeof text, "%s %03X#%s%s", from != NULL ? "tx" : "rx", (unsigned)f->id, hex,
                    (f->flags & CO_FRAME_RTR) != 0U ? "R" : "");
     publish(emu, EVENT_FRAME, from, bus, at, f->id, text, fields);
-}
-
-void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at)
-{
-    emu_t *emu = bus->emu;
-    if (emu != NULL && emu->n_sessions != 0U) { /* the common case, no session: nothing else is looked at */
-        frame_event(emu, bus, from, f, at);
-    }
 }

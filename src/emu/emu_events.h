@@ -27,7 +27,17 @@ void events_interface(emu_bus_t *bus, const char *line);
 /** A protocol fault of node n: kind ("sdo-ignore"...), action ("injected", "cleared", "ended"); logged too. */
 void events_fault(emu_node_t *n, const char *kind, const char *action, const char *text);
 
-/** A frame on the bus at time at: sent by from, or received (from NULL). Costs a comparison when nobody subscribed. */
-void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at);
+/** Publishes a frame to the sessions whose subscription takes it (events_frame's work when a session exists). */
+void events_frame_publish(emu_t *emu, emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at);
+
+/** A frame on the bus at time at: sent by from, or received (from NULL). Inline: every frame comes this way, and
+ *  without a session (the common case) it costs a comparison, not a call. */
+static inline void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at)
+{
+    emu_t *emu = bus->emu;
+    if (emu != NULL && emu->n_sessions != 0U) {
+        events_frame_publish(emu, bus, from, f, at);
+    }
+}
 
 #endif /* EMU_EVENTS_H */

@@ -217,7 +217,7 @@ co_time_us_t faults_run(struct emu_node *n, co_time_us_t now)
         f->active &= ~bit(FAULT_BUS_OFF);
         const uint8_t msef[5] = {0U, 0U, 0U, 0U, 0U};
         (void)co_emcy_raise(&n->dev.node, 0x8140U, 0x10U, msef);
-        n->dirty = true;
+        node_mark_dirty(n);
         events_fault(n, "bus-off", "ended", "recovered from bus-off: EMCY 0x8140");
     }
     co_time_us_t next = CO_NEVER;
@@ -515,7 +515,7 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
             reply("node %u: error: the node did not restart", node_id(n));
             return 1;
         }
-        n->dirty = true;
+        node_mark_dirty(n);
         reply("node %u: fault reboot: restarted", node_id(n));
         return 0;
     case FAULT_BUS_OFF:
@@ -523,14 +523,14 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
             return refuse(n, "fault NODE bus-off MS (1..3600000)");
         }
         f->bus_off_until = now + (co_time_us_t)a * 1000U;
-        n->dirty = true; /* its deadline now includes the recovery */
+        node_mark_dirty(n); /* its deadline now includes the recovery */
         break;
     default:
         reply("node %u: error: unknown fault '%s' (try: fault %u)", node_id(n), argv[1], node_id(n));
         return 1;
     }
     f->active |= bit((fault_kind_t)k);
-    n->dirty = true;
+    node_mark_dirty(n);
     describe(n, (fault_kind_t)k, now);
     char text[160];
     (void)snprintf(text, sizeof text, "fault %s injected", argv[1]);
@@ -560,7 +560,7 @@ int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now)
                 }
             }
         }
-        n->dirty = true;
+        node_mark_dirty(n);
         reply("node %u: fault-clear: %s", node_id(n), k < 0 ? "all faults cleared" : "cleared");
         return 0;
     }

@@ -108,7 +108,7 @@ static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, ui
     q->emu->in_command = true;
     const uint32_t abort_code = co_od_read(&n->dev.node, index, sub, buf, sizeof buf, &len, CO_ORIGIN_LOCAL);
     q->emu->in_command = false;
-    n->dirty = true;
+    node_mark_dirty(n);
     if (abort_code != 0U) {
         fail(q->s, q->id, "0x%04X:%02X: %s (0x%08lX)", index, sub, co_abort_text(abort_code), (unsigned long)abort_code);
         return false;
@@ -195,7 +195,7 @@ static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
         (void)json_array_append_new(values, v);
     }
     q->emu->in_command = false;
-    n->dirty = true;
+    node_mark_dirty(n);
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
     (void)json_object_set_new(r, "values", values);
@@ -262,7 +262,7 @@ void cmd_set(const request_t *q)
     q->emu->in_command = true;
     const device_cmd_result_t dr = device_command(&n->dev, 3, (const char *const *)argv, n->dev.now);
     q->emu->in_command = false;
-    n->dirty = true;
+    node_mark_dirty(n);
     output_set_reply_sink(NULL, NULL);
     json_decref(c.lines);
     if (dr != DEVICE_CMD_OK) {
@@ -371,7 +371,7 @@ void cmd_objects(const request_t *q)
         }
     }
     q->emu->in_command = false;
-    n->dirty = true;
+    node_mark_dirty(n);
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
     (void)json_object_set_new(r, "objects", rows);

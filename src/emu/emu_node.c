@@ -10,23 +10,6 @@
 #include "emu_events.h"
 #include "emu_output.h"
 
-static co_status_t port_send(void *ctx, const co_frame_t *f)
-{
-    emu_node_t *n = (emu_node_t *)ctx;
-    /* A store is durable before the core answers it: the port's last commit of the store does it (nvm_file.h). */
-    if (faults_none(&n->faults)) {
-        return bus_send(n->bus, n, f);
-    }
-    co_frame_t frame = *f;
-    switch (faults_tx(n, &frame, n->dev.now)) {
-    case FAULT_TX_DROP:
-        return CO_OK; /* lost on the way, as on a bus that never carried it */
-    case FAULT_TX_HELD:
-        return CO_OK; /* bus_run asks faults_run when it is due */
-    default:
-        return bus_send(n->bus, n, &frame);
-    }
-}
 static co_status_t port_nvm_write(void *ctx, co_nvm_area_t a, uint32_t off, const void *d, size_t len)
 {
     return nvm_file_write(&((emu_node_t *)ctx)->nvm, a, off, d, len);
@@ -80,7 +63,7 @@ emu_node_t *node_create(emu_bus_t *bus, bool first_bus, const node_spec_t *spec,
         node_destroy(n);
         return NULL;
     }
-    n->port.send = port_send;
+    n->port.send = bus_node_send;
     n->port.nvm_write = port_nvm_write;
     n->port.nvm_commit = port_nvm_commit;
     n->port.nvm_read = port_nvm_read;

@@ -48,6 +48,9 @@ static output_stream_t streams[N_STREAMS] = {{.name = "stderr", .what = "log", .
 static co_time_us_t output_start;
 static int output_log_level;
 static bool output_ready;
+/* A line was put or dropped since output_flush last found both streams idle: the main loop's flush and poll entries
+ * cost a test, not a look at both streams, in the common pass where nothing was logged. */
+static bool output_busy;
 
 static void setup(output_stream_t *s)
 {
@@ -96,10 +99,12 @@ static void ring_put(output_stream_t *s, const char *data, size_t n)
     memcpy(s->ring + tail, data, first);
     memcpy(s->ring, data + first, n - first);
     s->len += n;
+    output_busy = true;
 }
 
 static void drop(output_stream_t *s, unsigned long lines, size_t bytes)
 {
+    output_busy = true;
     s->dropped_lines += lines;
     s->dropped_bytes += bytes;
     s->dropped_lines_total += lines;
@@ -278,14 +283,10 @@ static bool write_some(output_stream_t *s)
     return false;
 }
 
-void output_flush(void)
+bool output_flush(void)
 {
-    bool idle = true;
-    for (int i = 0; i < N_STREAMS; i++) {
-        idle = idle && streams[i].len == 0U && !streams[i].dropping && streams[i].dropped_lines == 0U;
-    }
-    if (idle) {
-        return; /* the common pass: nothing written, nothing held back */
+    if (!output_busy) {
+        return false; /* the common pass: nothing written, nothing held back */
     }
     for (int i = 0; i < N_STREAMS; i++) {
         output_stream_t *s = &streams[i];
@@ -295,11 +296,20 @@ void output_flush(void)
     for (int i = 0; i < N_STREAMS; i++) { /* the log first: the reports of both go there */
         resume_once_drained(&streams[i]);
     }
+    bool idle = true;
+    for (int i = 0; i < N_STREAMS; i++) {
+        idle = idle && streams[i].len == 0U && !streams[i].dropping && streams[i].dropped_lines == 0U;
+    }
+    output_busy = !idle;
+    return output_busy;
 }
 
 nfds_t output_poll_fds(struct pollfd *pfd)
 {
     nfds_t n = 0U;
+    if (!output_busy) {
+        return 0U; /* both streams empty (output_flush found them so) */
+    }
     for (int i = 0; i < N_STREAMS; i++) {
         if (streams[i].len > 0U && streams[i].how != WRITE_NOWHERE) {
             pfd[n].fd = streams[i].fd;
@@ -325,7 +335,7 @@ static bool anything_waiting(void)
 static void drain_until(co_time_us_t deadline)
 {
     for (;;) {
-        output_flush();
+        (void)output_flush();
         const co_time_us_t now = socketcan_now_us();
         if (!anything_waiting() || now >= deadline) {
             return;

@@ -20,6 +20,7 @@
 #define EMU_OUTPUT_H
 
 #include <poll.h>
+#include <stdbool.h>
 
 #include "co/co.h"
 
@@ -51,8 +52,9 @@ void output_set_reply_sink(reply_sink_fn fn, void *ctx);
 /** One whole line (newline included) on stdout as it is, whatever the reply sink: the stdin session's output. */
 void output_reply_line(const char *line, size_t len);
 
-/** Writes what the streams can take now, without blocking. Call once per pass of the main loop. */
-void output_flush(void);
+/** Writes what the streams can take now, without blocking. Call once per pass of the main loop. Returns whether
+ *  bytes wait still (or drops wait to be reported): only then has output_poll_fds anything to add. */
+bool output_flush(void);
 
 /** Adds a POLLOUT entry to pfd for each stream with bytes waiting (at most 2); returns how many. */
 nfds_t output_poll_fds(struct pollfd *pfd);

@@ -1,18 +1,14 @@
-/* The runtime's start, main loop and stop: see emu_runtime.h. */
-#define _GNU_SOURCE /* ppoll, PATH_MAX and POSIX calls, as in every file of the Linux program */
+/* The runtime's start and stop, and its signals: see emu_runtime.h (the loop itself: emu_loop.c). */
+#define _GNU_SOURCE /* PATH_MAX and POSIX calls, as in every file of the Linux program */
 #include "emu_runtime.h"
 
-#include <errno.h>
-#include <poll.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "emu_bus.h"
-#include "emu_commands.h"
 #include "emu_control.h"
+#include "emu_loop.h"
 #include "emu_output.h"
 #include "emu_script.h"
 #include "emu_socket.h"
@@ -99,85 +95,7 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
 
 int runtime_loop(emu_t *emu)
 {
-    /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients, the web */
-    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1];
-    while (!emu->quit && stop_signal == 0) {
-        /* Read afresh: the time of the last wake-up would be late by this pass's reading and commands, and a deadline
-         * that fell in between would cost another whole pass (with 127 nodes, more than the clock read saves). */
-        co_time_us_t now = socketcan_now_us();
-        char line[COMMAND_LINE_MAX + 1];
-        /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
-        while (!emu->quit && script_next_at(&emu->script) <= now - emu->start &&
-               script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
-            run_command(emu, line);
-        }
-        co_time_us_t next = CO_NEVER;
-        nfds_t nfds = 0U;
-        for (size_t i = 0U; i < emu->n_buses; i++) {
-            emu_bus_t *b = emu->buses[i];
-            bool tx_pending = false;
-            const co_time_us_t t = bus_run(b, now, &tx_pending);
-            next = t < next ? t : next;
-            pfd[nfds].fd = b->can.fd; /* -1 while the interface is gone: poll ignores it */
-            pfd[nfds].events = socketcan_poll_events(&b->can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
-            pfd[nfds].revents = 0;
-            nfds++;
-        }
-        const co_time_us_t script_at = script_next_at(&emu->script);
-        if (script_at != CO_NEVER && emu->start + script_at < next) {
-            next = emu->start + script_at;
-        }
-        output_flush(); /* what this pass logged and replied, as far as the readers take it */
-        sockets_flush(&emu->sockets);
-        const nfds_t stdin_index = emu->control.open ? nfds : 0U;
-        if (emu->control.open) {
-            pfd[nfds].fd = STDIN_FILENO;
-            pfd[nfds].events = POLLIN;
-            pfd[nfds].revents = 0;
-            nfds++;
-        }
-        nfds += output_poll_fds(&pfd[nfds]); /* POLLOUT wakes the loop to write more: the next pass does */
-        const nfds_t sockets_index = nfds;
-        nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
-        const nfds_t web_index = nfds;
-        now = socketcan_now_us();
-        if (emu->web.daemon != NULL) { /* without --web a pass pays for neither call */
-            nfds += web_poll_fds(&emu->web, &pfd[nfds], now, &next);
-        }
-        struct timespec ts;
-        struct timespec *timeout = NULL;
-        if (next != CO_NEVER) {
-            const co_time_us_t wait = next > now ? next - now : 0U;
-            ts.tv_sec = (time_t)(wait / 1000000U);
-            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
-            timeout = &ts;
-        }
-        const int ready = ppoll(pfd, nfds, timeout, NULL);
-        if (ready < 0) {
-            if (errno == EINTR) {
-                continue;
-            }
-            output_error("poll: %s", strerror(errno));
-            return 1;
-        }
-        now = socketcan_now_us();
-        for (size_t i = 0U; i < emu->n_buses; i++) {
-            if ((pfd[i].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
-                bus_receive(emu->buses[i], now, next);
-            }
-            if ((pfd[i].revents & POLLOUT) != 0) {
-                bus_tx_ready(emu->buses[i]); /* room in the socket's buffer: nodes with queued frames retry now */
-            }
-        }
-        if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
-            control_read(emu);
-        }
-        sockets_service(emu, &emu->sockets, &pfd[sockets_index], web_index - sockets_index);
-        if (emu->web.daemon != NULL) {
-            web_service(emu, &emu->web, &pfd[web_index], nfds - web_index, now);
-        }
-    }
-    return 0;
+    return loop_run(emu, &stop_signal);
 }
 
 void runtime_stop(emu_t *emu)

@@ -18,13 +18,6 @@
 
 #define REOPEN_INTERVAL_US 500000U
 
-co_time_us_t socketcan_now_us(void)
-{
-    struct timespec ts;
-    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (co_time_us_t)ts.tv_sec * 1000000U + (co_time_us_t)ts.tv_nsec / 1000U;
-}
-
 static void logf_(socketcan_t *c, const char *fmt, const char *detail)
 {
     if (c->log != NULL) {
@@ -229,6 +222,7 @@ static void went_away(socketcan_t *c, int e)
     socketcan_close(c);
     c->gone = true;
     c->next_reopen = 0U;
+    c->service_at = 0U;
 }
 
 co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
@@ -238,19 +232,16 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
         c->lost_while_down++;
         return CO_ERR_IO;
     }
-    struct can_frame cf;
-    memset(&cf, 0, sizeof cf);
-    cf.can_id = frame->id & CAN_SFF_MASK;
-    if ((frame->flags & CO_FRAME_RTR) != 0U) {
-        cf.can_id |= CAN_RTR_FLAG;
-    }
-    cf.can_dlc = frame->len;
-    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
     if (c->tx_full_hold) {
         /* The queue was full earlier in this pass of the main loop: with many nodes on one socket, each
          * retrying its frame every CO_TX_RETRY_US, asking again would cost one failing system call per node. */
         return CO_ERR_BUSY;
     }
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = (frame->id & CAN_SFF_MASK) | ((frame->flags & CO_FRAME_RTR) != 0U ? CAN_RTR_FLAG : 0U);
+    cf.can_dlc = frame->len;
+    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
     ssize_t n = write(c->fd, &cf, sizeof cf);
     if (n < 0 && errno == ENETDOWN && iface_up(c)) {
         /* A socket error is delivered once, to the next read or write, whenever that comes: this ENETDOWN can
@@ -303,6 +294,9 @@ static __attribute__((noinline)) void error_frame(socketcan_t *c, const struct c
     } else {
         c->error_frames_unlogged++; /* summed up by socketcan_service at the end of the second */
         (void)memcpy(c->error_last, detail, sizeof detail);
+        if (c->error_window_end < c->service_next) {
+            c->service_next = c->error_window_end; /* the summary wakes the loop, even on a bus gone quiet */
+        }
     }
 }
 
@@ -332,52 +326,68 @@ static void rx_setup(socketcan_t *c)
     }
 }
 
+/* Reads ahead what the kernel has, up to SOCKETCAN_RX_BATCH frames (one system call): their count, or what
+ * socketcan_read answers when there is none (0: nothing waits, -1: the interface went away). */
+static int rx_refill(socketcan_t *c)
+{
+    if (c->fd < 0) {
+        return 0;
+    }
+    if (c->rx_msgs[0].msg_hdr.msg_iov != &c->rx_iov[0]) {
+        rx_setup(c);
+    }
+    /* Fewer than asked for: the queue ran empty (or an error came after the first frames, which the next call
+     * returns). */
+    const int n = recvmmsg(c->fd, c->rx_msgs, SOCKETCAN_RX_BATCH, MSG_DONTWAIT, NULL);
+    if (n < 0) {
+        return read_failed(c, errno);
+    }
+    c->rx_next = 0U;
+    c->rx_count = (unsigned)n;
+    c->rx_drained = (unsigned)n < SOCKETCAN_RX_BATCH;
+    return n;
+}
+
 int socketcan_read(socketcan_t *c, co_frame_t *frame)
 {
     for (;;) {
         if (c->rx_next == c->rx_count) {
-            if (c->fd < 0) {
-                return 0;
+            const int n = rx_refill(c);
+            if (n <= 0) {
+                return n;
             }
-            if (c->rx_msgs[0].msg_hdr.msg_iov != &c->rx_iov[0]) {
-                rx_setup(c);
-            }
-            /* Fewer than asked for: the queue ran empty (or an error came after the first frames, which the next
-             * call returns). */
-            const int n = recvmmsg(c->fd, c->rx_msgs, SOCKETCAN_RX_BATCH, MSG_DONTWAIT, NULL);
-            if (n < 0) {
-                return read_failed(c, errno);
-            }
-            c->rx_next = 0U;
-            c->rx_count = (unsigned)n;
-            c->rx_drained = (unsigned)n < SOCKETCAN_RX_BATCH;
-            continue;
         }
-        const struct can_frame *cf = &c->rx_frames[c->rx_next];
-        const unsigned len = c->rx_msgs[c->rx_next].msg_len;
-        c->rx_next++;
-        if (len != sizeof *cf) {
+        const unsigned k = c->rx_next++;
+        if (c->rx_msgs[k].msg_len != sizeof c->rx_frames[k]) {
             continue; /* not a classic CAN frame */
         }
         if (c->down && iface_up(c)) {
             /* Not on any frame: frames received before the interface went down may still be queued. */
             set_up(c);
         }
-        c->rx_since_query = true;
-        if ((cf->can_id & CAN_ERR_FLAG) != 0U) {
+        if (!c->rx_since_query) {
+            /* The drop count is to be asked for at rx_next_query: socketcan_service runs and wakes the loop then. */
+            c->rx_since_query = true;
+            c->service_at = c->rx_next_query < c->service_at ? c->rx_next_query : c->service_at;
+            c->service_next = c->rx_next_query < c->service_next ? c->rx_next_query : c->service_next;
+        }
+        const struct can_frame *cf = &c->rx_frames[k];
+        const canid_t id = cf->can_id;
+        if ((id & CAN_ERR_FLAG) != 0U) {
             error_frame(c, cf);
             continue;
         }
-        frame->flags = (uint8_t)(((cf->can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
-                                 ((cf->can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
-        frame->id = (cf->can_id & CAN_EFF_FLAG) != 0U ? (cf->can_id & CAN_EFF_MASK) : (cf->can_id & CAN_SFF_MASK);
+        const bool eff = (id & CAN_EFF_FLAG) != 0U;
+        frame->id = id & (eff ? CAN_EFF_MASK : CAN_SFF_MASK);
+        frame->flags = (uint8_t)(((id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) | (eff ? CO_FRAME_EFF : 0U));
         frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
         memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
         return 1;
     }
 }
 
-co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
+/* socketcan_service() proper; returns the next time it wants to run (a wake-up), or CO_NEVER. */
+static co_time_us_t service(socketcan_t *c, co_time_us_t now)
 {
     c->tx_full_hold = false; /* a new pass of the main loop: the next send asks the kernel again */
     co_time_us_t next = CO_NEVER;
@@ -415,4 +425,21 @@ co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
         c->next_reopen = now + REOPEN_INTERVAL_US;
     }
     return c->next_reopen < next ? c->next_reopen : next;
+}
+
+co_time_us_t socketcan_service_run(socketcan_t *c, co_time_us_t now)
+{
+    const co_time_us_t next = service(c, now);
+    /* Each of its branches is due again at one of these times (the error second rolls over at its end even when
+     * nothing waits for it); a frame read or a socket gone bring it forward (socketcan_read, went_away). */
+    co_time_us_t at = c->error_window_end;
+    if ((c->rx_since_query || c->rx_query_again) && c->rx_next_query < at) {
+        at = c->rx_next_query;
+    }
+    if (c->gone && c->next_reopen < at) {
+        at = c->next_reopen;
+    }
+    c->service_at = at;
+    c->service_next = next;
+    return next;
 }

@@ -22,6 +22,7 @@
 #include <net/if.h>
 #include <stdbool.h>
 #include <sys/socket.h> /* struct mmsghdr: the includer defines _GNU_SOURCE, as every file of the Linux program */
+#include <time.h>
 
 #include "co/co.h"
 
@@ -54,6 +55,12 @@ typedef struct socketcan {
     bool rx_since_query;               /**< Frames were read since the count was last asked for. */
     bool rx_query_again;               /**< Ask once more a second after the last ask (drops after the last frame). */
     co_time_us_t rx_next_query;
+    /* The earliest time socketcan_service() has anything to do (roll the error frames' second, ask for the drop
+     * count, reopen), whether or not it wakes the loop for it, and what it returned last: before service_at, and
+     * with no send refused in this pass (tx_full_hold), it would return service_next again and change nothing. A
+     * frame read, an error frame and a socket gone bring both forward. */
+    co_time_us_t service_at;
+    co_time_us_t service_next;
     socketcan_log_fn log;
     void *log_ctx;
     /* Read ahead by socketcan_read(): rx_frames[rx_next..rx_count) not returned yet. rx_drained: the call that read
@@ -96,13 +103,27 @@ static inline bool socketcan_read_drained(const socketcan_t *c) { return c->rx_d
 /** Asks the kernel for the drop count and logs received frames lost and not reported yet (call before exit). */
 void socketcan_flush_log(socketcan_t *c);
 
+/** socketcan_service()'s work, when it has any. */
+co_time_us_t socketcan_service_run(socketcan_t *c, co_time_us_t now);
+
 /** Call once per pass of the main loop. Reopens a vanished interface when due, asks for the receive drop count
  * after frames were read (at once, then at most once a second, and once more a second after the last ask);
  * returns the next time it wants to run, or CO_NEVER. After ENOBUFS, sends are refused (CO_ERR_BUSY) without a
- * system call until this call. */
-co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now);
+ * system call until this call. Inline: most passes find nothing due and cost a comparison. */
+static inline co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
+{
+    if (!c->tx_full_hold && now < c->service_at) {
+        return c->service_next;
+    }
+    return socketcan_service_run(c, now);
+}
 
-/** CLOCK_MONOTONIC in µs. */
-co_time_us_t socketcan_now_us(void);
+/** CLOCK_MONOTONIC in µs. Inline: the main loop reads it at every wake-up. */
+static inline co_time_us_t socketcan_now_us(void)
+{
+    struct timespec ts;
+    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (co_time_us_t)ts.tv_sec * 1000000U + (co_time_us_t)ts.tv_nsec / 1000U;
+}
 
 #endif

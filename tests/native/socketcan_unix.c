@@ -21,13 +21,6 @@
 
 #include "../../src/linux/socketcan.h"
 
-co_time_us_t socketcan_now_us(void)
-{
-    struct timespec ts;
-    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (co_time_us_t)ts.tv_sec * 1000000U + (co_time_us_t)ts.tv_nsec / 1000U;
-}
-
 int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, void *log_ctx, char *err, size_t errlen)
 {
     memset(c, 0, sizeof *c);
@@ -117,9 +110,11 @@ int socketcan_read(socketcan_t *c, co_frame_t *frame)
 
 void socketcan_flush_log(socketcan_t *c) { (void)c; }
 
-co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
+/* Nothing to service here, ever (socketcan_service() in socketcan.h calls this when service_at has come). */
+co_time_us_t socketcan_service_run(socketcan_t *c, co_time_us_t now)
 {
-    (void)c;
     (void)now;
+    c->service_at = CO_NEVER;
+    c->service_next = CO_NEVER;
     return CO_NEVER;
 }

@@ -1,0 +1,173 @@
+/* The main loop: see emu_loop.h. */
+#define _GNU_SOURCE /* ppoll, PATH_MAX and POSIX calls, as in every file of the Linux program */
+#include "emu_loop.h"
+
+#include <errno.h>
+#include <poll.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "emu_bus.h"
+#include "emu_commands.h"
+#include "emu_control.h"
+#include "emu_output.h"
+#include "emu_script.h"
+#include "emu_socket.h"
+#include "emu_web.h"
+
+/* Control sockets listening or connected: only then has a pass their flushing, polling and servicing to do. */
+static bool sockets_in_use(const emu_sockets_t *k)
+{
+    return k->unix_fd >= 0 || k->tcp_fd >= 0 || k->n_clients > 0U;
+}
+
+/* The loop while it has one bus and nothing else to wait for: no control input, control socket or web view, no script
+ * line to come (none of them appears later), no output waiting. The same pass as runtime_loop's for that case, without
+ * looking at what is not there. Returns 0 when output waits to be written (runtime_loop polls for that), at quit or
+ * on a signal, 1 when poll fails. revents: what woke the bus last; *next: the deadline of its last pass, for a flood's
+ * reading. */
+static int run_bus_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next,
+                         short revents)
+{
+    emu_bus_t *b = emu->buses[0];
+    struct pollfd pfd = {b->can.fd, POLLIN, revents};
+    while (!emu->quit && *stop == 0) {
+        bool tx_pending = false;
+        *next = bus_pass(b, now, pfd.revents, *next, &tx_pending);
+        if (output_flush()) {
+            return 0;
+        }
+        pfd.fd = b->can.fd;
+        pfd.events = socketcan_poll_events(&b->can, tx_pending);
+        pfd.revents = 0;
+        *now = socketcan_now_us();
+        struct timespec ts;
+        struct timespec *timeout = NULL;
+        if (*next != CO_NEVER) {
+            const co_time_us_t wait = *next > *now ? *next - *now : 0U;
+            ts.tv_sec = (time_t)(wait / 1000000U);
+            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
+            timeout = &ts;
+        }
+        if (ppoll(&pfd, 1U, timeout, NULL) < 0) {
+            if (errno != EINTR) {
+                output_error("poll: %s", strerror(errno));
+                return 1;
+            }
+            pfd.revents = 0; /* a signal: nothing is ready */
+        }
+        *now = socketcan_now_us();
+    }
+    return 0;
+}
+
+int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
+{
+    /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients, the web */
+    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1];
+    for (size_t i = 0U; i < emu->n_buses; i++) {
+        pfd[i].revents = 0; /* nothing woke the buses before the first pass */
+    }
+    /* One clock read per wake-up serves its commands, frames and nodes; it is read again where a pass did work of
+     * unknown length (commands, sessions, a flood of frames) and before sleeping, so that the sleep ends at the
+     * deadline and not late by this pass's work. */
+    co_time_us_t now = socketcan_now_us();
+    co_time_us_t next = CO_NEVER; /* the earliest deadline the last pass found: a flood's reading stops there */
+    nfds_t stdin_index = 0U, sockets_index = 0U, web_index = 0U, nfds = 0U; /* where the last poll put them */
+    const bool alone = emu->n_buses == 1U && !emu->control.open && !sockets_in_use(&emu->sockets) &&
+                       emu->web.daemon == NULL && script_next_at(&emu->script) == CO_NEVER;
+    while (!emu->quit && *stop == 0) {
+        if (alone) {
+            if (run_bus_alone(emu, stop, &now, &next, pfd[0].revents) != 0) {
+                return 1;
+            }
+            pfd[0].revents = 0; /* its last wake-up is served */
+            if (emu->quit || *stop != 0) {
+                break;
+            }
+        }
+        /* What woke the loop besides the buses: work of unknown length, the clock is read again after it. */
+        bool commands = false;
+        if (stdin_index != 0U && (pfd[stdin_index].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+            control_read(emu);
+            commands = true;
+        }
+        const bool sockets = sockets_in_use(&emu->sockets);
+        if (sockets && web_index > sockets_index) {
+            sockets_service(emu, &emu->sockets, &pfd[sockets_index], web_index - sockets_index);
+            commands = true;
+        }
+        if (emu->web.daemon != NULL && nfds > 0U) {
+            web_service(emu, &emu->web, &pfd[web_index], nfds - web_index, now);
+            commands = true;
+        }
+        char line[COMMAND_LINE_MAX + 1];
+        /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
+        while (!emu->quit && script_next_at(&emu->script) <= now - emu->start &&
+               script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
+            run_command(emu, line);
+            commands = true;
+        }
+        if (commands) {
+            now = socketcan_now_us(); /* the nodes run at the time after the commands, which may have taken long */
+        }
+        const co_time_us_t due = next;
+        next = CO_NEVER;
+        for (size_t i = 0U; i < emu->n_buses; i++) {
+            emu_bus_t *b = emu->buses[i];
+            bool tx_pending = false;
+            const co_time_us_t t = bus_pass(b, &now, pfd[i].revents, due, &tx_pending);
+            next = t < next ? t : next;
+            pfd[i].fd = b->can.fd; /* -1 while the interface is gone: poll ignores it */
+            pfd[i].events = socketcan_poll_events(&b->can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
+            pfd[i].revents = 0;
+        }
+        nfds = (nfds_t)emu->n_buses;
+        const co_time_us_t script_at = script_next_at(&emu->script);
+        if (script_at != CO_NEVER && emu->start + script_at < next) {
+            next = emu->start + script_at;
+        }
+        /* what this pass logged and replied, as far as the readers take it; POLLOUT wakes the loop to write more */
+        if (output_flush()) {
+            nfds += output_poll_fds(&pfd[nfds]);
+        }
+        stdin_index = emu->control.open ? nfds : 0U;
+        if (emu->control.open) {
+            pfd[nfds].fd = STDIN_FILENO;
+            pfd[nfds].events = POLLIN;
+            pfd[nfds].revents = 0;
+            nfds++;
+        }
+        sockets_index = nfds;
+        if (sockets) {
+            sockets_flush(&emu->sockets);
+            nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
+        }
+        web_index = nfds;
+        now = socketcan_now_us();
+        if (emu->web.daemon != NULL) { /* without --web a pass pays for neither call */
+            nfds += web_poll_fds(&emu->web, &pfd[web_index], now, &next);
+        }
+        struct timespec ts;
+        struct timespec *timeout = NULL;
+        if (next != CO_NEVER) {
+            const co_time_us_t wait = next > now ? next - now : 0U;
+            ts.tv_sec = (time_t)(wait / 1000000U);
+            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
+            timeout = &ts;
+        }
+        const int ready = ppoll(pfd, nfds, timeout, NULL);
+        if (ready < 0) {
+            if (errno != EINTR) {
+                output_error("poll: %s", strerror(errno));
+                return 1;
+            }
+            for (nfds_t i = 0U; i < nfds; i++) {
+                pfd[i].revents = 0; /* a signal: nothing is ready */
+            }
+        }
+        now = socketcan_now_us();
+    }
+    return 0;
+}
