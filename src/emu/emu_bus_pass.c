@@ -36,7 +36,7 @@ static inline void deliver(emu_bus_t *b, const co_frame_t *f, size_t sender, co_
 
 /* Offers the local frames to the other nodes and processes every node that is dirty or due, until no local frame
  * waits: the pass bus_run's gating lets through. */
-static co_time_us_t run_nodes(emu_bus_t *b, co_time_us_t now)
+static inline __attribute__((always_inline)) co_time_us_t run_nodes(emu_bus_t *b, co_time_us_t now)
 {
     co_time_us_t next = CO_NEVER;
     bool tx_pending = false;

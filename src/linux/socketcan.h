@@ -118,6 +118,10 @@ static inline co_time_us_t socketcan_service(socketcan_t *c, co_time_us_t now)
     return socketcan_service_run(c, now);
 }
 
+#ifdef SOCKETCAN_NOW_US_EXTERN
+/** The clock, given by a test harness that replaces it (tests/fuzz/target_control.c: repeatable runs). */
+co_time_us_t socketcan_now_us(void);
+#else
 /** CLOCK_MONOTONIC in µs. Inline: the main loop reads it at every wake-up. */
 static inline co_time_us_t socketcan_now_us(void)
 {
@@ -125,5 +129,6 @@ static inline co_time_us_t socketcan_now_us(void)
     (void)clock_gettime(CLOCK_MONOTONIC, &ts);
     return (co_time_us_t)ts.tv_sec * 1000000U + (co_time_us_t)ts.tv_nsec / 1000U;
 }
+#endif
 
 #endif
