@@ -159,11 +159,6 @@ static void set_up(socketcan_t *c)
     }
 }
 
-short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
-{
-    return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0));
-}
-
 /* Received frames the kernel dropped because the socket's receive buffer was full: the socket's own count
  * (SO_MEMINFO, cumulative since it was opened), asked for by socketcan_service() after frames were read and
  * before the socket is closed. New drops are added to the total and logged; the asking is rate-limited, so
@@ -225,9 +220,9 @@ static void went_away(socketcan_t *c, int e)
     c->service_at = 0U;
 }
 
-co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n)
 {
-    socketcan_t *c = (socketcan_t *)ctx;
+    int e = errno; /* of the write, when it failed */
     if (c->fd < 0) {
         c->lost_while_down++;
         return CO_ERR_IO;
@@ -237,25 +232,19 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
          * retrying its frame every CO_TX_RETRY_US, asking again would cost one failing system call per node. */
         return CO_ERR_BUSY;
     }
-    struct can_frame cf;
-    memset(&cf, 0, sizeof cf);
-    cf.can_id = (frame->id & CAN_SFF_MASK) | ((frame->flags & CO_FRAME_RTR) != 0U ? CAN_RTR_FLAG : 0U);
-    cf.can_dlc = frame->len;
-    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
-    ssize_t n = write(c->fd, &cf, sizeof cf);
-    if (n < 0 && errno == ENETDOWN && iface_up(c)) {
+    if (n < 0 && e == ENETDOWN && iface_up(c)) {
         /* A socket error is delivered once, to the next read or write, whenever that comes: this ENETDOWN can
          * report an outage that is already over (down and up while the loop did not look). The outage is
          * reported, and the frame is not lost for it. */
         set_down(c, "; frames are lost until it is up again");
-        n = write(c->fd, &cf, sizeof cf);
+        n = write(c->fd, cf, sizeof *cf);
+        e = errno;
     }
-    if (n == (ssize_t)sizeof cf) {
+    if (n == (ssize_t)sizeof *cf) {
         c->tx_full = false;
         set_up(c);
         return CO_OK;
     }
-    const int e = errno;
     if (e == ENOBUFS) {
         /* The interface's queue is full (a real controller that cannot send: bus busy, no acknowledgement).
          * The core keeps the frame and retries CO_TX_RETRY_US later; POLLOUT would not wait for this, as the

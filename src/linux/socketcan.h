@@ -20,9 +20,12 @@
 
 #include <linux/can.h>
 #include <net/if.h>
+#include <poll.h>
 #include <stdbool.h>
+#include <string.h>
 #include <sys/socket.h> /* struct mmsghdr: the includer defines _GNU_SOURCE, as every file of the Linux program */
 #include <time.h>
+#include <unistd.h>
 
 #include "co/co.h"
 
@@ -78,12 +81,37 @@ typedef struct socketcan {
 int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, void *log_ctx, char *err, size_t errlen);
 void socketcan_close(socketcan_t *c);
 
-/** co_port_t.send for this channel (ctx = socketcan_t *). */
-co_status_t socketcan_send(void *ctx, const co_frame_t *frame);
+/** socketcan_send's other cases: no socket, a send refused in this pass (tx_full_hold), or the write of cf that
+ *  returned n (errno set when it failed) and is not a plain success on an interface known to be up. */
+co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n);
+
+/** co_port_t.send for this channel (ctx = socketcan_t *). Inline, the write and its plain success: every frame a
+ *  node sends comes this way, and a layer of call for it cost as much as the rest of the success path. */
+static inline co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+{
+    socketcan_t *c = (socketcan_t *)ctx;
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = (frame->id & CAN_SFF_MASK) | ((frame->flags & CO_FRAME_RTR) != 0U ? CAN_RTR_FLAG : 0U);
+    cf.can_dlc = frame->len;
+    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
+    ssize_t n = -1;
+    if (c->fd >= 0 && !c->tx_full_hold) {
+        n = write(c->fd, &cf, sizeof cf);
+        if (n == (ssize_t)sizeof cf && !c->down) {
+            c->tx_full = false;
+            return CO_OK;
+        }
+    }
+    return socketcan_send_slow(c, &cf, n);
+}
 
 /** The events to poll the socket for: POLLIN, and POLLOUT when frames wait (tx_pending) for room in the
  * socket's buffer; not after ENOBUFS (see above). */
-short socketcan_poll_events(const socketcan_t *c, bool tx_pending);
+static inline short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
+{
+    return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0)); /* inline: the loop asks before every sleep */
+}
 
 /** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later).
  * Frames come from a read-ahead of up to SOCKETCAN_RX_BATCH, which only a call with nothing read ahead refills

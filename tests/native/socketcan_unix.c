@@ -60,27 +60,17 @@ void socketcan_close(socketcan_t *c)
     }
 }
 
-co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+/* The part of socketcan_send (socketcan.h: the frame built and written there) that tells its result; the
+ * interface is never down here and never refuses a send for a whole pass. */
+co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n)
 {
-    socketcan_t *c = (socketcan_t *)ctx;
-    struct can_frame f;
-    memset(&f, 0, sizeof f);
-    f.can_id = frame->id & CAN_SFF_MASK;
-    f.can_dlc = frame->len;
-    memcpy(f.data, frame->data, frame->len);
     if (c->fd < 0) {
         return CO_ERR_IO;
     }
-    if (send(c->fd, &f, sizeof f, MSG_NOSIGNAL) == (ssize_t)sizeof f) {
+    if (n == (ssize_t)sizeof *cf) {
         return CO_OK;
     }
     return (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS) ? CO_ERR_BUSY : CO_ERR_IO;
-}
-
-short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
-{
-    (void)c;
-    return (short)(POLLIN | (tx_pending ? POLLOUT : 0));
 }
 
 /* No read-ahead here (socketcan_read_ahead_empty() always true, socketcan_read_drained() never): one recv a frame. */
