@@ -315,9 +315,7 @@ static void rx_setup(socketcan_t *c)
     }
 }
 
-/* Reads ahead what the kernel has, up to SOCKETCAN_RX_BATCH frames (one system call): their count, or what
- * socketcan_read answers when there is none (0: nothing waits, -1: the interface went away). */
-static int rx_refill(socketcan_t *c)
+int socketcan_read_ahead(socketcan_t *c)
 {
     if (c->fd < 0) {
         return 0;
@@ -337,42 +335,33 @@ static int rx_refill(socketcan_t *c)
     return n;
 }
 
-int socketcan_read(socketcan_t *c, co_frame_t *frame)
+int socketcan_read_other(socketcan_t *c, unsigned k, co_frame_t *frame)
 {
-    for (;;) {
-        if (c->rx_next == c->rx_count) {
-            const int n = rx_refill(c);
-            if (n <= 0) {
-                return n;
-            }
-        }
-        const unsigned k = c->rx_next++;
-        if (c->rx_msgs[k].msg_len != sizeof c->rx_frames[k]) {
-            continue; /* not a classic CAN frame */
-        }
-        if (c->down && iface_up(c)) {
-            /* Not on any frame: frames received before the interface went down may still be queued. */
-            set_up(c);
-        }
-        if (!c->rx_since_query) {
-            /* The drop count is to be asked for at rx_next_query: socketcan_service runs and wakes the loop then. */
-            c->rx_since_query = true;
-            c->service_at = c->rx_next_query < c->service_at ? c->rx_next_query : c->service_at;
-            c->service_next = c->rx_next_query < c->service_next ? c->rx_next_query : c->service_next;
-        }
-        const struct can_frame *cf = &c->rx_frames[k];
-        const canid_t id = cf->can_id;
-        if ((id & CAN_ERR_FLAG) != 0U) {
-            error_frame(c, cf);
-            continue;
-        }
-        const bool eff = (id & CAN_EFF_FLAG) != 0U;
-        frame->id = id & (eff ? CAN_EFF_MASK : CAN_SFF_MASK);
-        frame->flags = (uint8_t)(((id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) | (eff ? CO_FRAME_EFF : 0U));
-        frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
-        memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
-        return 1;
+    if (c->rx_msgs[k].msg_len != sizeof c->rx_frames[k]) {
+        return 0; /* not a classic CAN frame */
     }
+    if (c->down && iface_up(c)) {
+        /* Not on any frame: frames received before the interface went down may still be queued. */
+        set_up(c);
+    }
+    if (!c->rx_since_query) {
+        /* The drop count is to be asked for at rx_next_query: socketcan_service runs and wakes the loop then. */
+        c->rx_since_query = true;
+        c->service_at = c->rx_next_query < c->service_at ? c->rx_next_query : c->service_at;
+        c->service_next = c->rx_next_query < c->service_next ? c->rx_next_query : c->service_next;
+    }
+    const struct can_frame *cf = &c->rx_frames[k];
+    const canid_t id = cf->can_id;
+    if ((id & CAN_ERR_FLAG) != 0U) {
+        error_frame(c, cf);
+        return 0;
+    }
+    const bool eff = (id & CAN_EFF_FLAG) != 0U;
+    frame->id = id & (eff ? CAN_EFF_MASK : CAN_SFF_MASK);
+    frame->flags = (uint8_t)(((id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) | (eff ? CO_FRAME_EFF : 0U));
+    frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
+    memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
+    return 1;
 }
 
 /* socketcan_service() proper; returns the next time it wants to run (a wake-up), or CO_NEVER. */

@@ -113,12 +113,45 @@ static inline short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
     return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0)); /* inline: the loop asks before every sleep */
 }
 
+/** socketcan_read's call to the kernel, with nothing read ahead: reads ahead up to SOCKETCAN_RX_BATCH frames (one
+ *  system call); their count, 0 when none waits, -1 when the interface went away (reported, reopened later). */
+int socketcan_read_ahead(socketcan_t *c);
+
+/** socketcan_read's other frames, rx_frames[k] (already taken from the read-ahead): not a classic CAN frame, an
+ *  error frame (logged), the first frame since the drop count was last asked for, or one read while the interface
+ *  was known to be down. 1 with frame set, 0 when it is not one for the nodes. */
+int socketcan_read_other(socketcan_t *c, unsigned k, co_frame_t *frame);
+
 /** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later).
  * Frames come from a read-ahead of up to SOCKETCAN_RX_BATCH, which only a call with nothing read ahead refills
  * (one system call). A reader may stop before 0 only where socketcan_read_ahead_empty() holds: frames read ahead
  * wake no poll. Frames the kernel dropped because the receive buffer was full are counted (rx_dropped) and
- * logged, at most once a second (see socketcan_service). */
-int socketcan_read(socketcan_t *c, co_frame_t *frame);
+ * logged, at most once a second (see socketcan_service). Inline, the plain data frame: every frame read comes this
+ * way, and a layer of call cost it as much as taking it. */
+static inline int socketcan_read(socketcan_t *c, co_frame_t *frame)
+{
+    for (;;) {
+        if (c->rx_next == c->rx_count) {
+            const int n = socketcan_read_ahead(c);
+            if (n <= 0) {
+                return n;
+            }
+        }
+        const unsigned k = c->rx_next++;
+        const struct can_frame *cf = &c->rx_frames[k];
+        if (c->rx_msgs[k].msg_len == sizeof *cf && (cf->can_id & (CAN_ERR_FLAG | CAN_EFF_FLAG)) == 0U &&
+            c->rx_since_query && !c->down) {
+            frame->id = cf->can_id & CAN_SFF_MASK;
+            frame->flags = (uint8_t)((cf->can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U);
+            frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
+            memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
+            return 1;
+        }
+        if (socketcan_read_other(c, k, frame) == 1) {
+            return 1;
+        }
+    }
+}
 
 /** True when every frame read ahead is returned: the next socketcan_read() asks the kernel. */
 static inline bool socketcan_read_ahead_empty(const socketcan_t *c) { return c->rx_next == c->rx_count; }
