@@ -151,25 +151,28 @@ co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us
 
 /* The same pass and sleep as loop_run's for this case, in one function with the pass inlined: the pass per frame
  * costs no call and no round trip of the time and state through memory. */
-int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next,
-                         short revents)
+int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next, short revents)
 {
     emu_bus_t *b = emu->buses[0];
     struct pollfd pfd = {b->can.fd, POLLIN, revents};
+    /* The time and the deadline in locals, given back at the end: the inlined pass keeps them in registers. */
+    co_time_us_t t = *now;
+    co_time_us_t deadline = *next;
+    int status = 0;
     while (!emu->quit && *stop == 0) {
         bool tx_pending = false;
-        *next = pass(b, now, pfd.revents, *next, &tx_pending);
+        deadline = pass(b, &t, pfd.revents, deadline, &tx_pending);
         if (output_flush()) {
-            return 0;
+            break; /* output waits: loop_run polls for it */
         }
         pfd.fd = b->can.fd;
         pfd.events = socketcan_poll_events(&b->can, tx_pending);
         pfd.revents = 0;
-        *now = socketcan_now_us();
+        t = socketcan_now_us();
         struct timespec ts;
         struct timespec *timeout = NULL;
-        if (*next != CO_NEVER) {
-            const co_time_us_t wait = *next > *now ? *next - *now : 0U;
+        if (deadline != CO_NEVER) {
+            const co_time_us_t wait = deadline > t ? deadline - t : 0U;
             ts.tv_sec = (time_t)(wait / 1000000U);
             ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
             timeout = &ts;
@@ -177,11 +180,14 @@ int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *n
         if (ppoll(&pfd, 1U, timeout, NULL) < 0) {
             if (errno != EINTR) {
                 output_error("poll: %s", strerror(errno));
-                return 1;
+                status = 1;
+                break;
             }
             pfd.revents = 0; /* a signal: nothing is ready */
         }
-        *now = socketcan_now_us();
+        t = socketcan_now_us();
     }
-    return 0;
+    *now = t;
+    *next = deadline;
+    return status;
 }
