@@ -181,22 +181,6 @@ void device_clear_running_state(device_t *dev, size_t env_offset, size_t env_siz
     memset(m + env_offset + env_size, 0, size - env_offset - env_size);
 }
 
-co_time_us_t device_process(device_t *dev, co_time_us_t now)
-{
-    dev->now = now;
-    co_time_us_t next = CO_NEVER;
-    if (dev->cls->step != NULL) {
-        if (dev->touched || now >= dev->step_due) {
-            dev->touched = false;
-            dev->step_due = dev->cls->step(dev, now);
-            co_node_values_changed(&dev->node); /* the models write their process values directly */
-        }
-        next = dev->step_due;
-    }
-    const co_time_us_t core = co_node_process(&dev->node, now);
-    return core < next ? core : next;
-}
-
 void device_printf(const device_t *dev, const char *fmt, ...)
 {
     char line[512];

@@ -146,8 +146,23 @@ static inline bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_
     return co_node_rx(&dev->node, frame, now);
 }
 
-/** Runs the model (when due or touched) and the core; returns the earliest deadline of both. */
-co_time_us_t device_process(device_t *dev, co_time_us_t now);
+/** Runs the model (when due or touched) and the core; returns the earliest deadline of both. Inline, as device_rx:
+ *  a runner calls it after every frame that concerned the node and at each of its deadlines. */
+static inline co_time_us_t device_process(device_t *dev, co_time_us_t now)
+{
+    dev->now = now;
+    co_time_us_t next = CO_NEVER;
+    if (dev->cls->step != NULL) {
+        if (dev->touched || now >= dev->step_due) {
+            dev->touched = false;
+            dev->step_due = dev->cls->step(dev, now);
+            co_node_values_changed(&dev->node); /* the models write their process values directly */
+        }
+        next = dev->step_due;
+    }
+    const co_time_us_t core = co_node_process(&dev->node, now);
+    return core < next ? core : next;
+}
 
 /** Runs a control command: the device's own first, then the common ones (see device.c). */
 device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now);

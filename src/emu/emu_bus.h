@@ -10,6 +10,8 @@
 #ifndef EMU_BUS_H
 #define EMU_BUS_H
 
+#include <signal.h>
+
 #include "emu.h"
 
 /** Opens the interface (b->emu set by the caller); 0, or an errno with a message in err. */
@@ -39,6 +41,14 @@ co_status_t bus_node_send(void *ctx, const co_frame_t *f);
  *  each batch of a flood. Returns the earliest deadline of its nodes and of the interface; *tx_pending tells whether a
  *  node has frames the interface did not take yet. */
 co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us_t due, bool *tx_pending);
+
+/** The main loop while it has one bus and nothing else to wait for: no control input, control socket or web view, no
+ *  script line to come (none of them appears later), no output waiting. The same pass and sleep as loop_run's for
+ *  that case, without looking at what is not there. Returns 0 when output waits to be written (loop_run polls for
+ *  that), at quit or on a signal, 1 when poll fails. revents: what woke the bus last; *now: the time of the pass;
+ *  *next: the deadline of its last pass, for a flood's reading. */
+int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next,
+                  short revents);
 
 /** The exit report of the bus (its lost frames), its counts added to sent, dropped and rx_lost; closes the socket. */
 void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost);

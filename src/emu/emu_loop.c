@@ -22,46 +22,6 @@ static bool sockets_in_use(const emu_sockets_t *k)
     return k->unix_fd >= 0 || k->tcp_fd >= 0 || k->n_clients > 0U;
 }
 
-/* The loop while it has one bus and nothing else to wait for: no control input, control socket or web view, no script
- * line to come (none of them appears later), no output waiting. The same pass as runtime_loop's for that case, without
- * looking at what is not there. Returns 0 when output waits to be written (runtime_loop polls for that), at quit or
- * on a signal, 1 when poll fails. revents: what woke the bus last; *next: the deadline of its last pass, for a flood's
- * reading. */
-static int run_bus_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next,
-                         short revents)
-{
-    emu_bus_t *b = emu->buses[0];
-    struct pollfd pfd = {b->can.fd, POLLIN, revents};
-    while (!emu->quit && *stop == 0) {
-        bool tx_pending = false;
-        *next = bus_pass(b, now, pfd.revents, *next, &tx_pending);
-        if (output_flush()) {
-            return 0;
-        }
-        pfd.fd = b->can.fd;
-        pfd.events = socketcan_poll_events(&b->can, tx_pending);
-        pfd.revents = 0;
-        *now = socketcan_now_us();
-        struct timespec ts;
-        struct timespec *timeout = NULL;
-        if (*next != CO_NEVER) {
-            const co_time_us_t wait = *next > *now ? *next - *now : 0U;
-            ts.tv_sec = (time_t)(wait / 1000000U);
-            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
-            timeout = &ts;
-        }
-        if (ppoll(&pfd, 1U, timeout, NULL) < 0) {
-            if (errno != EINTR) {
-                output_error("poll: %s", strerror(errno));
-                return 1;
-            }
-            pfd.revents = 0; /* a signal: nothing is ready */
-        }
-        *now = socketcan_now_us();
-    }
-    return 0;
-}
-
 int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
 {
     /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients, the web */
@@ -79,7 +39,7 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
                        emu->web.daemon == NULL && script_next_at(&emu->script) == CO_NEVER;
     while (!emu->quit && *stop == 0) {
         if (alone) {
-            if (run_bus_alone(emu, stop, &now, &next, pfd[0].revents) != 0) {
+            if (bus_run_alone(emu, stop, &now, &next, pfd[0].revents) != 0) {
                 return 1;
             }
             pfd[0].revents = 0; /* its last wake-up is served */

@@ -159,11 +159,6 @@ static void set_up(socketcan_t *c)
     }
 }
 
-short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
-{
-    return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0));
-}
-
 /* Received frames the kernel dropped because the socket's receive buffer was full: the socket's own count
  * (SO_MEMINFO, cumulative since it was opened), asked for by socketcan_service() after frames were read and
  * before the socket is closed. New drops are added to the total and logged; the asking is rate-limited, so
@@ -225,9 +220,9 @@ static void went_away(socketcan_t *c, int e)
     c->service_at = 0U;
 }
 
-co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n)
 {
-    socketcan_t *c = (socketcan_t *)ctx;
+    int e = errno; /* of the write, when it failed */
     if (c->fd < 0) {
         c->lost_while_down++;
         return CO_ERR_IO;
@@ -237,25 +232,19 @@ co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
          * retrying its frame every CO_TX_RETRY_US, asking again would cost one failing system call per node. */
         return CO_ERR_BUSY;
     }
-    struct can_frame cf;
-    memset(&cf, 0, sizeof cf);
-    cf.can_id = (frame->id & CAN_SFF_MASK) | ((frame->flags & CO_FRAME_RTR) != 0U ? CAN_RTR_FLAG : 0U);
-    cf.can_dlc = frame->len;
-    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
-    ssize_t n = write(c->fd, &cf, sizeof cf);
-    if (n < 0 && errno == ENETDOWN && iface_up(c)) {
+    if (n < 0 && e == ENETDOWN && iface_up(c)) {
         /* A socket error is delivered once, to the next read or write, whenever that comes: this ENETDOWN can
          * report an outage that is already over (down and up while the loop did not look). The outage is
          * reported, and the frame is not lost for it. */
         set_down(c, "; frames are lost until it is up again");
-        n = write(c->fd, &cf, sizeof cf);
+        n = write(c->fd, cf, sizeof *cf);
+        e = errno;
     }
-    if (n == (ssize_t)sizeof cf) {
+    if (n == (ssize_t)sizeof *cf) {
         c->tx_full = false;
         set_up(c);
         return CO_OK;
     }
-    const int e = errno;
     if (e == ENOBUFS) {
         /* The interface's queue is full (a real controller that cannot send: bus busy, no acknowledgement).
          * The core keeps the frame and retries CO_TX_RETRY_US later; POLLOUT would not wait for this, as the
@@ -326,9 +315,7 @@ static void rx_setup(socketcan_t *c)
     }
 }
 
-/* Reads ahead what the kernel has, up to SOCKETCAN_RX_BATCH frames (one system call): their count, or what
- * socketcan_read answers when there is none (0: nothing waits, -1: the interface went away). */
-static int rx_refill(socketcan_t *c)
+int socketcan_read_ahead(socketcan_t *c)
 {
     if (c->fd < 0) {
         return 0;
@@ -348,42 +335,33 @@ static int rx_refill(socketcan_t *c)
     return n;
 }
 
-int socketcan_read(socketcan_t *c, co_frame_t *frame)
+int socketcan_read_other(socketcan_t *c, unsigned k, co_frame_t *frame)
 {
-    for (;;) {
-        if (c->rx_next == c->rx_count) {
-            const int n = rx_refill(c);
-            if (n <= 0) {
-                return n;
-            }
-        }
-        const unsigned k = c->rx_next++;
-        if (c->rx_msgs[k].msg_len != sizeof c->rx_frames[k]) {
-            continue; /* not a classic CAN frame */
-        }
-        if (c->down && iface_up(c)) {
-            /* Not on any frame: frames received before the interface went down may still be queued. */
-            set_up(c);
-        }
-        if (!c->rx_since_query) {
-            /* The drop count is to be asked for at rx_next_query: socketcan_service runs and wakes the loop then. */
-            c->rx_since_query = true;
-            c->service_at = c->rx_next_query < c->service_at ? c->rx_next_query : c->service_at;
-            c->service_next = c->rx_next_query < c->service_next ? c->rx_next_query : c->service_next;
-        }
-        const struct can_frame *cf = &c->rx_frames[k];
-        const canid_t id = cf->can_id;
-        if ((id & CAN_ERR_FLAG) != 0U) {
-            error_frame(c, cf);
-            continue;
-        }
-        const bool eff = (id & CAN_EFF_FLAG) != 0U;
-        frame->id = id & (eff ? CAN_EFF_MASK : CAN_SFF_MASK);
-        frame->flags = (uint8_t)(((id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) | (eff ? CO_FRAME_EFF : 0U));
-        frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
-        memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
-        return 1;
+    if (c->rx_msgs[k].msg_len != sizeof c->rx_frames[k]) {
+        return 0; /* not a classic CAN frame */
     }
+    if (c->down && iface_up(c)) {
+        /* Not on any frame: frames received before the interface went down may still be queued. */
+        set_up(c);
+    }
+    if (!c->rx_since_query) {
+        /* The drop count is to be asked for at rx_next_query: socketcan_service runs and wakes the loop then. */
+        c->rx_since_query = true;
+        c->service_at = c->rx_next_query < c->service_at ? c->rx_next_query : c->service_at;
+        c->service_next = c->rx_next_query < c->service_next ? c->rx_next_query : c->service_next;
+    }
+    const struct can_frame *cf = &c->rx_frames[k];
+    const canid_t id = cf->can_id;
+    if ((id & CAN_ERR_FLAG) != 0U) {
+        error_frame(c, cf);
+        return 0;
+    }
+    const bool eff = (id & CAN_EFF_FLAG) != 0U;
+    frame->id = id & (eff ? CAN_EFF_MASK : CAN_SFF_MASK);
+    frame->flags = (uint8_t)(((id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) | (eff ? CO_FRAME_EFF : 0U));
+    frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
+    memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
+    return 1;
 }
 
 /* socketcan_service() proper; returns the next time it wants to run (a wake-up), or CO_NEVER. */

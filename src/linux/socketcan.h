@@ -20,9 +20,12 @@
 
 #include <linux/can.h>
 #include <net/if.h>
+#include <poll.h>
 #include <stdbool.h>
+#include <string.h>
 #include <sys/socket.h> /* struct mmsghdr: the includer defines _GNU_SOURCE, as every file of the Linux program */
 #include <time.h>
+#include <unistd.h>
 
 #include "co/co.h"
 
@@ -78,19 +81,77 @@ typedef struct socketcan {
 int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, void *log_ctx, char *err, size_t errlen);
 void socketcan_close(socketcan_t *c);
 
-/** co_port_t.send for this channel (ctx = socketcan_t *). */
-co_status_t socketcan_send(void *ctx, const co_frame_t *frame);
+/** socketcan_send's other cases: no socket, a send refused in this pass (tx_full_hold), or the write of cf that
+ *  returned n (errno set when it failed) and is not a plain success on an interface known to be up. */
+co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n);
+
+/** co_port_t.send for this channel (ctx = socketcan_t *). Inline, the write and its plain success: every frame a
+ *  node sends comes this way, and a layer of call for it cost as much as the rest of the success path. */
+static inline co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+{
+    socketcan_t *c = (socketcan_t *)ctx;
+    struct can_frame cf;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = (frame->id & CAN_SFF_MASK) | ((frame->flags & CO_FRAME_RTR) != 0U ? CAN_RTR_FLAG : 0U);
+    cf.can_dlc = frame->len;
+    memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
+    ssize_t n = -1;
+    if (c->fd >= 0 && !c->tx_full_hold) {
+        n = write(c->fd, &cf, sizeof cf);
+        if (n == (ssize_t)sizeof cf && !c->down) {
+            c->tx_full = false;
+            return CO_OK;
+        }
+    }
+    return socketcan_send_slow(c, &cf, n);
+}
 
 /** The events to poll the socket for: POLLIN, and POLLOUT when frames wait (tx_pending) for room in the
  * socket's buffer; not after ENOBUFS (see above). */
-short socketcan_poll_events(const socketcan_t *c, bool tx_pending);
+static inline short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
+{
+    return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0)); /* inline: the loop asks before every sleep */
+}
+
+/** socketcan_read's call to the kernel, with nothing read ahead: reads ahead up to SOCKETCAN_RX_BATCH frames (one
+ *  system call); their count, 0 when none waits, -1 when the interface went away (reported, reopened later). */
+int socketcan_read_ahead(socketcan_t *c);
+
+/** socketcan_read's other frames, rx_frames[k] (already taken from the read-ahead): not a classic CAN frame, an
+ *  error frame (logged), the first frame since the drop count was last asked for, or one read while the interface
+ *  was known to be down. 1 with frame set, 0 when it is not one for the nodes. */
+int socketcan_read_other(socketcan_t *c, unsigned k, co_frame_t *frame);
 
 /** Reads one frame: 1 = a frame, 0 = none pending, -1 = the interface went away (reported, reopened later).
  * Frames come from a read-ahead of up to SOCKETCAN_RX_BATCH, which only a call with nothing read ahead refills
  * (one system call). A reader may stop before 0 only where socketcan_read_ahead_empty() holds: frames read ahead
  * wake no poll. Frames the kernel dropped because the receive buffer was full are counted (rx_dropped) and
- * logged, at most once a second (see socketcan_service). */
-int socketcan_read(socketcan_t *c, co_frame_t *frame);
+ * logged, at most once a second (see socketcan_service). Inline, the plain data frame: every frame read comes this
+ * way, and a layer of call cost it as much as taking it. */
+static inline int socketcan_read(socketcan_t *c, co_frame_t *frame)
+{
+    for (;;) {
+        if (c->rx_next == c->rx_count) {
+            const int n = socketcan_read_ahead(c);
+            if (n <= 0) {
+                return n;
+            }
+        }
+        const unsigned k = c->rx_next++;
+        const struct can_frame *cf = &c->rx_frames[k];
+        if (c->rx_msgs[k].msg_len == sizeof *cf && (cf->can_id & (CAN_ERR_FLAG | CAN_EFF_FLAG)) == 0U &&
+            c->rx_since_query && !c->down) {
+            frame->id = cf->can_id & CAN_SFF_MASK;
+            frame->flags = (uint8_t)((cf->can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U);
+            frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
+            memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
+            return 1;
+        }
+        if (socketcan_read_other(c, k, frame) == 1) {
+            return 1;
+        }
+    }
+}
 
 /** True when every frame read ahead is returned: the next socketcan_read() asks the kernel. */
 static inline bool socketcan_read_ahead_empty(const socketcan_t *c) { return c->rx_next == c->rx_count; }

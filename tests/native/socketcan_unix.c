@@ -60,51 +60,53 @@ void socketcan_close(socketcan_t *c)
     }
 }
 
-co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
+/* The part of socketcan_send (socketcan.h: the frame built and written there) that tells its result; the
+ * interface is never down here and never refuses a send for a whole pass. */
+co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n)
 {
-    socketcan_t *c = (socketcan_t *)ctx;
-    struct can_frame f;
-    memset(&f, 0, sizeof f);
-    f.can_id = frame->id & CAN_SFF_MASK;
-    f.can_dlc = frame->len;
-    memcpy(f.data, frame->data, frame->len);
     if (c->fd < 0) {
         return CO_ERR_IO;
     }
-    if (send(c->fd, &f, sizeof f, MSG_NOSIGNAL) == (ssize_t)sizeof f) {
+    if (n == (ssize_t)sizeof *cf) {
         return CO_OK;
     }
     return (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS) ? CO_ERR_BUSY : CO_ERR_IO;
 }
 
-short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
+/* A read-ahead of one frame, one recv each (socketcan_read_drained() never holds): the frame goes to
+ * socketcan_read_other, as rx_since_query is never set here. */
+int socketcan_read_ahead(socketcan_t *c)
 {
-    (void)c;
-    return (short)(POLLIN | (tx_pending ? POLLOUT : 0));
-}
-
-/* No read-ahead here (socketcan_read_ahead_empty() always true, socketcan_read_drained() never): one recv a frame. */
-int socketcan_read(socketcan_t *c, co_frame_t *frame)
-{
-    struct can_frame f;
     if (c->fd < 0) {
         return 0;
     }
-    const ssize_t n = recv(c->fd, &f, sizeof f, 0);
+    const ssize_t n = recv(c->fd, &c->rx_frames[0], sizeof c->rx_frames[0], 0);
     if (n == 0) {
         (void)close(c->fd); /* the test closed the bus: nothing more arrives, sends fail */
         c->fd = -1;
         return 0;
     }
-    if (n != (ssize_t)sizeof f || (f.can_id & CAN_ERR_FLAG) != 0U) {
-        return 0; /* EAGAIN, a packet of another size, or an error frame (the real channel logs those) */
+    if (n < 0) {
+        return 0; /* EAGAIN */
+    }
+    c->rx_msgs[0].msg_len = (unsigned)n;
+    c->rx_next = 0U;
+    c->rx_count = 1U;
+    return 1;
+}
+
+int socketcan_read_other(socketcan_t *c, unsigned k, co_frame_t *frame)
+{
+    const struct can_frame *f = &c->rx_frames[k];
+    if (c->rx_msgs[k].msg_len != sizeof *f || (f->can_id & CAN_ERR_FLAG) != 0U) {
+        return 0; /* a packet of another size, or an error frame (the real channel logs those) */
     }
     memset(frame, 0, sizeof *frame);
-    frame->id = f.can_id & CAN_EFF_MASK;
-    frame->flags = (uint8_t)(((f.can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
-                             ((f.can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
-    frame->len = f.can_dlc > 8U ? 8U : f.can_dlc;
-    memcpy(frame->data, f.data, frame->len);
+    frame->id = f->can_id & CAN_EFF_MASK;
+    frame->flags = (uint8_t)(((f->can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U) |
+                             ((f->can_id & CAN_EFF_FLAG) != 0U ? CO_FRAME_EFF : 0U));
+    frame->len = f->can_dlc > 8U ? 8U : f->can_dlc;
+    memcpy(frame->data, f->data, frame->len);
     return 1;
 }
 
