@@ -133,4 +133,16 @@ static inline co_time_us_t emu_since_start(const emu_t *emu, co_time_us_t at)
     return at > emu->start ? at - emu->start : 0U;
 }
 
+/** ppoll's timeout until `deadline` (0 when it has passed, in *ts), or NULL to wait without one (CO_NEVER). */
+static inline struct timespec *emu_poll_timeout(co_time_us_t deadline, co_time_us_t now, struct timespec *ts)
+{
+    if (deadline == CO_NEVER) {
+        return NULL;
+    }
+    const co_time_us_t wait = deadline > now ? deadline - now : 0U;
+    ts->tv_sec = (time_t)(wait / 1000000U);
+    ts->tv_nsec = (long)(wait % 1000000U) * 1000L;
+    return ts;
+}
+
 #endif /* EMU_H */

@@ -170,14 +170,7 @@ int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *n
         pfd.revents = 0;
         t = socketcan_now_us();
         struct timespec ts;
-        struct timespec *timeout = NULL;
-        if (deadline != CO_NEVER) {
-            const co_time_us_t wait = deadline > t ? deadline - t : 0U;
-            ts.tv_sec = (time_t)(wait / 1000000U);
-            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
-            timeout = &ts;
-        }
-        if (ppoll(&pfd, 1U, timeout, NULL) < 0) {
+        if (ppoll(&pfd, 1U, emu_poll_timeout(deadline, t, &ts), NULL) < 0) {
             if (errno != EINTR) {
                 output_error("poll: %s", strerror(errno));
                 status = 1;

@@ -110,14 +110,7 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             nfds += web_poll_fds(&emu->web, &pfd[web_index], now, &next);
         }
         struct timespec ts;
-        struct timespec *timeout = NULL;
-        if (next != CO_NEVER) {
-            const co_time_us_t wait = next > now ? next - now : 0U;
-            ts.tv_sec = (time_t)(wait / 1000000U);
-            ts.tv_nsec = (long)(wait % 1000000U) * 1000L;
-            timeout = &ts;
-        }
-        const int ready = ppoll(pfd, nfds, timeout, NULL);
+        const int ready = ppoll(pfd, nfds, emu_poll_timeout(next, now, &ts), NULL);
         if (ready < 0) {
             if (errno != EINTR) {
                 output_error("poll: %s", strerror(errno));
