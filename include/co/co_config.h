@@ -15,9 +15,17 @@
 /** 1: co_time_us_t is 32 bits wide and wraps every 2^32 µs (71.6 minutes): no 64-bit arithmetic on a 32-bit (or
  *  8-bit) core and 4 bytes less per deadline. The core then compares times wrap-safe, which holds while the
  *  caller calls co_node_process() no later than 2^31 µs (35.8 minutes) after the deadline it returned (a main
- *  loop calls it every few ms). 0 (the default): 64-bit time that never wraps. */
+ *  loop calls it every few ms). 0: 64-bit time that never wraps.
+ *  The default follows the target: 0 on a host with an operating system (Linux and other Unix, macOS, Windows:
+ *  its clock is 64-bit and the cost of 64-bit arithmetic does not matter there; canopen-emu's device models need
+ *  it), 1 on everything else, a microcontroller bare metal or under an RTOS (Cortex-M, RISC-V, AVR), where 64-bit
+ *  comparisons and sums cost flash on every deadline (the Bürkert image on a Cortex-M0+: 520 bytes). */
 #ifndef CO_CONFIG_TIME32
+#if defined(__linux__) || defined(__unix__) || defined(__APPLE__) || defined(_WIN32)
 #define CO_CONFIG_TIME32 0
+#else
+#define CO_CONFIG_TIME32 1
+#endif
 #endif
 
 /** 1: compact dictionary rows (co_od_entry_t, 10 bytes instead of 16 on 32-bit targets): the limits by number (at

@@ -3,8 +3,8 @@
  * @brief Basic types shared by every part of the CANopen slave core: time, CAN frames, status codes.
  *
  * Contract: time is always a caller-supplied monotonic count of microseconds (co_time_us_t). With 64-bit time (the
- * default) it never wraps in practice (2^64 µs is 584,000 years). With CO_CONFIG_TIME32 (co_config.h) it is 32 bits
- * wide and wraps every 71.6 minutes: compare times with co_time_before() / co_time_reached(), never with < or >=.
+ * default on a host) it never wraps in practice (2^64 µs is 584,000 years). With CO_CONFIG_TIME32 (co_config.h: the
+ * default on a microcontroller) it is 32 bits wide and wraps every 71.6 minutes: compare times with co_time_before() / co_time_reached(), never with < or >=.
  */
 #ifndef CO_TYPES_H
 #define CO_TYPES_H
