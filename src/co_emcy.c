@@ -35,6 +35,7 @@ static uint8_t update_register(co_node_t *node)
     return reg;
 }
 
+#if CO_CONFIG_EMCY_HISTORY
 /* 0x1003: newest error at sub 1, older ones move up, the oldest falls out when the array is full. One pass from
  * sub 1 up: each sub-index takes the value the one below held (a sub-index the table lacks moves nothing). */
 static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
@@ -66,6 +67,7 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
     }
     co_od_entry_set_u32(node, count_e, count);
 }
+#endif
 
 /* Queues the 8 bytes of an EMCY (code 0: an error reset) with the error register reg. */
 static void enqueue(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t *msef)
@@ -118,7 +120,9 @@ bool co_emcy_raise(co_node_t *node, uint16_t code, uint8_t reg_bits, const uint8
     a->code = code;
     a->reg = reg_bits;
     memcpy(a->msef, m, 5U);
+#if CO_CONFIG_EMCY_HISTORY
     push_history(node, code, m);
+#endif
     report(node, code, m);
     return true;
 }
@@ -206,6 +210,7 @@ uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint
     return co_cob_id_check(v, cur, !stored && (cur & CO_COBID_INVALID) == 0U);
 }
 
+#if CO_CONFIG_EMCY_HISTORY
 uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e)
 {
     if (e->sub == 0U) {
@@ -232,3 +237,4 @@ bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t
     co_od_entry_set_u32(node, e, 0U);
     return true;
 }
+#endif /* CO_CONFIG_EMCY_HISTORY */

@@ -447,9 +447,11 @@ static uint32_t comm_check_write(co_node_t *node, const co_od_entry_t *e, const 
     case 0x1003:
     case 0x1014:
     case 0x1015:
+#if CO_CONFIG_EMCY_HISTORY
         if (e->index == 0x1003 && e->sub == 0U) {
             return co_emcy_write_action(node, e, data, len) ? CO_HANDLED : CO_ABORT_INVALID_VALUE;
         }
+#endif
         return co_emcy_check_write(node, e, data, stored);
 #if CO_CONFIG_SYNC
     case 0x1005:
@@ -553,12 +555,14 @@ uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, si
     if (origin != CO_ORIGIN_LOCAL && (e->flags & CO_OD_READ) == 0U) {
         return (e->flags & CO_OD_WRITE) != 0U ? CO_ABORT_WRITE_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
+#if CO_CONFIG_EMCY_HISTORY
     if (e->index == 0x1003U) {
         r = co_emcy_check_read(node, e);
         if (r != CO_ABORT_NONE) {
             return r;
         }
     }
+#endif
     r = read_hook(node, e);
     if (r != CO_ABORT_NONE) {
         return r;

@@ -153,4 +153,11 @@
 #define CO_CONFIG_PDO_TIMERS 1
 #endif
 
+/** 1: the pre-defined error field 0x1003 (the EMCY history) is compiled in. 0: errors still set 0x1001 and send
+ *  their EMCY, nothing keeps a history; co_node_init() refuses a dictionary that has 0x1003 (CO_ERR_RANGE) rather
+ *  than show a history that never fills. A generated <c_name>_od_config.h turns it off for a dictionary without it. */
+#ifndef CO_CONFIG_EMCY_HISTORY
+#define CO_CONFIG_EMCY_HISTORY 1
+#endif
+
 #endif /* CO_CONFIG_H */

@@ -211,7 +211,8 @@ def fitted(tmp_path, eds_text, profile_text=BASE_PROFILE):
     ("sds", {"CO_CONFIG_SYNC", "CO_CONFIG_NODE_GUARDING", "CO_CONFIG_HB_CONSUMER", "CO_CONFIG_MPDO",
              "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64", "CO_CONFIG_PDO_TIMERS"},
      {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 2}),
-    ("buerkert-flow-controller", {"CO_CONFIG_MPDO", "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_OD_LIMITS_64"},
+    ("buerkert-flow-controller", {"CO_CONFIG_MPDO", "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_OD_LIMITS_64",
+                                  "CO_CONFIG_EMCY_HISTORY"},
      {"CO_RPDO_MAX": 4, "CO_TPDO_MAX": 4, "CO_HB_CONSUMER_MAX": 127}),
 ])
 def test_fitted_configuration_of_the_shipped_devices(tmp_path, device, off, caps):
@@ -242,6 +243,13 @@ def test_fitted_configuration_follows_the_objects(tmp_path):
     eds = set_key(set_key(eds, "2000sub2", "DataType", "0x0008"), "2000sub2", "HighLimit", "365.5")
     off, _ = fitted(tmp_path, eds)
     assert "CO_CONFIG_OD_LIMITS_64" not in off
+    # The pre-defined error field keeps the EMCY history; without it, the history is compiled out.
+    assert "CO_CONFIG_EMCY_HISTORY" not in off
+    without = re.sub(r"^\[1003(?:sub\d+)?\]\n(?:(?!\[).*\n)*", "", eds, flags=re.MULTILINE)
+    without = replace_list(without, "OptionalObjects", [o for o in optional_objects(eds) if int(o, 16) != 0x1003])
+    assert "[1003" not in without
+    off, _ = fitted(tmp_path, without)
+    assert "CO_CONFIG_EMCY_HISTORY" in off
 
 
 def test_16_bit_limit_pairs_where_every_limit_fits(tmp_path):
