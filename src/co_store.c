@@ -62,6 +62,12 @@ static co_nvm_status_t read_header(co_node_t *node, co_nvm_area_t area, uint8_t 
     return CO_NVM_NONE;
 }
 
+/* Reads len bytes at pos of the stored payload into dst: true when they are there. */
+static bool read_payload(co_node_t *node, uint32_t pos, uint8_t *dst, size_t len)
+{
+    return node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + pos, dst, len) == CO_OK;
+}
+
 /* Validates the stored parameter blob; returns its payload length through *len. */
 static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
 {
@@ -79,7 +85,7 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
     uint8_t chunk[32];
     for (uint32_t pos = 0U; pos < payload;) {
         const uint32_t n = (payload - pos) < sizeof chunk ? (payload - pos) : (uint32_t)sizeof chunk;
-        if (node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + pos, chunk, (size_t)n) != CO_OK) {
+        if (!read_payload(node, pos, chunk, (size_t)n)) {
             return CO_NVM_CORRUPT; /* truncated */
         }
         crc = co_crc32(crc, chunk, (size_t)n);
@@ -111,14 +117,11 @@ static void reader_next(record_reader_t *r)
 {
     uint8_t *rec = r->rec;
     r->key = READER_END;
-    if (r->pos + RECORD_HEAD > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos, rec, RECORD_HEAD) != CO_OK) {
+    if (r->pos + RECORD_HEAD > r->end || !read_payload(r->node, r->pos, rec, RECORD_HEAD)) {
         return;
     }
     const uint32_t size = RECORD_HEAD + (uint32_t)rec[3];
-    if (r->pos + size > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos + RECORD_HEAD,
-                                &rec[RECORD_HEAD], rec[3]) != CO_OK) {
+    if (r->pos + size > r->end || !read_payload(r->node, r->pos + RECORD_HEAD, &rec[RECORD_HEAD], rec[3])) {
         return;
     }
     r->pos += size;
