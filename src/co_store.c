@@ -116,15 +116,15 @@ typedef struct record_reader {
 static void reader_next(record_reader_t *r)
 {
     uint8_t *rec = r->rec;
+    const uint32_t at = r->pos;
     r->key = READER_END;
-    if (r->pos + RECORD_HEAD > r->end || !read_payload(r->node, r->pos, rec, RECORD_HEAD)) {
+    if (at + RECORD_HEAD > r->end || !read_payload(r->node, at, rec, RECORD_HEAD)) {
         return;
     }
-    const uint32_t size = RECORD_HEAD + (uint32_t)rec[3];
-    if (r->pos + size > r->end || !read_payload(r->node, r->pos + RECORD_HEAD, &rec[RECORD_HEAD], rec[3])) {
+    r->pos = at + RECORD_HEAD + rec[3]; /* past the record (no use after READER_END) */
+    if (r->pos > r->end || !read_payload(r->node, at + RECORD_HEAD, &rec[RECORD_HEAD], rec[3])) {
         return;
     }
-    r->pos += size;
     r->key = ((uint32_t)co_get_u16(rec) << 8) | rec[2];
 }
 
