@@ -45,11 +45,8 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
     if (size == 0U || count_e == NULL) {
         return;
     }
-    uint8_t count = (uint8_t)co_od_entry_u32(node, count_e);
-    if (count >= size) {
-        count = (uint8_t)(size - 1U); /* the oldest falls out */
-    }
-    count++;
+    const uint32_t was_count = co_od_entry_u32(node, count_e);
+    const uint8_t count = was_count < size ? (uint8_t)(was_count + 1U) : size; /* full: the oldest falls out */
     uint32_t carry = (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24);
     bool below = true; /* the sub-index below exists (sub 1 takes the new error) */
     for (unsigned i = 1U; i <= count; i++) {
