@@ -70,14 +70,14 @@ static void enqueue(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t *
     co_emcy_t *em = &node->emcy;
     if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way */
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
-        em->q_count--;
         em->lost++;
+    } else {
+        em->q_count++;
     }
-    uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN];
+    uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count - 1U) % CO_EMCY_QUEUE_LEN]; /* the last slot */
     co_put_u16(data, code);
     data[2] = reg;
     memcpy(&data[3], msef, 5U);
-    em->q_count++;
     co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, reg);
 }
 
