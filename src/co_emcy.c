@@ -173,18 +173,19 @@ co_time_us_t co_emcy_process(co_node_t *node)
         if (co_time_pending(node->now, em->next_allowed)) {
             return em->next_allowed;
         }
-        co_frame_t f;
-        f.id = em->cob_id & CO_COBID_CAN_ID;
-        f.len = 8U;
-        f.flags = 0U;
-        memcpy(f.data, em->queue[em->q_head], 8U);
+        const uint8_t *data = em->queue[em->q_head];
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
-        if ((em->cob_id & CO_COBID_INVALID) != 0U) {
-            continue; /* EMCY disabled */
+        if ((em->cob_id & CO_COBID_INVALID) == 0U) { /* else EMCY is disabled: the report is dropped */
+            co_frame_t f;
+            f.id = em->cob_id & CO_COBID_CAN_ID;
+            f.len = 8U;
+            f.flags = 0U;
+            memcpy(f.data, data, 8U);
+            co_node_send(node, &f);
+            em->next_allowed =
+                em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
         }
-        co_node_send(node, &f);
-        em->next_allowed = em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
     }
     return CO_TIME32_RETIRE(em->next_allowed);
 }
