@@ -83,13 +83,12 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
     }
     uint32_t crc = 0U;
     uint8_t chunk[32];
-    for (uint32_t pos = 0U; pos < payload;) {
-        const uint32_t n = (payload - pos) < sizeof chunk ? (payload - pos) : (uint32_t)sizeof chunk;
-        if (!read_payload(node, pos, chunk, (size_t)n)) {
+    for (uint32_t pos = 0U; pos < payload; pos += sizeof chunk) {
+        const size_t n = (payload - pos) < sizeof chunk ? (size_t)(payload - pos) : sizeof chunk;
+        if (!read_payload(node, pos, chunk, n)) {
             return CO_NVM_CORRUPT; /* truncated */
         }
-        crc = co_crc32(crc, chunk, (size_t)n);
-        pos += n;
+        crc = co_crc32(crc, chunk, n);
     }
     if (crc != co_get_u32(&h[12])) {
         return CO_NVM_CORRUPT;
