@@ -48,18 +48,20 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
     const uint32_t was_count = co_od_entry_u32(node, count_e);
     const uint8_t count = was_count < size ? (uint8_t)(was_count + 1U) : size; /* full: the oldest falls out */
     uint32_t carry = (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24);
-    bool below = true; /* the sub-index below exists (sub 1 takes the new error) */
+    co_od_entry_t one;
+    /* The sub-index below the one at hand, NULL where the table lacks it: only tested, never read (sub 1 takes the
+     * new error). */
+    const co_od_entry_t *below = count_e;
     for (unsigned i = 1U; i <= count; i++) {
-        co_od_entry_t one;
         const co_od_entry_t *e = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
         if (e != NULL) {
             const uint32_t was = co_od_entry_u32(node, e);
-            if (below) {
+            if (below != NULL) {
                 co_od_entry_set_u32(node, e, carry);
             }
             carry = was;
         }
-        below = e != NULL;
+        below = e;
     }
     co_od_entry_set_u32(node, count_e, count);
 }
