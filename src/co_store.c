@@ -202,18 +202,17 @@ static bool in_group(uint8_t sub, uint16_t index)
 
 /* Streams records to the staging area and keeps the running CRC. */
 typedef struct blob_writer {
-    co_node_t *node;
     uint32_t pos;
     uint32_t crc;
     bool ok;
 } blob_writer_t;
 
 /* Appends a record: head and value in one buffer, as record_reader_t.rec holds it. */
-static void writer_put(blob_writer_t *w, const uint8_t *rec)
+static void writer_put(co_node_t *node, blob_writer_t *w, const uint8_t *rec)
 {
     const size_t size = RECORD_HEAD + (size_t)rec[3];
     w->ok = w->ok &&
-            w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, rec, size) == CO_OK;
+            node->port->nvm_write(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, rec, size) == CO_OK;
     w->crc = co_crc32(w->crc, rec, size);
     w->pos += (uint32_t)size;
 }
@@ -275,7 +274,7 @@ static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, const uint8_
 static uint32_t rewrite(co_node_t *node, uint8_t group, bool save)
 {
     record_reader_t old;
-    blob_writer_t w = {node, 0U, 0U, true};
+    blob_writer_t w = {0U, 0U, true};
     if (!stage_device_areas(node, CO_NVM_PARAMS, save ? 0x1010U : 0x1011U, group)) {
         return CO_ABORT_HARDWARE;
     }
@@ -307,10 +306,10 @@ static uint32_t rewrite(co_node_t *node, uint8_t group, bool save)
                     co_put_u16(rec, e->index);
                     rec[2] = e->sub;
                     rec[3] = (uint8_t)n;
-                    writer_put(&w, rec);
+                    writer_put(node, &w, rec);
                 }
             } else if (stored && (save || !grouped || (e->flags & CO_OD_KEEP) != 0U)) {
-                writer_put(&w, old.rec);
+                writer_put(node, &w, old.rec);
             }
         }
     }
