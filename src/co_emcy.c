@@ -217,18 +217,18 @@ uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e)
 
 bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
+    (void)e; /* 0x1003:00, found again as the loop's sub-index 0 */
     (void)len;
     if (data[0] != 0U) {
         return false; /* only 0 (clear the history) may be written to 0x1003:00 */
     }
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
-    for (unsigned i = 1U; i <= size; i++) {
+    for (unsigned i = 0U; i <= size; i++) { /* the count and every error */
         co_od_entry_t one;
         const co_od_entry_t *s = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
         if (s != NULL) {
             co_od_entry_set_u32(node, s, 0U);
         }
     }
-    co_od_entry_set_u32(node, e, 0U);
     return true;
 }
