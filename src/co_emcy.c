@@ -70,13 +70,15 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
 static void enqueue(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
-    if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way */
-        em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
+    unsigned slot = em->q_head;
+    if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way, its slot takes the new one */
+        em->q_head = (uint8_t)((slot + 1U) % CO_EMCY_QUEUE_LEN);
         em->lost++;
     } else {
+        slot = (slot + em->q_count) % CO_EMCY_QUEUE_LEN;
         em->q_count++;
     }
-    uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count - 1U) % CO_EMCY_QUEUE_LEN]; /* the last slot */
+    uint8_t *data = em->queue[slot];
     co_put_u16(data, code);
     data[2] = reg;
     memcpy(&data[3], msef, 5U);
