@@ -266,16 +266,18 @@ static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, const uint8_
     return node->port->nvm_commit(node->port_ctx, own, total_len) == CO_OK ? CO_OK : CO_ERR_IO;
 }
 
-/* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay).
+/* req: the sub-index of 0x1010 (save) or 0x1011 written, its sub the group.
+ * save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay).
  * Returns the store's abort code: CO_ABORT_HARDWARE when there is no storage or the port failed; CO_ABORT_STORE
  * (0x08000020) when a value to save is one its load would refuse (co_od_check_stored: a value the application
  * wrote past the object's limits, which only a local write can do): nothing of the store is kept, rather than a
  * save confirmed now and loaded as defaults at the next start. */
-static uint32_t rewrite(co_node_t *node, uint8_t group, bool save)
+static uint32_t rewrite(co_node_t *node, const co_od_entry_t *req, bool save)
 {
+    const uint8_t group = req->sub;
     record_reader_t old;
     blob_writer_t w = {0U, 0U, true};
-    if (!stage_device_areas(node, CO_NVM_PARAMS, save ? 0x1010U : 0x1011U, group)) {
+    if (!stage_device_areas(node, CO_NVM_PARAMS, req->index, group)) {
         return CO_ABORT_HARDWARE;
     }
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
@@ -331,7 +333,7 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
     if (co_get_u32(data) != (save ? SIG_SAVE : SIG_LOAD)) {
         return CO_ABORT_STORE; /* wrong signature */
     }
-    const uint32_t r = rewrite(node, e->sub, save);
+    const uint32_t r = rewrite(node, e, save);
     co_node_event(node, save ? CO_EV_STORE : CO_EV_RESTORE, e->index, e->sub, 0U, r);
     return r;
 }
