@@ -328,6 +328,25 @@ static void queue_overflow_drops_oldest_and_counts(void)
     ASSERT_FRAME(CO_EMCY_QUEUE_LEN - 1U, 0x085U, 8, 0x00, 0x00, 0x00, 0, 0, 0, 0, 0);
 }
 
+static void queue_overflow_keeps_the_newest_in_order(void)
+{
+    RX(0x000, 0x02, 0x05);
+    fake_port_clear(&fx.port);
+    const uint32_t reports = 2U * (CO_EMCY_QUEUE_LEN - 1U); /* 14 for a queue of 8: the slots wrap, some twice */
+    for (uint16_t k = 0U; k < reports / 2U; k++) {
+        TEST_ASSERT_TRUE(co_emcy_raise(&fx.node, (uint16_t)(0x5001U + k), 0x01U, NULL));
+        TEST_ASSERT_TRUE(co_emcy_clear(&fx.node, (uint16_t)(0x5001U + k), NULL));
+    }
+    TEST_ASSERT_EQUAL_UINT32(reports - CO_EMCY_QUEUE_LEN, fx.node.emcy.lost);
+    RX(0x000, 0x80, 0x05);
+    TEST_ASSERT_EQUAL_UINT32(CO_EMCY_QUEUE_LEN, fx.port.n_sent);
+    for (uint32_t i = 0U; i < CO_EMCY_QUEUE_LEN; i++) { /* the last reports, raise and reset alternating */
+        const uint32_t report = reports - CO_EMCY_QUEUE_LEN + i;
+        const uint16_t code = (report % 2U) == 0U ? (uint16_t)(0x5001U + report / 2U) : 0U;
+        TEST_ASSERT_EQUAL_HEX16(code, (uint16_t)(fx.port.sent[i].data[0] | (fx.port.sent[i].data[1] << 8)));
+    }
+}
+
 static void inhibit_time_in_100us_units(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1015, 0, 50U, 2U)); /* 5 ms */
@@ -567,6 +586,7 @@ int main(void)
     RUN_TEST(stopped_queues_until_leaving);
     RUN_TEST(stopped_queue_sent_on_start_too);
     RUN_TEST(queue_overflow_drops_oldest_and_counts);
+    RUN_TEST(queue_overflow_keeps_the_newest_in_order);
     RUN_TEST(inhibit_time_in_100us_units);
     RUN_TEST(inhibit_time_counts_from_last_emcy);
     RUN_TEST(cob_id_bit31_disables_emcy);
