@@ -281,7 +281,7 @@ static uint32_t rewrite(co_node_t *node, const co_od_entry_t *req, bool save)
         return CO_ABORT_HARDWARE;
     }
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
-    for (uint16_t i = 0U; i < node->od->count; i++) {
+    for (unsigned i = 0U; i < node->od->count; i++) {
         const co_od_entry_t *row = &node->od->entries[i];
         if ((row->flags & CO_OD_STORE) == 0U) {
             continue;
