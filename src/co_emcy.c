@@ -46,7 +46,7 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
         return;
     }
     const uint32_t was_count = co_od_entry_u32(node, count_e);
-    const uint8_t count = was_count < size ? (uint8_t)(was_count + 1U) : size; /* full: the oldest falls out */
+    const uint32_t count = was_count < size ? was_count + 1U : size; /* full: the oldest falls out */
     uint32_t carry = (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24);
     co_od_entry_t one;
     /* The sub-index below the one at hand, NULL where the table lacks it: only tested, never read (sub 1 takes the
