@@ -120,7 +120,7 @@ static void reader_next(record_reader_t *r)
     if (at + RECORD_HEAD > r->end || !read_payload(r->node, at, rec, RECORD_HEAD)) {
         return;
     }
-    r->pos = at + RECORD_HEAD + rec[3]; /* past the record (no use after READER_END) */
+    r->pos = at + RECORD_HEAD + rec[3]; /* past the record; unused if it proves cut short (key READER_END) */
     if (r->pos > r->end || !read_payload(r->node, at + RECORD_HEAD, &rec[RECORD_HEAD], rec[3])) {
         return;
     }
