@@ -46,24 +46,23 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
     if (size == 0U || count_e == NULL) {
         return;
     }
-    uint8_t count = (uint8_t)co_od_entry_u32(node, count_e);
-    if (count >= size) {
-        count = (uint8_t)(size - 1U); /* the oldest falls out */
-    }
-    count++;
+    const uint32_t was_count = co_od_entry_u32(node, count_e);
+    const uint32_t count = was_count < size ? was_count + 1U : size; /* full: the oldest falls out */
     uint32_t carry = (uint32_t)code | ((uint32_t)msef[0] << 16) | ((uint32_t)msef[1] << 24);
-    bool below = true; /* the sub-index below exists (sub 1 takes the new error) */
+    co_od_entry_t one;
+    /* The sub-index below the one at hand, NULL where the table lacks it: only tested, never read (sub 1 takes the
+     * new error). */
+    const co_od_entry_t *below = count_e;
     for (unsigned i = 1U; i <= count; i++) {
-        co_od_entry_t one;
         const co_od_entry_t *e = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
         if (e != NULL) {
             const uint32_t was = co_od_entry_u32(node, e);
-            if (below) {
+            if (below != NULL) {
                 co_od_entry_set_u32(node, e, carry);
             }
             carry = was;
         }
-        below = e != NULL;
+        below = e;
     }
     co_od_entry_set_u32(node, count_e, count);
 }
@@ -73,16 +72,18 @@ static void push_history(co_node_t *node, uint16_t code, const uint8_t *msef)
 static void enqueue(co_node_t *node, uint16_t code, uint8_t reg, const uint8_t *msef)
 {
     co_emcy_t *em = &node->emcy;
-    if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way */
-        em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
-        em->q_count--;
+    unsigned slot = em->q_head;
+    if (em->q_count == CO_EMCY_QUEUE_LEN) { /* full: the oldest report gives way, its slot takes the new one */
+        em->q_head = (uint8_t)((slot + 1U) % CO_EMCY_QUEUE_LEN);
         em->lost++;
+    } else {
+        slot = (slot + em->q_count) % CO_EMCY_QUEUE_LEN;
+        em->q_count++;
     }
-    uint8_t *data = em->queue[(unsigned)(em->q_head + em->q_count) % CO_EMCY_QUEUE_LEN];
+    uint8_t *data = em->queue[slot];
     co_put_u16(data, code);
     data[2] = reg;
     memcpy(&data[3], msef, 5U);
-    em->q_count++;
     co_node_event(node, CO_EV_EMCY, 0x1014U, 0U, code, reg);
 }
 
@@ -180,18 +181,19 @@ co_time_us_t co_emcy_process(co_node_t *node)
         if (co_time_pending(node->now, em->next_allowed)) {
             return em->next_allowed;
         }
-        co_frame_t f;
-        f.id = em->cob_id & CO_COBID_CAN_ID;
-        f.len = 8U;
-        f.flags = 0U;
-        memcpy(f.data, em->queue[em->q_head], 8U);
+        const uint8_t *data = em->queue[em->q_head];
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
-        if ((em->cob_id & CO_COBID_INVALID) != 0U) {
-            continue; /* EMCY disabled */
+        if ((em->cob_id & CO_COBID_INVALID) == 0U) { /* else EMCY is disabled: the report is dropped */
+            co_frame_t f;
+            f.id = em->cob_id & CO_COBID_CAN_ID;
+            f.len = 8U;
+            f.flags = 0U;
+            memcpy(f.data, data, 8U);
+            co_node_send(node, &f);
+            em->next_allowed =
+                em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
         }
-        co_node_send(node, &f);
-        em->next_allowed = em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
     }
     return CO_TIME32_RETIRE(em->next_allowed);
 }
@@ -222,19 +224,19 @@ uint32_t co_emcy_check_read(co_node_t *node, const co_od_entry_t *e)
 
 bool co_emcy_write_action(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
+    (void)e; /* 0x1003:00, found again as the loop's sub-index 0 */
     (void)len;
     if (data[0] != 0U) {
         return false; /* only 0 (clear the history) may be written to 0x1003:00 */
     }
     const uint8_t size = co_od_sub_count(node->od, 0x1003U);
-    for (unsigned i = 1U; i <= size; i++) {
+    for (unsigned i = 0U; i <= size; i++) { /* the count and every error */
         co_od_entry_t one;
         const co_od_entry_t *s = co_od_find(node->od, 0x1003U, (uint8_t)i, &one);
         if (s != NULL) {
             co_od_entry_set_u32(node, s, 0U);
         }
     }
-    co_od_entry_set_u32(node, e, 0U);
     return true;
 }
 #endif /* CO_CONFIG_EMCY_HISTORY */

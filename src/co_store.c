@@ -62,6 +62,12 @@ static co_nvm_status_t read_header(co_node_t *node, co_nvm_area_t area, uint8_t 
     return CO_NVM_NONE;
 }
 
+/* Reads len bytes at pos of the stored payload into dst: true when they are there. */
+static bool read_payload(co_node_t *node, uint32_t pos, uint8_t *dst, size_t len)
+{
+    return node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + pos, dst, len) == CO_OK;
+}
+
 /* Validates the stored parameter blob; returns its payload length through *len. */
 static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
 {
@@ -77,13 +83,12 @@ static co_nvm_status_t params_check(co_node_t *node, uint32_t *len)
     }
     uint32_t crc = 0U;
     uint8_t chunk[32];
-    for (uint32_t pos = 0U; pos < payload;) {
-        const uint32_t n = (payload - pos) < sizeof chunk ? (payload - pos) : (uint32_t)sizeof chunk;
-        if (node->port->nvm_read(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + pos, chunk, (size_t)n) != CO_OK) {
+    for (uint32_t pos = 0U; pos < payload; pos += sizeof chunk) {
+        const size_t n = (payload - pos) < sizeof chunk ? (size_t)(payload - pos) : sizeof chunk;
+        if (!read_payload(node, pos, chunk, n)) {
             return CO_NVM_CORRUPT; /* truncated */
         }
-        crc = co_crc32(crc, chunk, (size_t)n);
-        pos += n;
+        crc = co_crc32(crc, chunk, n);
     }
     if (crc != co_get_u32(&h[12])) {
         return CO_NVM_CORRUPT;
@@ -110,18 +115,15 @@ typedef struct record_reader {
 static void reader_next(record_reader_t *r)
 {
     uint8_t *rec = r->rec;
+    const uint32_t at = r->pos;
     r->key = READER_END;
-    if (r->pos + RECORD_HEAD > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos, rec, RECORD_HEAD) != CO_OK) {
+    if (at + RECORD_HEAD > r->end || !read_payload(r->node, at, rec, RECORD_HEAD)) {
         return;
     }
-    const uint32_t size = RECORD_HEAD + (uint32_t)rec[3];
-    if (r->pos + size > r->end ||
-        r->node->port->nvm_read(r->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + r->pos + RECORD_HEAD,
-                                &rec[RECORD_HEAD], rec[3]) != CO_OK) {
+    r->pos = at + RECORD_HEAD + rec[3]; /* past the record; unused if it proves cut short (key READER_END) */
+    if (r->pos > r->end || !read_payload(r->node, at + RECORD_HEAD, &rec[RECORD_HEAD], rec[3])) {
         return;
     }
-    r->pos += size;
     r->key = ((uint32_t)co_get_u16(rec) << 8) | rec[2];
 }
 
@@ -200,18 +202,17 @@ static bool in_group(uint8_t sub, uint16_t index)
 
 /* Streams records to the staging area and keeps the running CRC. */
 typedef struct blob_writer {
-    co_node_t *node;
     uint32_t pos;
     uint32_t crc;
     bool ok;
 } blob_writer_t;
 
 /* Appends a record: head and value in one buffer, as record_reader_t.rec holds it. */
-static void writer_put(blob_writer_t *w, const uint8_t *rec)
+static void writer_put(co_node_t *node, blob_writer_t *w, const uint8_t *rec)
 {
     const size_t size = RECORD_HEAD + (size_t)rec[3];
     w->ok = w->ok &&
-            w->node->port->nvm_write(w->node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, rec, size) == CO_OK;
+            node->port->nvm_write(node->port_ctx, CO_NVM_PARAMS, HEADER_LEN + w->pos, rec, size) == CO_OK;
     w->crc = co_crc32(w->crc, rec, size);
     w->pos += (uint32_t)size;
 }
@@ -265,20 +266,22 @@ static co_status_t commit_store(co_node_t *node, co_nvm_area_t own, const uint8_
     return node->port->nvm_commit(node->port_ctx, own, total_len) == CO_OK ? CO_OK : CO_ERR_IO;
 }
 
-/* save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay).
+/* req: the sub-index of 0x1010 (save) or 0x1011 written, its sub the group.
+ * save: the group's rows get their current values; restore: the group's rows are dropped (KEEP rows stay).
  * Returns the store's abort code: CO_ABORT_HARDWARE when there is no storage or the port failed; CO_ABORT_STORE
  * (0x08000020) when a value to save is one its load would refuse (co_od_check_stored: a value the application
  * wrote past the object's limits, which only a local write can do): nothing of the store is kept, rather than a
  * save confirmed now and loaded as defaults at the next start. */
-static uint32_t rewrite(co_node_t *node, uint8_t group, bool save)
+static uint32_t rewrite(co_node_t *node, const co_od_entry_t *req, bool save)
 {
+    const uint8_t group = req->sub;
     record_reader_t old;
-    blob_writer_t w = {node, 0U, 0U, true};
-    if (!stage_device_areas(node, CO_NVM_PARAMS, save ? 0x1010U : 0x1011U, group)) {
+    blob_writer_t w = {0U, 0U, true};
+    if (!stage_device_areas(node, CO_NVM_PARAMS, req->index, group)) {
         return CO_ABORT_HARDWARE;
     }
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
-    for (uint16_t i = 0U; i < node->od->count; i++) {
+    for (unsigned i = 0U; i < node->od->count; i++) {
         const co_od_entry_t *row = &node->od->entries[i];
         if ((row->flags & CO_OD_STORE) == 0U) {
             continue;
@@ -305,10 +308,10 @@ static uint32_t rewrite(co_node_t *node, uint8_t group, bool save)
                     co_put_u16(rec, e->index);
                     rec[2] = e->sub;
                     rec[3] = (uint8_t)n;
-                    writer_put(&w, rec);
+                    writer_put(node, &w, rec);
                 }
             } else if (stored && (save || !grouped || (e->flags & CO_OD_KEEP) != 0U)) {
-                writer_put(&w, old.rec);
+                writer_put(node, &w, old.rec);
             }
         }
     }
@@ -330,7 +333,7 @@ uint32_t co_store_check_write(co_node_t *node, const co_od_entry_t *e, const uin
     if (co_get_u32(data) != (save ? SIG_SAVE : SIG_LOAD)) {
         return CO_ABORT_STORE; /* wrong signature */
     }
-    const uint32_t r = rewrite(node, e->sub, save);
+    const uint32_t r = rewrite(node, e, save);
     co_node_event(node, save ? CO_EV_STORE : CO_EV_RESTORE, e->index, e->sub, 0U, r);
     return r;
 }

@@ -328,6 +328,25 @@ static void queue_overflow_drops_oldest_and_counts(void)
     ASSERT_FRAME(CO_EMCY_QUEUE_LEN - 1U, 0x085U, 8, 0x00, 0x00, 0x00, 0, 0, 0, 0, 0);
 }
 
+static void queue_overflow_keeps_the_newest_in_order(void)
+{
+    RX(0x000, 0x02, 0x05);
+    fake_port_clear(&fx.port);
+    const uint32_t reports = 2U * (CO_EMCY_QUEUE_LEN - 1U); /* 14 for a queue of 8: the slots wrap, some twice */
+    for (uint16_t k = 0U; k < reports / 2U; k++) {
+        TEST_ASSERT_TRUE(co_emcy_raise(&fx.node, (uint16_t)(0x5001U + k), 0x01U, NULL));
+        TEST_ASSERT_TRUE(co_emcy_clear(&fx.node, (uint16_t)(0x5001U + k), NULL));
+    }
+    TEST_ASSERT_EQUAL_UINT32(reports - CO_EMCY_QUEUE_LEN, fx.node.emcy.lost);
+    RX(0x000, 0x80, 0x05);
+    TEST_ASSERT_EQUAL_UINT32(CO_EMCY_QUEUE_LEN, fx.port.n_sent);
+    for (uint32_t i = 0U; i < CO_EMCY_QUEUE_LEN; i++) { /* the last reports, raise and reset alternating */
+        const uint32_t report = reports - CO_EMCY_QUEUE_LEN + i;
+        const uint16_t code = (report % 2U) == 0U ? (uint16_t)(0x5001U + report / 2U) : 0U;
+        TEST_ASSERT_EQUAL_HEX16(code, (uint16_t)(fx.port.sent[i].data[0] | (fx.port.sent[i].data[1] << 8)));
+    }
+}
+
 static void inhibit_time_in_100us_units(void)
 {
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1015, 0, 50U, 2U)); /* 5 ms */
@@ -487,6 +506,62 @@ static void emcy_sent_in_preop_and_operational(void)
     TEST_ASSERT_EQUAL_UINT32(2U, fx_count(0x085U));
 }
 
+/* A history whose table lacks a sub-index (0x1003:01, :03..05; no :02): a sub-index the table lacks moves nothing,
+ * the one above it keeps its value (the count still counts the present sub-indices), and clearing zeroes the count
+ * and the errors up to that count. */
+typedef struct gap_values {
+    uint32_t device_type;
+    uint8_t error_register;
+    uint8_t count;
+    uint32_t errors[4]; /* :01, :03, :04, :05 */
+    uint8_t id_n;
+    uint32_t vendor;
+} gap_values_t;
+
+#define G(i, s, t, f, m) CO_OD_ROW(i, s, t, f, sizeof(((gap_values_t *)0)->m), offsetof(gap_values_t, m))
+static const co_od_entry_t gap_entries[] = {
+    G(0x1000, 0, CO_T_UNSIGNED32, CO_OD_READ, device_type),
+    G(0x1001, 0, CO_T_UNSIGNED8, CO_OD_READ, error_register),
+    G(0x1003, 0, CO_T_UNSIGNED8, CO_OD_READ | CO_OD_WRITE, count),
+    G(0x1003, 1, CO_T_UNSIGNED32, CO_OD_READ, errors[0]),
+    CO_OD_RUN(0x1003, 3, 3, CO_T_UNSIGNED32, CO_OD_READ, sizeof(uint32_t), offsetof(gap_values_t, errors[1])),
+    G(0x1018, 0, CO_T_UNSIGNED8, CO_OD_READ, id_n),
+    G(0x1018, 1, CO_T_UNSIGNED32, CO_OD_READ, vendor),
+};
+static const gap_values_t gap_defaults = {0x191UL, 0U, 0U, {0x11UL, 0x33UL, 0x44UL, 0x55UL}, 1U, 0x39UL};
+static const co_od_t gap_od = {"gap", gap_entries, (uint16_t)(sizeof gap_entries / sizeof gap_entries[0]),
+                               &gap_defaults, (uint32_t)sizeof(gap_values_t), 0x6A90UL, 0U, NULL, 0U, NULL, 0U};
+
+static void history_with_a_sub_index_the_table_lacks(void)
+{
+    static co_node_t gap_node;
+    static gap_values_t v;
+    const co_node_cfg_t cfg = {.od = &gap_od, .values = &v, .port = &fx.port.port, .port_ctx = &fx.port, .node_id = 9U};
+    TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&gap_node, &cfg, 0U));
+    static const uint32_t after[5][5] = {
+        /* count, :01, :03, :04, :05 after raising 0x5001, 0x5002, ... */
+        {1U, 0x5001UL, 0x33UL, 0x44UL, 0x55UL},
+        {2U, 0x5002UL, 0x33UL, 0x44UL, 0x55UL}, /* :01's error is lost: :02 is missing */
+        {3U, 0x5003UL, 0x33UL, 0x44UL, 0x55UL}, /* :03 is not written: the one below is missing */
+        {4U, 0x5004UL, 0x33UL, 0x33UL, 0x55UL}, /* :04 takes what :03 held */
+        {4U, 0x5005UL, 0x33UL, 0x33UL, 0x55UL}, /* 4 present sub-indices: the count stays */
+    };
+    for (unsigned k = 0U; k < 5U; k++) {
+        TEST_ASSERT_TRUE(co_emcy_raise(&gap_node, (uint16_t)(0x5001U + k), 0x80U, NULL));
+        TEST_ASSERT_EQUAL_UINT8(after[k][0], v.count);
+        for (unsigned j = 0U; j < 4U; j++) {
+            TEST_ASSERT_EQUAL_HEX32(after[k][j + 1U], v.errors[j]);
+        }
+    }
+    const uint8_t zero = 0U;
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&gap_node, 0x1003U, 0U, &zero, 1U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_UINT8(0U, v.count);
+    TEST_ASSERT_EQUAL_HEX32(0U, v.errors[0]);
+    TEST_ASSERT_EQUAL_HEX32(0U, v.errors[1]);
+    TEST_ASSERT_EQUAL_HEX32(0U, v.errors[2]);
+    TEST_ASSERT_EQUAL_HEX32(0x55UL, v.errors[3]); /* :05, past the count of present sub-indices */
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -502,6 +577,7 @@ int main(void)
     RUN_TEST(history_stores_only_nonzero_codes);
     RUN_TEST(code_zero_never_enters_history);
     RUN_TEST(history_drops_oldest_when_full);
+    RUN_TEST(history_with_a_sub_index_the_table_lacks);
     RUN_TEST(v36_write_zero_clears_history);
     RUN_TEST(v37_write_nonzero_count_refused);
     RUN_TEST(v38_read_empty_history_sub1);
@@ -510,6 +586,7 @@ int main(void)
     RUN_TEST(stopped_queues_until_leaving);
     RUN_TEST(stopped_queue_sent_on_start_too);
     RUN_TEST(queue_overflow_drops_oldest_and_counts);
+    RUN_TEST(queue_overflow_keeps_the_newest_in_order);
     RUN_TEST(inhibit_time_in_100us_units);
     RUN_TEST(inhibit_time_counts_from_last_emcy);
     RUN_TEST(cob_id_bit31_disables_emcy);
