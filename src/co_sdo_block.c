@@ -165,7 +165,9 @@ static void upload_confirmation(co_node_t *node, co_sdo_server_t *s, const uint8
         co_sdo_abort(node, s, CO_ABORT_BLOCK_SIZE);
         return;
     }
-    const bool all_taken = ackseq == s->seq && upload_block_sent(s) && upload_end_of_block(s) >= s->size;
+    /* Every segment sent confirmed, at least one (a block the port had no room for yet has none), and they reach
+     * the end of the object. */
+    const bool all_taken = ackseq == s->seq && ackseq != 0U && upload_end_of_block(s) >= s->size;
     if (all_taken) {
         const uint32_t unused = upload_end_of_block(s) - s->size;
         uint8_t crc[2];
