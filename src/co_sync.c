@@ -80,10 +80,10 @@ co_time_us_t co_sync_process(co_node_t *node)
         sync->timeout_due = CO_NEVER; /* consumer off: monitoring restarts with the next SYNC */
         return CO_NEVER;
     }
-    if (sync->timeout_error || sync->timeout_due == CO_NEVER) {
+    if (sync->timeout_error) {
         return CO_NEVER;
     }
-    if (co_long_timer_expired(node->now, &sync->timeout_due, &sync->rest_ms)) {
+    if (co_long_timer_expired(node->now, &sync->timeout_due, &sync->rest_ms)) { /* CO_NEVER never expires */
         sync->timeout_error = true;
         (void)co_emcy_raise(node, 0x8100U, 0x10U, sync_msef);
         return CO_NEVER;
