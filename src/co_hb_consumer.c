@@ -76,8 +76,8 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
     bool used = false;
     for (unsigned i = 0U; i < hbc->used; i++) {
         co_hb_consumer_slot_t *s = &hbc->slot[i];
-        if (s->node_id != id || s->state == 0U) {
-            continue;
+        if (s->node_id != id) {
+            continue; /* (an unused slot has node-ID 0, and id is 1..127) */
         }
         used = true;
         s->remote_state = f->data[0];
