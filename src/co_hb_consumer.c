@@ -19,10 +19,10 @@ static void slot_emcy(co_node_t *node, uint8_t node_id, bool raise)
     }
 }
 
-static void slot_configure(co_node_t *node, unsigned i)
+/* Slot s from its entry of 0x1016 (sub-index sub). */
+static void slot_configure(co_node_t *node, co_hb_consumer_slot_t *s, uint8_t sub)
 {
-    co_hb_consumer_slot_t *s = &node->hbc.slot[i];
-    const uint32_t v = co_od_u32_or(node, 0x1016U, (uint8_t)(i + 1U), 0U);
+    const uint32_t v = co_od_u32_or(node, 0x1016U, sub, 0U);
     const uint8_t id = (uint8_t)(v >> 16);
     if (s->state == 3U) {
         slot_emcy(node, s->node_id, false);
@@ -58,7 +58,7 @@ void co_hbc_reset(co_node_t *node)
     hbc->count = n;
     for (unsigned i = 0U; i < n; i++) {
         hbc->slot[i].state = 0U;
-        slot_configure(node, i);
+        slot_configure(node, &hbc->slot[i], (uint8_t)(i + 1U));
     }
     update_index(node);
 }
@@ -142,7 +142,7 @@ uint32_t co_hbc_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
 void co_hbc_written(co_node_t *node, const co_od_entry_t *e)
 {
     if (e->sub >= 1U && e->sub <= node->hbc.count) {
-        slot_configure(node, e->sub - 1U);
+        slot_configure(node, &node->hbc.slot[e->sub - 1U], e->sub);
         update_index(node);
         co_node_routes_update(node); /* the heartbeats it takes changed */
     }
