@@ -13,9 +13,12 @@ static const uint8_t guard_msef[5] = {0x01U, 0U, 0U, 0U, 0U}; /* distinguishes l
 void co_guard_written(co_node_t *node)
 {
     co_guard_t *g = &node->guard;
-    g->present = co_od_exists(node->od, 0x100CU, 0U) && co_od_exists(node->od, 0x100DU, 0U);
-    g->guard_ms = (uint16_t)co_od_u32_or(node, 0x100CU, 0U, 0U);
-    g->life_factor = (uint8_t)co_od_u32_or(node, 0x100DU, 0U, 0U);
+    /* One look-up each: the row that holds sub-index 0 starts there, so its value is sub-index 0's. */
+    const co_od_entry_t *guard_time = co_od_find_row(node->od, 0x100CU, 0U);
+    const co_od_entry_t *life_factor = co_od_find_row(node->od, 0x100DU, 0U);
+    g->present = guard_time != NULL && life_factor != NULL;
+    g->guard_ms = guard_time != NULL ? (uint16_t)co_od_entry_u32(node, guard_time) : 0U;
+    g->life_factor = life_factor != NULL ? (uint8_t)co_od_entry_u32(node, life_factor) : 0U;
 }
 
 void co_guard_reset(co_node_t *node)
