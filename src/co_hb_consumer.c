@@ -77,7 +77,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
     for (unsigned i = 0U; i < hbc->used; i++) {
         co_hb_consumer_slot_t *s = &hbc->slot[i];
         if (s->node_id != id) {
-            continue; /* (an unused slot has node-ID 0, and id is 1..127) */
+            continue; /* (a slot not in use has node-ID 0, never a heartbeat's: the node-ID alone tells) */
         }
         used = true;
         s->remote_state = f->data[0];
