@@ -10,13 +10,15 @@
 
 static const uint8_t guard_msef[5] = {0x01U, 0U, 0U, 0U, 0U}; /* distinguishes life guarding from HB consumers */
 
-static uint32_t life_time_ms(const co_node_t *node) { return (uint32_t)node->guard.guard_ms * node->guard.life_factor; }
-
 void co_guard_written(co_node_t *node)
 {
-    node->guard.present = co_od_exists(node->od, 0x100CU, 0U) && co_od_exists(node->od, 0x100DU, 0U);
-    node->guard.guard_ms = (uint16_t)co_od_u32_or(node, 0x100CU, 0U, 0U);
-    node->guard.life_factor = (uint8_t)co_od_u32_or(node, 0x100DU, 0U, 0U);
+    co_guard_t *g = &node->guard;
+    /* One look-up each: the row that holds sub-index 0 starts there, so its value is sub-index 0's. */
+    const co_od_entry_t *guard_time = co_od_find_row(node->od, 0x100CU, 0U);
+    const co_od_entry_t *life_factor = co_od_find_row(node->od, 0x100DU, 0U);
+    g->present = guard_time != NULL && life_factor != NULL;
+    g->guard_ms = guard_time != NULL ? (uint16_t)co_od_entry_u32(node, guard_time) : 0U;
+    g->life_factor = life_factor != NULL ? (uint8_t)co_od_entry_u32(node, life_factor) : 0U;
 }
 
 void co_guard_reset(co_node_t *node)
@@ -31,38 +33,40 @@ void co_guard_reset(co_node_t *node)
 void co_guard_rx(co_node_t *node, const co_frame_t *f)
 {
     (void)f; /* routed here only when the device has node guarding (co_node.c) */
+    co_guard_t *g = &node->guard;
     if (node->hb.period_ms != 0U) {
         return; /* heartbeat producer active: node guarding disabled */
     }
-    const co_frame_t reply = {0x700U + node->node_id, 1U, 0U, {(uint8_t)(node->guard.toggle | (uint8_t)node->nmt_state)}};
+    const co_frame_t reply = {0x700U + node->node_id, 1U, 0U, {(uint8_t)(g->toggle | (uint8_t)node->nmt_state)}};
     co_node_send(node, &reply);
-    node->guard.toggle ^= 0x80U;
-    const uint32_t life = life_time_ms(node);
-    node->guard.armed = life != 0U;
-    node->guard.deadline = life != 0U ? co_long_timer_start(node->now, life, &node->guard.rest_ms) : CO_NEVER;
-    co_node_due(node, node->guard.deadline);
-    if (node->guard.failed) {
-        node->guard.failed = false;
+    g->toggle ^= 0x80U;
+    const uint32_t life = (uint32_t)g->guard_ms * g->life_factor;
+    g->armed = life != 0U;
+    g->deadline = life != 0U ? co_long_timer_start(node->now, life, &g->rest_ms) : CO_NEVER;
+    co_node_due(node, g->deadline);
+    if (g->failed) {
+        g->failed = false;
         (void)co_emcy_clear(node, 0x8130U, guard_msef);
     }
 }
 
 co_time_us_t co_guard_process(co_node_t *node)
 {
-    if (!node->guard.armed || node->guard.failed) {
+    co_guard_t *g = &node->guard;
+    if (!g->armed || g->failed) {
         return CO_NEVER;
     }
     if (node->hb.period_ms != 0U) {
-        node->guard.armed = false;
+        g->armed = false;
         return CO_NEVER;
     }
-    if (co_long_timer_expired(node->now, &node->guard.deadline, &node->guard.rest_ms)) {
-        node->guard.failed = true;
+    if (co_long_timer_expired(node->now, &g->deadline, &g->rest_ms)) {
+        g->failed = true;
         co_node_event(node, CO_EV_GUARD_TIMEOUT, 0x100CU, 0U, 0U, 0U);
         (void)co_emcy_raise(node, 0x8130U, 0x10U, guard_msef);
         return CO_NEVER;
     }
-    return node->guard.deadline;
+    return g->deadline;
 }
 
 #endif /* CO_CONFIG_NODE_GUARDING */

@@ -7,22 +7,25 @@
 
 #if CO_CONFIG_HB_CONSUMER
 
-static void slot_msef(uint8_t node_id, uint8_t msef[5])
+/* EMCY 0x8130 of the slot monitoring node_id, raised or cleared: the manufacturer-specific field names the
+ * heartbeat consumer (2) and the node. */
+static void slot_emcy(co_node_t *node, uint8_t node_id, bool raise)
 {
-    msef[0] = 0x02U; /* heartbeat consumer */
-    msef[1] = node_id;
-    msef[2] = msef[3] = msef[4] = 0U;
+    const uint8_t msef[5] = {0x02U, node_id, 0U, 0U, 0U};
+    if (raise) {
+        (void)co_emcy_raise(node, 0x8130U, 0x10U, msef);
+    } else {
+        (void)co_emcy_clear(node, 0x8130U, msef);
+    }
 }
 
-static void slot_configure(co_node_t *node, unsigned i)
+/* Slot s from its entry of 0x1016 (sub-index sub). */
+static void slot_configure(co_node_t *node, co_hb_consumer_slot_t *s, uint8_t sub)
 {
-    co_hb_consumer_slot_t *s = &node->hbc.slot[i];
-    const uint32_t v = co_od_u32_or(node, 0x1016U, (uint8_t)(i + 1U), 0U);
+    const uint32_t v = co_od_u32_or(node, 0x1016U, sub, 0U);
     const uint8_t id = (uint8_t)(v >> 16);
     if (s->state == 3U) {
-        uint8_t msef[5];
-        slot_msef(s->node_id, msef);
-        (void)co_emcy_clear(node, 0x8130U, msef);
+        slot_emcy(node, s->node_id, false);
     }
     s->node_id = (id >= 1U && id <= 127U && (v & 0xFFFFU) != 0U) ? id : 0U;
     s->state = s->node_id != 0U ? 1U : 0U;
@@ -36,42 +39,45 @@ static void slot_configure(co_node_t *node, unsigned i)
  * docs/performance.md, "the core alone"). */
 static void update_index(co_node_t *node)
 {
-    node->hbc.used = 0U;
-    memset(node->hbc.monitored, 0, sizeof node->hbc.monitored);
-    for (unsigned i = 0U; i < node->hbc.count; i++) {
-        const uint8_t id = node->hbc.slot[i].node_id;
+    co_hb_consumer_t *hbc = &node->hbc;
+    hbc->used = 0U;
+    memset(hbc->monitored, 0, sizeof hbc->monitored);
+    for (unsigned i = 0U; i < hbc->count; i++) {
+        const uint8_t id = hbc->slot[i].node_id;
         if (id != 0U) {
-            node->hbc.used = (uint8_t)(i + 1U);
-            node->hbc.monitored[id >> 3] = (uint8_t)(node->hbc.monitored[id >> 3] | (1U << (id & 7U)));
+            hbc->used = (uint8_t)(i + 1U);
+            hbc->monitored[id >> 3] = (uint8_t)(hbc->monitored[id >> 3] | (1U << (id & 7U)));
         }
     }
 }
 
 void co_hbc_reset(co_node_t *node)
 {
+    co_hb_consumer_t *hbc = &node->hbc;
     uint8_t n = co_od_sub_count(node->od, 0x1016U);
-    node->hbc.count = n;
+    hbc->count = n;
     for (unsigned i = 0U; i < n; i++) {
-        node->hbc.slot[i].state = 0U;
-        slot_configure(node, i);
+        hbc->slot[i].state = 0U;
+        slot_configure(node, &hbc->slot[i], (uint8_t)(i + 1U));
     }
     update_index(node);
 }
 
 bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
 {
+    co_hb_consumer_t *hbc = &node->hbc;
     if (f->len != 1U) { /* f->id is 0x701..0x77F (co_node_rx) */
         return false;
     }
     const uint8_t id = (uint8_t)(f->id - 0x700U);
-    if ((node->hbc.monitored[id >> 3] & (1U << (id & 7U))) == 0U) {
+    if ((hbc->monitored[id >> 3] & (1U << (id & 7U))) == 0U) {
         return false;
     }
     bool used = false;
-    for (unsigned i = 0U; i < node->hbc.used; i++) {
-        co_hb_consumer_slot_t *s = &node->hbc.slot[i];
-        if (s->node_id != id || s->state == 0U) {
-            continue;
+    for (unsigned i = 0U; i < hbc->used; i++) {
+        co_hb_consumer_slot_t *s = &hbc->slot[i];
+        if (s->node_id != id) {
+            continue; /* (a slot not in use has node-ID 0, never a heartbeat's: the node-ID alone tells) */
         }
         used = true;
         s->remote_state = f->data[0];
@@ -83,9 +89,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
             continue;
         }
         if (s->state == 3U) {
-            uint8_t msef[5];
-            slot_msef(id, msef);
-            (void)co_emcy_clear(node, 0x8130U, msef);
+            slot_emcy(node, id, false);
         }
         s->state = 2U;
         s->deadline = co_time_after(node->now, (uint32_t)s->time_ms * 1000U);
@@ -96,18 +100,17 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
 
 co_time_us_t co_hbc_process(co_node_t *node)
 {
+    co_hb_consumer_t *hbc = &node->hbc;
     co_time_us_t next = CO_NEVER;
-    for (unsigned i = 0U; i < node->hbc.used; i++) {
-        co_hb_consumer_slot_t *s = &node->hbc.slot[i];
+    for (unsigned i = 0U; i < hbc->used; i++) {
+        co_hb_consumer_slot_t *s = &hbc->slot[i];
         if (s->state != 2U) {
             continue;
         }
         if (co_time_reached(node->now, s->deadline)) {
-            uint8_t msef[5];
             s->state = 3U;
-            slot_msef(s->node_id, msef);
             co_node_event(node, CO_EV_HB_TIMEOUT, 0x1016U, (uint8_t)(i + 1U), s->node_id, 0U);
-            (void)co_emcy_raise(node, 0x8130U, 0x10U, msef);
+            slot_emcy(node, s->node_id, true);
         } else {
             next = co_min_time(next, s->deadline);
         }
@@ -139,7 +142,7 @@ uint32_t co_hbc_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
 void co_hbc_written(co_node_t *node, const co_od_entry_t *e)
 {
     if (e->sub >= 1U && e->sub <= node->hbc.count) {
-        slot_configure(node, e->sub - 1U);
+        slot_configure(node, &node->hbc.slot[e->sub - 1U], e->sub);
         update_index(node);
         co_node_routes_update(node); /* the heartbeats it takes changed */
     }

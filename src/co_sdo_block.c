@@ -132,17 +132,19 @@ static void download_end(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const
 /* Bytes of the upload, counted in segments: an empty object still takes one segment (with 7 unused bytes). */
 static uint32_t upload_end_of_block(const co_sdo_server_t *s) { return s->pos + (uint32_t)s->seq * BLK_SEG_DATA; }
 
-static bool upload_block_sent(const co_sdo_server_t *s)
-{
-    return s->seq >= s->blksize || (s->seq > 0U && upload_end_of_block(s) >= s->size);
-}
-
 /* Sends the segments of the current block while the port takes frames at once, so a block of up to 127
- * segments never floods the node's transmit queue: what is left goes out from co_sdo_block_process. */
-static void upload_send_block(co_node_t *node, co_sdo_server_t *s)
+ * segments never floods the node's transmit queue: what is left goes out from co_sdo_block_process. True when
+ * the block is out (blksize segments, or fewer that reach the end of the object). */
+static bool upload_send_block(co_node_t *node, co_sdo_server_t *s)
 {
-    while (!upload_block_sent(s) && node->txq.count == 0U) {
+    for (;;) {
         const uint32_t offset = upload_end_of_block(s);
+        if (s->seq >= s->blksize || (s->seq > 0U && offset >= s->size)) {
+            return true;
+        }
+        if (node->txq.count != 0U) {
+            return false;
+        }
         const uint32_t left = s->size - offset;
         s->seq++;
         co_sdo_send(node, s, (uint8_t)(s->seq | (left <= BLK_SEG_DATA ? BLK_LAST : 0U)), &s->buf[offset],
@@ -165,7 +167,9 @@ static void upload_confirmation(co_node_t *node, co_sdo_server_t *s, const uint8
         co_sdo_abort(node, s, CO_ABORT_BLOCK_SIZE);
         return;
     }
-    const bool all_taken = ackseq == s->seq && upload_block_sent(s) && upload_end_of_block(s) >= s->size;
+    /* Every segment sent confirmed, at least one (a block the port had no room for yet has none), and they reach
+     * the end of the object. */
+    const bool all_taken = ackseq == s->seq && ackseq != 0U && upload_end_of_block(s) >= s->size;
     if (all_taken) {
         const uint32_t unused = upload_end_of_block(s) - s->size;
         uint8_t crc[2];
@@ -177,7 +181,7 @@ static void upload_confirmation(co_node_t *node, co_sdo_server_t *s, const uint8
     s->pos += (uint32_t)ackseq * BLK_SEG_DATA;
     s->seq = 0U;
     s->blksize = blksize;
-    upload_send_block(node, s);
+    (void)upload_send_block(node, s);
 }
 
 /* The client's next step in each state from CO_SDO_BLK_DOWNLOAD_END on: its command byte without the bits that
@@ -206,7 +210,7 @@ bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
         break;
     case CO_SDO_BLK_UPLOAD_START:
         s->state = CO_SDO_BLK_UPLOAD;
-        upload_send_block(node, s);
+        (void)upload_send_block(node, s);
         break;
     case CO_SDO_BLK_UPLOAD:
         upload_confirmation(node, s, f->data);
@@ -220,8 +224,7 @@ bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 
 co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s)
 {
-    upload_send_block(node, s);
-    return upload_block_sent(s) ? CO_NEVER : co_time_after(node->now, CO_TX_RETRY_US);
+    return upload_send_block(node, s) ? CO_NEVER : co_time_after(node->now, CO_TX_RETRY_US);
 }
 
 #endif /* CO_CONFIG_SDO_BLOCK */

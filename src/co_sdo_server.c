@@ -50,7 +50,7 @@ void co_sdo_start(co_sdo_server_t *s, uint8_t state, uint32_t size)
     s->state = state;
     s->size = size;
     s->pos = 0U;
-    s->toggle = 0U;
+    s->toggle = 0U; /* the toggle bit of the next segment, in place: bit 4 of its command byte */
     s->seq = 0U;
 }
 
@@ -187,7 +187,7 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd)
 {
     const uint32_t left = s->size - s->pos;
     const uint32_t n = left < 7U ? left : 7U;
-    const bool last = s->pos + n >= s->size;
+    const bool last = left <= 7U;
     const uint8_t answer = (uint8_t)((cmd & 0x10U) | ((7U - n) << 1) | (last ? 1U : 0U));
     co_sdo_send(node, s, answer, &s->buf[s->pos], (size_t)n);
     s->pos += n;
@@ -213,11 +213,11 @@ static void serve(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 #if CO_CONFIG_SDO_SEGMENTED
     const bool download = s->state == SDO_SEG_DOWNLOAD && (cmd & 0xE0U) == 0x00U;
     if (download || (s->state == SDO_SEG_UPLOAD && (cmd & 0xEFU) == 0x60U)) {
-        if (((cmd >> 4) & 1U) != s->toggle) {
+        if ((cmd & 0x10U) != s->toggle) {
             co_sdo_abort(node, s, CO_ABORT_TOGGLE);
             return;
         }
-        s->toggle ^= 1U;
+        s->toggle ^= 0x10U;
         if (download) {
             download_segment(node, s, cmd, &f->data[1]);
         } else {

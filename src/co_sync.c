@@ -13,8 +13,9 @@ static const uint8_t sync_msef[5] = {0x03U, 0U, 0U, 0U, 0U};
 /* 1.5 periods after now: exact to the µs up to 16.7 minutes, to the ms beyond (a long timer, co_priv.h). */
 static co_time_us_t timeout_after(co_node_t *node)
 {
-    const uint32_t period = node->sync.period_us;
-    node->sync.rest_ms = 0U;
+    co_sync_t *sync = &node->sync;
+    const uint32_t period = sync->period_us;
+    sync->rest_ms = 0U;
     if (period == 0U) {
         return CO_NEVER;
     }
@@ -22,7 +23,7 @@ static co_time_us_t timeout_after(co_node_t *node)
         return co_time_after(node->now, period + period / 2U);
     }
     const uint32_t ms = co_div_u32(period, 1000U, NULL);
-    return co_long_timer_start(node->now, ms + ms / 2U, &node->sync.rest_ms);
+    return co_long_timer_start(node->now, ms + ms / 2U, &sync->rest_ms);
 }
 
 /* The parameters the consumer uses at every SYNC, from the OD (at a reset and when one is written). The
@@ -38,53 +39,56 @@ static void load_parameters(co_node_t *node)
 
 void co_sync_reset(co_node_t *node)
 {
+    co_sync_t *sync = &node->sync;
     load_parameters(node);
-    node->sync.timeout_due = CO_NEVER;
-    node->sync.timeout_error = false;
-    node->sync.length_error = false;
+    sync->timeout_due = CO_NEVER;
+    sync->timeout_error = false;
+    sync->length_error = false;
 }
 
 void co_sync_rx(co_node_t *node, const co_frame_t *f)
 {
+    co_sync_t *sync = &node->sync;
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
         return;
     }
-    const uint8_t overflow = node->sync.overflow;
+    const uint8_t overflow = sync->overflow;
     if (f->len != (overflow != 0U ? 1U : 0U)) {
-        if (!node->sync.length_error) {
-            node->sync.length_error = true;
+        if (!sync->length_error) {
+            sync->length_error = true;
             (void)co_emcy_raise(node, 0x8240U, 0x10U, sync_msef);
         }
         return;
     }
-    if (node->sync.length_error) {
-        node->sync.length_error = false;
+    if (sync->length_error) {
+        sync->length_error = false;
         (void)co_emcy_clear(node, 0x8240U, sync_msef);
     }
-    if (node->sync.timeout_error) {
-        node->sync.timeout_error = false;
+    if (sync->timeout_error) {
+        sync->timeout_error = false;
         (void)co_emcy_clear(node, 0x8100U, sync_msef);
     }
-    node->sync.timeout_due = timeout_after(node);
-    co_node_due(node, node->sync.timeout_due);
+    sync->timeout_due = timeout_after(node);
+    co_node_due(node, sync->timeout_due);
     co_pdo_on_sync(node, overflow != 0U ? f->data[0] : 0U);
 }
 
 co_time_us_t co_sync_process(co_node_t *node)
 {
+    co_sync_t *sync = &node->sync;
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
-        node->sync.timeout_due = CO_NEVER; /* consumer off: monitoring restarts with the next SYNC */
+        sync->timeout_due = CO_NEVER; /* consumer off: monitoring restarts with the next SYNC */
         return CO_NEVER;
     }
-    if (node->sync.timeout_error || node->sync.timeout_due == CO_NEVER) {
+    if (sync->timeout_error) {
         return CO_NEVER;
     }
-    if (co_long_timer_expired(node->now, &node->sync.timeout_due, &node->sync.rest_ms)) {
-        node->sync.timeout_error = true;
+    if (co_long_timer_expired(node->now, &sync->timeout_due, &sync->rest_ms)) { /* CO_NEVER never expires */
+        sync->timeout_error = true;
         (void)co_emcy_raise(node, 0x8100U, 0x10U, sync_msef);
         return CO_NEVER;
     }
-    return node->sync.timeout_due;
+    return sync->timeout_due;
 }
 
 uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len, bool stored)
@@ -114,12 +118,13 @@ uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint
 
 void co_sync_written(co_node_t *node, const co_od_entry_t *e)
 {
-    const uint16_t can_id = node->sync.can_id;
+    co_sync_t *sync = &node->sync;
+    const uint16_t can_id = sync->can_id;
     load_parameters(node);
-    if (e->index == 0x1006U && node->sync.timeout_due != CO_NEVER) {
-        node->sync.timeout_due = timeout_after(node);
+    if (e->index == 0x1006U && sync->timeout_due != CO_NEVER) {
+        sync->timeout_due = timeout_after(node);
     }
-    if (node->sync.can_id != can_id) {
+    if (sync->can_id != can_id) {
         co_node_routes_update(node);
     }
 }

@@ -121,6 +121,30 @@ static void upload_block_waits_for_a_busy_port(void)
     TEST_ASSERT_EQUAL_UINT32(0U, fx.node.stats.tx_dropped);
 }
 
+/* An empty object is one segment with 7 unused bytes. A confirmation that comes before the port took any segment of
+ * the block (ackseq 0 of none sent) confirms nothing: the block still goes out, and the end follows its own
+ * confirmation. */
+static void upload_of_an_empty_object_confirmed_before_its_block(void)
+{
+    SDO(0x21, 0x05, 0x20, 0x00, 0, 0, 0, 0); /* segmented download of 0 bytes */
+    SDO(0x0F, 0, 0, 0, 0, 0, 0, 0);          /* its only segment: 7 bytes unused, the last */
+    EXPECT(0x20, 0, 0, 0, 0, 0, 0, 0);
+    TEST_ASSERT_EQUAL_STRING("", fx.values.x2005_description);
+    const uint32_t before = fx.port.n_sent;
+    fx.port.busy_count = 100U;                 /* a busy port: */
+    SDO(0xA4, 0x05, 0x20, 0x00, 127, 0, 0, 0); /* the answer waits in the queue */
+    SDO(0xA3, 0, 0, 0, 0, 0, 0, 0);            /* no segment goes behind it */
+    SDO(0xA2, 0, 127, 0, 0, 0, 0, 0);          /* confirms none */
+    SENT(before);
+    fx.port.busy_count = 0U;
+    fx_advance(10000U);
+    SENT(before + 2U);
+    FRAME(before, 0xC6, 0x05, 0x20, 0x00, 0, 0, 0, 0);
+    FRAME(before + 1U, 0x81, 0, 0, 0, 0, 0, 0, 0);
+    SDO(0xA2, 1, 127, 0, 0, 0, 0, 0);
+    EXPECT(0xDD, 0, 0, 0, 0, 0, 0, 0); /* end: 7 unused bytes, the CRC of nothing */
+}
+
 static void download_with_crc(void)
 {
     SDO(0xC6, 0x05, 0x20, 0x00, 9, 0, 0, 0); /* client CRC, size 9 */
@@ -231,6 +255,7 @@ int main(void)
     RUN_TEST(upload_repeats_from_the_last_confirmed_segment);
     RUN_TEST(upload_block_size_and_sequence_errors);
     RUN_TEST(upload_block_waits_for_a_busy_port);
+    RUN_TEST(upload_of_an_empty_object_confirmed_before_its_block);
     RUN_TEST(download_with_crc);
     RUN_TEST(download_with_a_bad_crc_is_refused);
     RUN_TEST(download_lost_and_repeated_segments);
