@@ -296,7 +296,7 @@ __attribute__((noinline)) void events_frame_publish(emu_t *emu, emu_bus_t *bus, 
 {
     /* The format is part of the frame's identity (session_wants): an extended 0x181 is no TPDO1 of node 1. */
     const bool eff = (f->flags & CO_FRAME_EFF) != 0U;
-    const uint32_t identity = f->id | (eff ? (uint32_t)SESSION_FRAME_EFF : 0U);
+    const uint32_t identity = f->id | (eff ? SESSION_FRAME_EFF : 0U);
     if (!anyone_wants(emu, EVENT_FRAME, from != NULL ? co_node_id(&from->dev.node) : 0U, bus, identity)) {
         return; /* nothing is built for a frame nobody's filter takes */
     }

@@ -517,8 +517,9 @@ bool json_parse_frame_filter(const char *text, uint32_t *id, uint32_t *mask)
             return false;
         }
     }
-    /* The frame format is part of the identity, as in candump and SocketCAN's filters: an extended frame 0x181 is
-     * not TPDO1 of node 1, so a filter takes one format only, 29-bit frames when its COB-ID ends in x. */
+    /* The frame format is part of the identity, as candump writes it and a SocketCAN filter with CAN_EFF_FLAG in
+     * its mask tells it: an extended frame 0x181 is not TPDO1 of node 1, so a filter takes one format only, 29-bit
+     * frames when its COB-ID ends in x. */
     const size_t len = strlen(buf);
     const bool eff = len > 1U && (buf[len - 1U] == 'x' || buf[len - 1U] == 'X');
     if (eff) {
@@ -594,7 +595,8 @@ static void cmd_subscribe(const request_t *q)
     if ((mask & ((uint32_t)1U << EVENT_FRAME)) != 0U) {
         if (!frame_filters(frames, ff, &n_ff)) {
             fail(q->s, q->id, "subscribe: frame events need \"frames\": \"COB-ID[/MASK]\" (\"COB-IDx[/MASK]\": "
-                              "29-bit frames) or a list of at most %d (\"0x700/0x780\": every heartbeat)", SESSION_FRAME_FILTERS);
+                              "29-bit frames) or a list of at most %d (\"0x700/0x780\": every heartbeat)",
+                 SESSION_FRAME_FILTERS);
             return;
         }
     } else if (frames != NULL) {

@@ -47,7 +47,7 @@ int event_kind_of(const char *name);
 
 /** The frame format in a filter and in the identifier session_wants is given: set for a 29-bit (extended) frame.
  *  Bit 31, as SocketCAN's CAN_EFF_FLAG: above every identifier. */
-#define SESSION_FRAME_EFF 0x80000000UL
+#define SESSION_FRAME_EFF ((uint32_t)0x80000000UL)
 
 /** Frames whose identifier (with SESSION_FRAME_EFF for an extended one) & mask == id. */
 typedef struct session_frame_filter {
