@@ -14,18 +14,19 @@ function stamp(us) {
 }
 
 /**
- * One frame as candump -l writes it: the COB-ID in 3 hex digits (8 for a 29-bit one), the data in upper-case hex;
- * a remote request `123#R`, with its length after the R when it is not 0 (`123#R2`), as can-utils does.
- * frame: {id, data (hex, as frame events give it), rtr}.
+ * One frame as candump -l writes it: the COB-ID in 3 hex digits (8 for a 29-bit one, whatever its value: the
+ * digits are how can-utils tell the formats apart), the data in upper-case hex; a remote request `123#R`, with its
+ * length after the R when it is not 0 (`123#R2`), as can-utils does.
+ * frame: {id, data (hex, as frame events give it), rtr, eff}.
  */
 export function line(us, iface, frame) {
-  const id = frame.id.toString(16).toUpperCase().padStart(frame.id > 0x7FF ? 8 : 3, "0");
+  const id = frame.id.toString(16).toUpperCase().padStart(frame.eff || frame.id > 0x7FF ? 8 : 3, "0");
   const bytes = frame.data.length / 2;
   const payload = frame.rtr ? `R${bytes > 0 ? bytes : ""}` : frame.data.toUpperCase();
   return `${stamp(us)} ${iface} ${id}#${payload}`;
 }
 
-/** The log of `frames` (each {time_us, bus, id, data, rtr}), oldest first, one line each with a newline. */
+/** The log of `frames` (each {time_us, bus, id, data, rtr, eff}), oldest first, one line each with a newline. */
 export function log(frames, clock) {
   let text = "";
   for (const f of frames) {

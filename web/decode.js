@@ -3,7 +3,7 @@
 // values need its mapping, which the caller looks up (web/pdomap.js). No DOM: tested with node --test (tests/web/js).
 
 /** The kinds of frame, as the trace's filter offers them. */
-export const KINDS = ["NMT", "SYNC", "EMCY", "TIME", "PDO", "SDO", "heartbeat", "LSS", "other"];
+export const KINDS = ["NMT", "SYNC", "EMCY", "TIME", "PDO", "SDO", "heartbeat", "LSS", "extended", "other"];
 
 /** The texts of the SDO abort codes (CiA 301 7.2.4.3.17) as the emulator words them (include/co/co_abort.h). */
 export const ABORT_TEXTS = new Map([
@@ -380,7 +380,7 @@ function lssSlave(bytes) {
 
 /**
  * What `frame` says: {kind (KINDS), node (the node-ID it concerns; null: none or all), text}.
- * frame: {id, data (hex, as frame events give it), rtr, dir ("tx": a node sent it; "rx": it came from the bus), node
+ * frame: {id, data (hex, as frame events give it), rtr, eff (a 29-bit frame), dir ("tx": a node sent it; "rx": it came from the bus), node
  * (the sender, for tx), guarded (a node guarding request of this COB-ID came before: the answer's toggle)}.
  * pdo(frame, bytes): the PDO the frame is by the mapping read from its node, {name: "TPDO1", node, text: the values}
  * (web/pdomap.js), or null when it is not known (yet): the PDO is then named by the predefined connection set only.
@@ -393,8 +393,9 @@ export function decode(frame, pdo = () => null) {
   const low = id & 0x7F;
   const fn = id >> 7;
   const sized = (kind, text, node = low) => ({kind, node, text});
-  if (id > 0x7FF) {
-    return {kind: "other", node: own, text: ""};
+  if (frame.eff || id > 0x7FF) {
+    // CANopen is 11-bit frames only: an extended frame 0x181 (J1939, a gateway) is no TPDO1 of node 1
+    return {kind: "extended", node: own, text: ""};
   }
   if (!rtr) {
     const mapped = pdo(frame, bytes); // first: a PDO may be given any COB-ID, not only its predefined one

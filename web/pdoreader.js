@@ -16,11 +16,11 @@ const PDO_PARAMETERS = [0x1400, 0x1BFF];
  * After which frame a node's PDOs may have changed, so that its mapping is read again: an NMT command that puts it in
  * pre-operational (pre-operational, reset node, reset communication: where a master remaps), its boot-up, an SDO
  * download to its PDO parameters answered. {bus, node} (node null: every node of the bus), or null.
- * frame: {id, data (hex), rtr, bus}.
+ * frame: {id, data (hex), rtr, eff, bus}.
  */
 export function mappingMayChange(frame) {
-  if (frame.rtr) {
-    return null;
+  if (frame.rtr || frame.eff) {
+    return null; // an extended frame is no NMT command, boot-up or SDO answer, whatever its identifier
   }
   const data = frame.data.toUpperCase();
   if (frame.id === 0x000 && data.length === 4 && ["80", "81", "82"].includes(data.slice(0, 2))) {

@@ -1,8 +1,9 @@
 // The trace view (docs/web.md "The trace"): every frame on the buses, decoded in CANopen terms, newest at the bottom.
-// It subscribes to all frames (frame events, COB-ID filter 0x000/0x000) while its view is shown, or always with
-// "record while hidden"; frames go into a ring of 20,000 (web/tracelog.js) as they come, and the table is drawn once
-// an exchange, with at most the last ROWS matching rows in the DOM. Pause and scrolling up stop the table, not the
-// recording. The PDOs' values come from their nodes' mapping, read as PDOs appear (web/pdoreader.js).
+// It subscribes to all frames (frame events, COB-ID filters 0x000/0x000 and 0x00000000x/0x0: 11-bit and 29-bit ones)
+// while its view is shown, or always with "record while hidden"; frames go into a ring of 20,000 (web/tracelog.js) as
+// they come, and the table is drawn once an exchange, with at most the last ROWS matching rows in the DOM. Pause and
+// scrolling up stop the table, not the recording. The PDOs' values come from their nodes' mapping, read as PDOs
+// appear (web/pdoreader.js).
 
 import {element, tableHead} from "./dom.js";
 import * as candump from "./candump.js";
@@ -13,7 +14,8 @@ import {COLUMNS, TraceLog, cells, parseFilter} from "./tracelog.js";
 
 /** Rows in the DOM at most: the newest that match. */
 export const ROWS = 500;
-const ALL_FRAMES = "0x000/0x000"; // mask 0: every COB-ID matches
+// mask 0: every COB-ID matches; a filter takes one format, so 11-bit frames, and with x the 29-bit ones
+const ALL_FRAMES = ["0x000/0x000", "0x00000000x/0x0"];
 
 class TracePanel {
   view = "trace";

@@ -13,8 +13,9 @@ export const COLUMNS = [
   ["text", "decoded"], ["data", "data"],
 ].map(([field, title]) => ({field, title}));
 
-function hexId(id) {
-  return id.toString(16).toUpperCase().padStart(id > 0x7FF ? 8 : 3, "0");
+/** The COB-ID as candump writes it: 8 digits for an extended frame, whatever its value. */
+function hexId(id, eff) {
+  return id.toString(16).toUpperCase().padStart(eff || id > 0x7FF ? 8 : 3, "0");
 }
 
 /** "12.345": seconds.milliseconds of the emulator's clock (since it started). */
@@ -57,7 +58,7 @@ export function parseFilter({text = "", kind = "", node = ""} = {}) {
 }
 
 function searchText(entry) {
-  entry.search ??= `${hexId(entry.id)}#${entry.data} ${entry.kind} ${entry.text}`.toLowerCase();
+  entry.search ??= `${hexId(entry.id, entry.eff)}#${entry.data} ${entry.kind} ${entry.text}`.toLowerCase();
   return entry.search;
 }
 
@@ -77,12 +78,12 @@ export class TraceLog {
     return this.#seq;
   }
 
-  /** A frame event: its entry, decoded ({seq, time_us, bus, dir, node, id, data, rtr, kind, about, text}). */
+  /** A frame event: its entry, decoded ({seq, time_us, bus, dir, node, id, data, rtr, eff, kind, about, text}). */
   add(ev) {
     const key = `${ev.bus}/${ev.id}`;
     const frame = {time_us: ev.time_us, bus: ev.bus, dir: ev.dir, node: ev.node ?? null, id: ev.id, data: ev.data,
-      rtr: Boolean(ev.rtr), guarded: false};
-    if (ev.id >> 7 === 0xE && ev.id <= 0x77F) { // the answer to a guard request has the toggle bit
+      rtr: Boolean(ev.rtr), eff: Boolean(ev.eff), guarded: false};
+    if (!frame.eff && ev.id >> 7 === 0xE && ev.id <= 0x77F) { // the answer to a guard request has the toggle bit
       frame.guarded = !frame.rtr && this.#guarded.delete(key);
       if (frame.rtr) {
         this.#guarded.add(key);
@@ -148,7 +149,7 @@ export function cells(entry, {wall = false, clock = null} = {}) {
     time: wall && clock !== null ? wallClock(clock.unix_us + entry.time_us - clock.time_us) : sinceStart(entry.time_us),
     bus: entry.bus,
     dir: entry.dir,
-    id: hexId(entry.id),
+    id: hexId(entry.id, entry.eff),
     node: entry.about === null ? "" : String(entry.about),
     kind: entry.kind,
     text: entry.text,

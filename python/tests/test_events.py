@@ -7,7 +7,7 @@ import can
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from canopen_emu import ControlTimeout
+from canopen_emu import ControlError, ControlTimeout, ExtendedId
 
 from conftest import remote
 
@@ -65,6 +65,30 @@ def test_frame_events_of_several_filters(canopen_emu, can_bus):
     got = [c.wait_for("frame", timeout=3) for _ in range(3)]
     ids = sorted(ev["id"] for ev in got)
     assert 0x125 in ids and 0x7FF in ids and 0x135 not in ids, got  # 0x135 & 0x7F0 is 0x130: no filter takes it
+
+
+def test_extended_frames_say_eff_and_only_extended_filters_take_them(canopen_emu, can_bus):
+    c = canopen_emu.client
+    bus = can_bus("vcan0")
+    base = canopen_emu.connect()  # a second client: the 11-bit filter alone
+    try:
+        assert base.subscribe("frame", frames=0x181) == ["frame"]
+        assert c.subscribe("frame", frames=[0x181, ExtendedId(0x181), ExtendedId(0x18FF0000, 0x1FFF0000)]) == ["frame"]
+        with pytest.raises(ControlError):
+            c.subscribe("frame", frames=0x18FF1234)  # above 11 bits: an extended one must say so
+        # the extended frames first: an event of one taken wrongly would come before the 11-bit frame's
+        bus.send(can.Message(arbitration_id=0x181, data=[0x11, 0x22], is_extended_id=True))
+        bus.send(can.Message(arbitration_id=0x18FF1234, data=[0x44], is_extended_id=True))
+        bus.send(can.Message(arbitration_id=0x181, data=[0x33], is_extended_id=False))
+        got = [c.wait_for("frame", timeout=3) for _ in range(3)]
+        assert [(ev["id"], ev["data"], ev.get("eff", False), ev["text"]) for ev in got] == [
+            (0x181, "1122", True, "rx 00000181#1122"), (0x18FF1234, "44", True, "rx 18FF1234#44"),
+            (0x181, "33", False, "rx 181#33")], got
+        only = base.wait_for("frame", timeout=3)
+        assert (only["data"], "eff" in only) == ("33", False), only  # TPDO1 of node 1, not the extended 0x181
+    finally:
+        base.close()
+    assert str(ExtendedId(0x181)) == "0x00000181x/0x1FFFFFFF"
 
 
 def test_events_that_come_during_requests_are_queued_not_lost(canopen_emu, can_bus):

@@ -94,7 +94,9 @@ static inline co_time_us_t bus_receive(emu_bus_t *b, co_time_us_t now, co_time_u
     co_frame_t f;
     for (unsigned k = 0U; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
         if (b->log_level >= LOG_VERBOSE) {
-            logline(LOG_VERBOSE, "rx %03X [%u]%s", (unsigned)f.id, f.len, (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
+            /* 8 digits for a 29-bit identifier, as candump: an extended 0x181 must not read as TPDO1 of node 1 */
+            logline(LOG_VERBOSE, "rx %0*X [%u]%s", (f.flags & CO_FRAME_EFF) != 0U ? 8 : 3, (unsigned)f.id, f.len,
+                    (f.flags & CO_FRAME_RTR) != 0U ? " RTR" : "");
         }
         events_frame(b, NULL, &f, now);
         if ((f.id & 0x780U) == 0x700U && f.id != 0x700U && f.len >= 1U &&

@@ -57,7 +57,7 @@ static void help(void)
           "  export-dcf NODE FILE         a node read from an EDS/DCF, its current values as a DCF\n"
           "  help [NODE]                  this text, or the device commands of NODE\n"
           "  subscribe KIND[,KIND...] [NODE...]  events of these kinds (or all) to this session\n"
-          "  subscribe frame COB-ID[/MASK] ...  the frames whose identifier matches one (at most 4), as events\n"
+          "  subscribe frame COB-ID[x][/MASK] ...  11-bit frames matching one (at most 4) as events; x: 29-bit ones\n"
           "  unsubscribe [KIND[,KIND...]]  stop them\n"
           "  quit                         stop the emulator");
 }

@@ -294,7 +294,10 @@ void events_interface(emu_bus_t *bus, const char *line)
 __attribute__((noinline)) void events_frame_publish(emu_t *emu, emu_bus_t *bus, const emu_node_t *from,
                                                     const co_frame_t *f, co_time_us_t at)
 {
-    if (!anyone_wants(emu, EVENT_FRAME, from != NULL ? co_node_id(&from->dev.node) : 0U, bus, f->id)) {
+    /* The format is part of the frame's identity (session_wants): an extended 0x181 is no TPDO1 of node 1. */
+    const bool eff = (f->flags & CO_FRAME_EFF) != 0U;
+    const uint32_t identity = f->id | (eff ? SESSION_FRAME_EFF : 0U);
+    if (!anyone_wants(emu, EVENT_FRAME, from != NULL ? co_node_id(&from->dev.node) : 0U, bus, identity)) {
         return; /* nothing is built for a frame nobody's filter takes */
     }
     json_t *fields = json_object();
@@ -308,8 +311,12 @@ __attribute__((noinline)) void events_frame_publish(emu_t *emu, emu_bus_t *bus, 
     if ((f->flags & CO_FRAME_RTR) != 0U) {
         (void)json_object_set_new(fields, "rtr", json_true());
     }
+    if (eff) {
+        (void)json_object_set_new(fields, "eff", json_true());
+    }
     char text[64];
-    (void)snprintf(text, sizeof text, "%s %03X#%s%s", from != NULL ? "tx" : "rx", (unsigned)f->id, hex,
+    /* candump's form: 3 hex digits for an 11-bit identifier, 8 for a 29-bit one, whatever its value */
+    (void)snprintf(text, sizeof text, "%s %0*X#%s%s", from != NULL ? "tx" : "rx", eff ? 8 : 3, (unsigned)f->id, hex,
                    (f->flags & CO_FRAME_RTR) != 0U ? "R" : "");
-    publish(emu, EVENT_FRAME, from, bus, at, f->id, text, fields);
+    publish(emu, EVENT_FRAME, from, bus, at, identity, text, fields);
 }

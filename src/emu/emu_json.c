@@ -517,11 +517,19 @@ bool json_parse_frame_filter(const char *text, uint32_t *id, uint32_t *mask)
             return false;
         }
     }
-    if (!device_parse_int(buf, 0, 0x1FFFFFFF, &v)) {
-        return false;
+    /* The frame format is part of the identity, as candump writes it and a SocketCAN filter with CAN_EFF_FLAG in
+     * its mask tells it: an extended frame 0x181 is not TPDO1 of node 1, so a filter takes one format only, 29-bit
+     * frames when its COB-ID ends in x. */
+    const size_t len = strlen(buf);
+    const bool eff = len > 1U && (buf[len - 1U] == 'x' || buf[len - 1U] == 'X');
+    if (eff) {
+        buf[len - 1U] = '\0';
     }
-    *id = (uint32_t)v & (uint32_t)m;
-    *mask = (uint32_t)m;
+    if (!device_parse_int(buf, 0, eff ? 0x1FFFFFFF : 0x7FF, &v)) {
+        return false; /* an 11-bit COB-ID above 0x7FF is a mistake, not a 29-bit filter by accident */
+    }
+    *mask = (uint32_t)m | SESSION_FRAME_EFF;
+    *id = ((uint32_t)v | (eff ? SESSION_FRAME_EFF : 0U)) & *mask;
     return true;
 }
 
@@ -549,7 +557,7 @@ static bool event_mask(const request_t *q, json_t *events, uint32_t *mask)
     return true;
 }
 
-/* "frames": one "COB-ID[/MASK]" or a list of 1 to SESSION_FRAME_FILTERS of them, into ff (n: how many). */
+/* "frames": one "COB-ID[x][/MASK]" or a list of 1 to SESSION_FRAME_FILTERS of them, into ff (n: how many). */
 static bool frame_filters(const json_t *frames, session_frame_filter_t *ff, size_t *n)
 {
     if (json_is_string(frames)) {
@@ -586,8 +594,9 @@ static void cmd_subscribe(const request_t *q)
     memcpy(ff, s->frames, sizeof ff);
     if ((mask & ((uint32_t)1U << EVENT_FRAME)) != 0U) {
         if (!frame_filters(frames, ff, &n_ff)) {
-            fail(q->s, q->id, "subscribe: frame events need \"frames\": \"COB-ID[/MASK]\" or a list of at most %d "
-                              "(\"0x700/0x780\": every heartbeat)", SESSION_FRAME_FILTERS);
+            fail(q->s, q->id, "subscribe: frame events need \"frames\": \"COB-ID[/MASK]\" (\"COB-IDx[/MASK]\": "
+                              "29-bit frames) or a list of at most %d (\"0x700/0x780\": every heartbeat)",
+                 SESSION_FRAME_FILTERS);
             return;
         }
     } else if (frames != NULL) {

@@ -20,7 +20,8 @@ void json_run(struct emu *emu, emu_session_t *s, const char *line);
 /** Writes {"id":null,"ok":false,"error":...} to s: for a line that could not be read as a request. */
 void json_error(emu_session_t *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
-/** "COB-ID[/MASK]" (decimal or 0x hex, 11 or 29 bits); false if it is not one. MASK defaults to all bits. */
+/** "COB-ID[x][/MASK]" (decimal or 0x hex): an 11-bit COB-ID, or with x a 29-bit one; false if it is not one. MASK
+ *  defaults to all 29 bits; id and mask both have SESSION_FRAME_EFF, so a filter takes frames of its format only. */
 bool json_parse_frame_filter(const char *text, uint32_t *id, uint32_t *mask);
 
 #endif /* EMU_JSON_H */

@@ -123,7 +123,7 @@ bool session_node_filter(emu_t *emu, char *word, session_node_filter_t *out, cha
     return true;
 }
 
-/* subscribe KIND[,KIND...] [NODE...] | subscribe frame COB-ID[/MASK] | unsubscribe [KIND[,KIND...]] */
+/* subscribe KIND[,KIND...] [NODE...] | subscribe frame COB-ID[x][/MASK] | unsubscribe [KIND[,KIND...]] */
 static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
 {
     char *save = NULL;
@@ -133,7 +133,7 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
     uint32_t mask = 0U;
     if (kinds == NULL) {
         if (on) {
-            session_printf(s, "error: usage: subscribe KIND[,KIND...] [NODE...] | subscribe frame COB-ID[/MASK]; "
+            session_printf(s, "error: usage: subscribe KIND[,KIND...] [NODE...] | subscribe frame COB-ID[x][/MASK]; "
                               "kinds: nmt boot-up emcy sdo-abort store nvm lss heartbeat guarding interface fault "
                               "message frame, or all");
             return;
@@ -166,8 +166,8 @@ static void text_subscribe(emu_t *emu, emu_session_t *s, char *line)
             n++;
         }
         if (!ok || n == 0U) {
-            session_printf(s, "error: usage: subscribe frame COB-ID[/MASK] ... (at most %d; 0x700/0x780: every "
-                              "heartbeat)", SESSION_FRAME_FILTERS);
+            session_printf(s, "error: usage: subscribe frame COB-ID[x][/MASK] ... (at most %d; 0x700/0x780: every "
+                              "heartbeat; x: 29-bit frames)", SESSION_FRAME_FILTERS);
             return;
         }
         memcpy(s->frames, frames, sizeof frames[0] * n);

@@ -45,7 +45,11 @@ int event_kind_of(const char *name);
 /** COB-ID filters of frame events a subscription may have (a trace of NMT, SDO and EMCY: three). */
 #define SESSION_FRAME_FILTERS 4
 
-/** Frames whose COB-ID & mask == id. */
+/** The frame format in a filter and in the identifier session_wants is given: set for a 29-bit (extended) frame.
+ *  Bit 31, as SocketCAN's CAN_EFF_FLAG: above every identifier. */
+#define SESSION_FRAME_EFF ((uint32_t)0x80000000UL)
+
+/** Frames whose identifier (with SESSION_FRAME_EFF for an extended one) & mask == id. */
 typedef struct session_frame_filter {
     uint32_t id;
     uint32_t mask;
@@ -86,7 +90,7 @@ void session_finish(struct emu *emu, emu_session_t *s);
 void session_run_line(struct emu *emu, emu_session_t *s, char *line);
 
 /** Whether an event of kind about node node_id (0: none) on bus is for s; for EVENT_FRAME, cob_id is the frame's
- *  identifier, matched against the session's COB-ID filter. */
+ *  identifier, with SESSION_FRAME_EFF for an extended frame, matched against the session's COB-ID filter. */
 bool session_wants(const emu_session_t *s, event_kind_t kind, uint8_t node_id, const struct emu_bus *bus,
                    uint32_t cob_id);
 

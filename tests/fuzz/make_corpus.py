@@ -895,7 +895,10 @@ def control_seeds():
                           '{"id":4,"cmd":"get","node":16,"objects":["0x1017"],"object":"0x1017"}\n'),
         ("json-frame-filters", '{"id":1,"cmd":"subscribe","events":["frame"],"frames":["0x000","0x080/0x780","0x711"]}\n'
                                '{"id":2,"cmd":"subscribe","events":["frame"],"frames":[]}\n'
-                               'subscribe frame 0x700/0x780 0x591 0x000 0x080 0x100\nsubscribe frame 0x580/0x780 bad\n'),
+                               'subscribe frame 0x700/0x780 0x591 0x000 0x080 0x100\nsubscribe frame 0x580/0x780 bad\n'
+                               '{"id":3,"cmd":"subscribe","events":["frame"],"frames":["0x181x","0x18FF0000x/0x1FFF0000",'
+                               '"0x00000000x/0x0","0x0x"]}\n{"id":4,"cmd":"subscribe","events":["frame"],"frames":"0x800"}\n'
+                               'subscribe frame 0x181x 0x1FFFFFFFx 0x181/0x7FFx\nsubscribe frame x 0xx 0x20000000x\n'),
         ("json-help-commands", '{"id":1,"cmd":"help","node":16}\n{"id":2,"cmd":"help","node":"all"}\n{"id":3,"cmd":"help"}\n'),
         ("json-quit", '{"id":"q","cmd":"quit"}\nlist\n'),
         ("protocol-faults", "fault 16 sdo-ignore 2\nfault 17 sdo-ignore 30% 7\nfault 18 sdo-delay 100\n"

@@ -6,6 +6,7 @@ import os
 import re
 import socket
 import stat
+import struct
 import subprocess
 import sys
 import time
@@ -338,8 +339,49 @@ def test_frame_events_follow_the_cob_id_filter(emulator, tmp_path):
         answer = j.event_or_answer()
         check_schema(answer, "subscribe")
         assert answer == {"id": 2, "ok": False, "error": 'subscribe: frame events need "frames": "COB-ID[/MASK]" '
-                                                          'or a list of at most 4 ("0x700/0x780": every heartbeat)'}
+                                                          '("COB-IDx[/MASK]": 29-bit frames) or a list of at most 4 '
+                                                          '("0x700/0x780": every heartbeat)'}
     j.close()
+
+
+def test_extended_frames_are_marked_and_taken_by_extended_filters_only(emulator, tmp_path):
+    # An extended (29-bit) frame whose identifier is 0x181 is not TPDO1 of node 1: its event says eff and writes
+    # the identifier in candump's 8 digits, and an 11-bit filter does not take it; a filter with x after its COB-ID
+    # takes 29-bit frames only (docs/decisions.md "Emulator").
+    emu, path = start(emulator, tmp_path, "sds:16")
+    text = Client(path)
+    text.send("subscribe frame 0x181 0x181x")
+    assert text.line() == "subscribed"
+    base = Client(path)
+    assert base.request(id=1, cmd="subscribe", events=["frame"], frames="0x181")["ok"]
+    both = Client(path)
+    assert both.request(id=1, cmd="subscribe", events=["frame"], frames=["0x181", "0x00000181x"])["ok"]
+    extended = Client(path)
+    assert extended.request(id=1, cmd="subscribe", events=["frame"], frames="0x18FF0000x/0x1FFF0000")["ok"]
+    for bad in ("0x800", "0x18FF1234", "x", "0x181/0x7FFx"):  # 11 bits unless marked; x goes after the COB-ID
+        answer = extended.request(id=2, cmd="subscribe", events=["frame"], frames=bad)
+        assert answer["ok"] is False and "COB-IDx[/MASK]" in answer["error"], (bad, answer)
+    raw = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
+    try:
+        raw.bind((IFACE,))
+        for can_id, data in ((0x181 | socket.CAN_EFF_FLAG, b"\x11\x22"), (0x18FF1234 | socket.CAN_EFF_FLAG, b"\x44"),
+                             (0x181, b"\x33")):  # the 11-bit frame last: an event of a frame taken wrongly comes first
+            raw.send(struct.pack("=IB3x8s", can_id, len(data), data.ljust(8, b"\0")))
+    finally:
+        raw.close()
+    first, second = both.event("frame"), both.event("frame")
+    assert {k: first[k] for k in ("dir", "id", "data", "eff", "text")} == {
+        "dir": "rx", "id": 0x181, "data": "1122", "eff": True, "text": "rx 00000181#1122"}, first
+    assert (second["id"], second["data"], second["text"]) == (0x181, "33", "rx 181#33") and "eff" not in second, second
+    only = base.event("frame")
+    assert (only["data"], only["text"]) == ("33", "rx 181#33") and "eff" not in only, only  # not the extended one
+    ext = extended.event("frame")
+    assert (ext["id"], ext["eff"], ext["text"]) == (0x18FF1234, True, "rx 18FF1234#44"), ext
+    lines = [text.line(2.0) for _ in range(2)]
+    assert re.fullmatch(rf"event frame \d+\.\d{{6}} {IFACE}: rx 00000181#1122", lines[0]), lines
+    assert re.fullmatch(rf"event frame \d+\.\d{{6}} {IFACE}: rx 181#33", lines[1]), lines
+    for c in (text, base, both, extended):
+        c.close()
 
 
 def test_many_clients_and_one_too_many(emulator, tmp_path):

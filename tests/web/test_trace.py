@@ -15,6 +15,7 @@ from test_overview import command, drain, loaded
 
 NODES = ("pro-ionizer:16", "sds:17", "buerkert:18")
 CAN_RTR_FLAG = 0x40000000
+CAN_EFF_FLAG = 0x80000000
 COUNT = re.compile(r"(\d+) frames kept, (\d+) dropped \(at most 20000\)(.*)")
 
 # The trace at one moment: its rows {field: text}, the status line's count and problem.
@@ -277,6 +278,8 @@ def test_download_saves_the_frames_as_a_candump_log(page, start_emulator, tmp_pa
         expected += [frame_text(0x612, request), frame_text(can_id, data)]
     emu.bus.send(0x123, bytes.fromhex("DEADBEEF"))  # not CANopen: in the log all the same
     expected.append("123#DEADBEEF")
+    emu.bus.send(0x181 | CAN_EFF_FLAG, bytes.fromhex("1122"))  # a 29-bit frame: 8 digits, so canplayer sends it so
+    expected.append("00000181#1122")
     for _ in range(2):  # node guarding: a remote request, answered with the state and the toggle bit
         emu.bus.send(0x712 | CAN_RTR_FLAG, b"")
         _, can_id, data = emu.bus.expect(lambda i, d: i == 0x712, 5.0, "the node guarding answer")
@@ -285,6 +288,8 @@ def test_download_saves_the_frames_as_a_candump_log(page, start_emulator, tmp_pa
     expected.append("080#")
     shot = wait_for(browser, "every frame in the trace", lambda s: len(s["rows"]) == len(expected), 5.0)
     assert drain(emu.bus) == []  # the bus saw nothing else
+    extended = [r for r in shot["rows"] if r["kind"] == "extended"]  # never read as node 1's TPDO1
+    assert [(r["id"], r["node"], r["text"], r["data"]) for r in extended] == [("00000181", "", "", "11 22")], shot
     assert [r["text"] for r in shot["rows"]][-6:] == [
         "", "node guarding request", "node guarding answer: pre-operational, toggle 0", "node guarding request",
         "node guarding answer: pre-operational, toggle 1", "SYNC"]

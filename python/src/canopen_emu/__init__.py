@@ -7,9 +7,9 @@
   canopen_emu, canopen_emu_factory, canopen_emu_session, and the emulator's log in a failed test's report.
 """
 from ._version import __version__
-from .client import (PROTOCOL_VERSION, ActiveError, Address, Client, Entry, Event, HeardNode, LastEmcy, NodeInfo,
-                     NodeRef, NodeStatus, ObjectInfo, ObjectRef, Reading, ServerInfo, Value, connect, decode_value,
-                     encode_value)
+from .client import (PROTOCOL_VERSION, ActiveError, Address, Client, Entry, Event, ExtendedId, FrameFilter,
+                     HeardNode, LastEmcy, NodeInfo, NodeRef, NodeStatus, ObjectInfo, ObjectRef, Reading, ServerInfo,
+                     Value, connect, decode_value, encode_value)
 from .emulator import DEFAULT_NODES, Emulator, find_executable
 from .errors import (CanopenEmuError, ConnectionClosed, ControlError, ControlTimeout, EmulatorError,
                      ProtocolError)
@@ -22,6 +22,6 @@ __all__ = [
     "__version__", "PROTOCOL_VERSION", "FAULT_KINDS", "DEFAULT_NODES",
     "connect", "Client", "Emulator", "find_executable", "decode_value", "encode_value",
     "ServerInfo", "NodeInfo", "NodeStatus", "HeardNode", "ActiveError", "LastEmcy", "Entry", "ObjectInfo", "Reading",
-    "Address", "NodeRef", "ObjectRef", "Value", "Event",
+    "Address", "NodeRef", "ObjectRef", "Value", "Event", "ExtendedId", "FrameFilter",
     "CanopenEmuError", "ControlError", "ProtocolError", "ControlTimeout", "ConnectionClosed", "EmulatorError",
 ]

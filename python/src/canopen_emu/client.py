@@ -15,7 +15,7 @@ import socket
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import (Any, Deque, Dict, Iterable, Iterator, List, Mapping, Optional, Sequence, Tuple,
+from typing import (Any, Deque, Dict, Iterable, Iterator, List, Mapping, NamedTuple, Optional, Sequence, Tuple,
                     Union)
 
 from .errors import ConnectionClosed, ControlError, ControlTimeout, ProtocolError
@@ -29,10 +29,26 @@ NodeRef = Union[int, str]
 ObjectRef = Union[str, int, Tuple[int, int]]
 #: A typed value as this client returns it: int, float, bool, str (VISIBLE_STRING) or bytes (OCTET_STRING, DOMAIN).
 Value = Union[int, float, bool, str, bytes]
-#: An event as the emulator sent it: ``event`` (the kind), ``time_us``, ``text`` and the kind's own fields.
+#: An event as the emulator sent it: ``event`` (the kind), ``time_us``, ``text`` and the kind's own fields (a
+#: ``frame`` event: ``dir``, ``id``, ``data``, and ``rtr`` / ``eff`` only when true: ``ev.get("eff", False)``).
 Event = Dict[str, Any]
 #: Where the control socket is: a Unix socket path, ``"HOST:PORT"``, or ``(host, port)``.
 Address = Union[str, "os.PathLike[str]", Tuple[str, int]]
+
+class ExtendedId(NamedTuple):
+    """A frame filter of ``subscribe(frames=...)`` for 29-bit (extended) frames: ``ExtendedId(0x181)`` takes the
+    extended frame with identifier 0x181 and never TPDO1 of node 1, as a COB-ID ``0x181`` takes that PDO and never
+    the extended frame (a filter takes one format; docs/control-protocol.md "Events")."""
+    cob_id: int
+    mask: int = 0x1FFFFFFF
+
+    def __str__(self) -> str:
+        return f"0x{self.cob_id:08X}x/0x{self.mask:08X}"
+
+
+#: A frame filter: an 11-bit COB-ID, ``(cob_id, mask)``, ``ExtendedId(cob_id[, mask])`` or the protocol's text
+#: (``"0x700/0x780"``, ``"0x181x"``).
+FrameFilter = Union[str, int, Tuple[int, int], ExtendedId]
 
 # The longest path a Unix socket address can hold on Linux (sun_path is 108 bytes with its NUL).
 _UNIX_PATH_MAX = 107
@@ -501,18 +517,20 @@ class Client:
     # --- events -----------------------------------------------------------------------------------------------
 
     def subscribe(self, events: Union[str, Iterable[str]], nodes: Optional[Sequence[NodeRef]] = None,
-                  frames: Union[None, str, int, Tuple[int, int], Sequence[Union[str, int, Tuple[int, int]]]] = None
-                  ) -> List[str]:
+                  frames: Union[None, FrameFilter, Sequence[FrameFilter]] = None) -> List[str]:
         """Asks for events of these kinds (``"all"``: every kind but ``frame``), of these nodes only (at most 16;
         replaces the node filter); ``frame`` events need ``frames``: a COB-ID, ``(cob_id, mask)`` or
-        ``"COB-ID[/MASK]"``, or a list of up to 4 of them. Returns the kinds now subscribed. Subscriptions add
-        up."""
+        ``"COB-ID[/MASK]"`` of 11-bit frames, ``ExtendedId(cob_id[, mask])`` or ``"COB-IDx[/MASK]"`` of 29-bit
+        ones, or a list of up to 4 of them (every frame: ``[(0, 0), ExtendedId(0, 0)]``). Returns the kinds now
+        subscribed. Subscriptions add up."""
         fields: Dict[str, Any] = {"events": events if events == "all" else
                                   [events] if isinstance(events, str) else list(events)}
         if nodes is not None:
             fields["nodes"] = list(nodes)
         if frames is not None:
-            def one(f: Union[str, int, Tuple[int, int]]) -> str:
+            def one(f: FrameFilter) -> str:
+                if isinstance(f, ExtendedId):  # before tuple: it is one
+                    return str(f)
                 if isinstance(f, tuple):
                     return f"0x{f[0]:X}/0x{f[1]:X}"
                 return f"0x{f:X}" if isinstance(f, int) else f

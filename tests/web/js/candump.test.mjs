@@ -29,6 +29,17 @@ test("a remote request is R, with its length when not 0; a 29-bit ID has 8 digit
   assert.equal(candump.line(1_000_000, "vcan0", {id: 0x7FF, data: "01"}), "(1.000000) vcan0 7FF#01");
 });
 
+test("an extended frame has 8 digits whatever its identifier: canplayer sends it as a 29-bit frame again", () => {
+  assert.equal(candump.line(1_000_000, "vcan0", {id: 0x181, data: "1122", eff: true}), "(1.000000) vcan0 00000181#1122");
+  assert.equal(candump.line(1_000_000, "vcan0", {id: 0x000, data: "", eff: true}), "(1.000000) vcan0 00000000#");
+  assert.equal(candump.line(1_000_000, "vcan0", {id: 0x711, data: "00", rtr: true, eff: true}),
+    "(1.000000) vcan0 00000711#R1");
+  assert.equal(candump.line(1_000_000, "vcan0", {id: 0x181, data: "1122", eff: false}), "(1.000000) vcan0 181#1122");
+  assert.equal(candump.log([{time_us: 2_000_000, bus: "vcan0", id: 0x181, data: "11", rtr: false, eff: true},
+    {time_us: 2_000_001, bus: "vcan0", id: 0x181, data: "11", rtr: false}], clock),
+  "(1701234567.000000) vcan0 00000181#11\n(1701234567.000001) vcan0 181#11\n");
+});
+
 test("a log is a line per frame, oldest first, each with its interface", () => {
   const frames = [
     {time_us: 2_000_000, bus: "vcan0", id: 0x611, data: "4018100100000000", rtr: false},

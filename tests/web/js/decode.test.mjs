@@ -14,7 +14,7 @@ function text(id, data, extra = {}) {
 }
 
 test("the kinds the filter offers", () => {
-  assert.deepEqual(KINDS, ["NMT", "SYNC", "EMCY", "TIME", "PDO", "SDO", "heartbeat", "LSS", "other"]);
+  assert.deepEqual(KINDS, ["NMT", "SYNC", "EMCY", "TIME", "PDO", "SDO", "heartbeat", "LSS", "extended", "other"]);
 });
 
 test("bytesOf reads the events' hex", () => {
@@ -263,6 +263,22 @@ test("LSS answers of the slaves (0x7E4)", () => {
 test("other COB-IDs are shown raw: no text, the sender as the node", () => {
   assert.deepEqual(d(0x123, "DEADBEEF"), {kind: "other", node: null, text: ""});
   assert.deepEqual(d(0x7E6, "00", {dir: "tx", node: 5}), {kind: "other", node: 5, text: ""});
-  assert.deepEqual(d(0x1234567, "01"), {kind: "other", node: null, text: ""}); // 29-bit
   assert.deepEqual(d(0x580, "4018100100000000"), {kind: "other", node: null, text: ""}); // node-ID 0
+});
+
+test("an extended (29-bit) frame is never read as CANopen, whatever its identifier", () => {
+  const extended = {kind: "extended", node: null, text: ""};
+  assert.deepEqual(d(0x1234567, "01", {eff: true}), extended);
+  assert.deepEqual(d(0x1234567, "01"), extended); // above 11 bits: extended even unmarked
+  assert.deepEqual(d(0x181, "1122", {eff: true}), extended); // not TPDO1 of node 1
+  assert.deepEqual(d(0x000, "0100", {eff: true}), extended); // not an NMT start
+  assert.deepEqual(d(0x711, "", {eff: true, rtr: true}), extended); // not a node guarding request
+  assert.deepEqual(d(0x591, "431810014E020000", {eff: true}), extended); // not an SDO answer
+  assert.deepEqual(d(0x7E5, "0401000000000000", {eff: true}), extended); // not LSS
+  // a node's mapping that names this COB-ID is not asked: its PDOs are 11-bit frames
+  let asked = 0;
+  const pdo = () => { asked++; return {name: "TPDO1", node: 1, text: "A=1"}; };
+  assert.deepEqual(decode({id: 0x181, data: "11", rtr: false, eff: true, dir: "rx"}, pdo), extended);
+  assert.equal(asked, 0);
+  assert.equal(decode({id: 0x181, data: "11", rtr: false, dir: "rx"}, pdo).kind, "PDO"); // the 11-bit one is
 });

@@ -201,4 +201,9 @@ test("after which frames a mapping may have changed", () => {
   assert.equal(f(0x611, "2F001A0000000000"), null); // the request: not yet written
   assert.equal(f(0x591, "43001A0100000000"), null); // an upload
   assert.equal(f(0x580, "60001A0100000000"), null);
+  // an extended frame is none of these, whatever its identifier and bytes
+  assert.equal(f(0x000, "8011", {eff: true}), null);
+  assert.equal(f(0x000, "8100", {eff: true}), null);
+  assert.equal(f(0x711, "00", {eff: true}), null);
+  assert.equal(f(0x591, "60001A0100000000", {eff: true}), null);
 });

@@ -20,7 +20,8 @@ test("a frame is decoded as it comes, numbered, and kept", () => {
   const log = new TraceLog(10);
   const entry = log.add(ev(0x611, "4018100100000000"));
   assert.deepEqual(entry, {seq: 1, time_us: time, bus: "vcan0", dir: "rx", node: null, id: 0x611,
-    data: "4018100100000000", rtr: false, guarded: false, kind: "SDO", about: 17, text: "SDO upload request 0x1018:01"});
+    data: "4018100100000000", rtr: false, eff: false, guarded: false, kind: "SDO", about: 17,
+    text: "SDO upload request 0x1018:01"});
   const answer = log.add(ev(0x591, "431810014E020000", {dir: "tx", node: 17, device: "sds"}));
   assert.equal(answer.text, "SDO upload response 0x1018:01 expedited 4 bytes = 590 (0x0000024E)");
   assert.equal(answer.node, 17);
@@ -35,6 +36,33 @@ test("a node guarding answer is told by the request before it", () => {
   assert.equal(log.add(ev(0x711, "7F", {dir: "tx", node: 17})).text, "heartbeat: pre-operational"); // not asked
   log.add(ev(0x712, "", {rtr: true}));
   assert.equal(log.add(ev(0x712, "7F", {bus: "vcan1", dir: "tx", node: 18})).text, "heartbeat: pre-operational");
+});
+
+test("an extended frame: 8 digits, kind extended, no PDO lookup, no guarding toggle, found by its candump text", () => {
+  let lookups = 0;
+  const log = new TraceLog(10, (frame) => {
+    lookups++;
+    return frame.id === 0x181 ? {name: "TPDO1", node: 1, text: "A=1"} : null;
+  });
+  const ext = log.add(ev(0x181, "1122", {eff: true}));
+  assert.deepEqual({kind: ext.kind, about: ext.about, text: ext.text, eff: ext.eff}, {kind: "extended", about: null,
+    text: "", eff: true});
+  assert.equal(lookups, 0); // the PDO mapping is not asked, so its values never come from this frame's bytes
+  assert.deepEqual(cells(ext), {time: sinceStart(ext.time_us), bus: "vcan0", dir: "rx", id: "00000181", node: "",
+    kind: "extended", text: "", data: "11 22"});
+  const pdo = log.add(ev(0x181, "1122"));
+  assert.deepEqual([pdo.kind, pdo.text, cells(pdo).id], ["PDO", "TPDO1 A=1", "181"]);
+  assert.equal(lookups, 1);
+  assert.equal(log.redecode("vcan0"), false); // redecoding leaves it extended
+  assert.equal(ext.kind, "extended");
+  const texts = (filter) => log.lastMatching(parseFilter(filter).match, 10).map((e) => `${e.kind} ${e.eff}`);
+  assert.deepEqual(texts({kind: "extended"}), ["extended true"]);
+  assert.deepEqual(texts({text: "00000181#1122"}), ["extended true"]);
+  assert.deepEqual(texts({kind: "PDO"}), ["PDO false"]);
+  assert.deepEqual(texts({node: "1"}), ["PDO false"]);
+  // an extended remote frame 0x711 is no guard request: the 11-bit answer after it is a heartbeat
+  log.add(ev(0x711, "", {rtr: true, eff: true}));
+  assert.equal(log.add(ev(0x711, "7F", {dir: "tx", node: 17})).text, "heartbeat: pre-operational");
 });
 
 test("since() gives what came after a seq, as far as the ring still has it", () => {
