@@ -9,17 +9,20 @@ static uint32_t period_us(const co_node_t *node) { return (uint32_t)node->hb.per
 /* A reset takes 0x1017 as a write of it would: one path, so the period's start is one copy of the code. */
 void co_hb_reset(co_node_t *node) { co_hb_written(node, NULL); }
 
+/* The node's state in one byte on 0x700 + node-ID: the heartbeat, and the boot-up (state Initialising, 0). */
+void co_hb_send(co_node_t *node)
+{
+    const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)node->nmt_state}};
+    co_node_send(node, &f);
+}
+
 co_time_us_t co_hb_process(co_node_t *node)
 {
-    const uint32_t p = period_us(node);
-    if (p == 0U || node->hb.due == CO_NEVER) {
-        return node->hb.due = (p != 0U ? co_time_after(node->now, p) : CO_NEVER);
-    }
+    /* hb.due is CO_NEVER exactly when 0x1017 is 0 (co_hb_written sets both), and CO_NEVER is never reached. */
     if (co_time_reached(node->now, node->hb.due)) {
-        const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)node->nmt_state}};
-        co_node_send(node, &f);
+        co_hb_send(node);
         /* Next deadline on the original grid; periods missed entirely (a very late call) are skipped. */
-        node->hb.due = co_next_on_grid(node->hb.due, p, node->now);
+        node->hb.due = co_next_on_grid(node->hb.due, period_us(node), node->now);
     }
     return node->hb.due;
 }

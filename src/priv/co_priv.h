@@ -219,6 +219,8 @@ void co_nmt_rx(co_node_t *node, const co_frame_t *f);
 
 /* ---- Heartbeat producer (co_hb.c) ---- */
 void co_hb_reset(co_node_t *node);
+/* Sends the node's state byte (node->nmt_state) on 0x700 + node-ID: a heartbeat, or in Initialising the boot-up. */
+void co_hb_send(co_node_t *node);
 co_time_us_t co_hb_process(co_node_t *node);
 uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 void co_hb_written(co_node_t *node, const co_od_entry_t *e);
