@@ -77,15 +77,14 @@ co_status_t co_lss_apply_bit_timing(co_node_t *node)
 static void switch_global(co_node_t *node, uint8_t mode)
 {
     co_lss_slave_t *l = &node->lss;
-    if (mode == LSS_CONFIGURATION) {
-        l->state = LSS_CONFIGURATION;
-    } else if (mode == LSS_WAITING) {
-        l->state = LSS_WAITING;
-        /* An unconfigured node that got a node-ID starts at once (reset communication, boot-up) rather
-         * than waiting for NMT 0x82, as CANopenNode does; see docs/decisions.md. */
-        if (node->node_id == CO_NODE_ID_UNCONFIGURED && l->pending_node_id != CO_NODE_ID_UNCONFIGURED) {
-            co_node_reset(node, CO_RESET_COMMUNICATION, node->now);
-        }
+    if (mode == LSS_CONFIGURATION || mode == LSS_WAITING) {
+        l->state = mode;
+    }
+    /* An unconfigured node that got a node-ID starts at once (reset communication, boot-up) rather than waiting for
+     * NMT 0x82, as CANopenNode does; see docs/decisions.md. */
+    if (mode == LSS_WAITING && node->node_id == CO_NODE_ID_UNCONFIGURED &&
+        l->pending_node_id != CO_NODE_ID_UNCONFIGURED) {
+        co_node_reset(node, CO_RESET_COMMUNICATION, node->now);
     }
     l->select_step = 0U;
 }
@@ -122,7 +121,8 @@ static void switch_selective(co_node_t *node, uint8_t cs, uint32_t v)
 }
 
 /* Identify remote slave, cs 0x46..0x4B in order: vendor, product, revision low/high, serial low/high. An exact number
- * (vendor, product) is checked as the range [v, v]; the low bound of a range is kept until its high bound comes. */
+ * (vendor, product) is checked as the range [v, v]; the low bound of a range is kept until its high bound comes. As in
+ * switch_selective, a number that is not ours ends the sequence at once. */
 static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
 {
     co_lss_slave_t *l = &node->lss;
@@ -137,13 +137,11 @@ static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
         }
     }
     const uint32_t id = identity(node, (uint8_t)((step + 1U) >> 1)); /* steps 0, 1, 3, 5: 0x1018 sub 1..4 */
-    const bool in_range = l->ident_low <= id && id <= v;
-    l->ident_match = in_range && (step == 0U || l->ident_match);
-    if (step == 5U) {
+    if (id < l->ident_low || id > v) {
         l->ident_step = 0U;
-        if (l->ident_match) {
-            reply(node, 0x4FU, 0U);
-        }
+    } else if (step == 5U) {
+        l->ident_step = 0U;
+        reply(node, 0x4FU, 0U);
     }
 }
 
