@@ -101,9 +101,18 @@ static bool next_in_sequence(uint8_t *expected, uint8_t step)
     return true;
 }
 
-/* Switch state selective, cs 0x40..0x43: vendor, product, revision, serial. A number that is not ours ends the
- * sequence at once: its later frames are then out of order and answered by nothing, as a full sequence with one
- * wrong number would be. */
+/* A number of a sequence checked: one that is not ours ends the sequence at once (its later frames are then out of
+ * order and answered by nothing, as a full sequence with one wrong number would be), and so does the last. True when
+ * the last was ours: the whole sequence matched. */
+static bool last_in_sequence(uint8_t *expected, bool ours, bool last)
+{
+    if (!ours || last) {
+        *expected = 0U;
+    }
+    return ours && last;
+}
+
+/* Switch state selective, cs 0x40..0x43: vendor, product, revision, serial. */
 static void switch_selective(co_node_t *node, uint8_t cs, uint32_t v)
 {
     co_lss_slave_t *l = &node->lss;
@@ -111,18 +120,14 @@ static void switch_selective(co_node_t *node, uint8_t cs, uint32_t v)
     if (l->state != LSS_WAITING || !next_in_sequence(&l->select_step, step)) {
         return;
     }
-    if (v != identity(node, step)) {
-        l->select_step = 0U;
-    } else if (step == 3U) {
-        l->select_step = 0U;
+    if (last_in_sequence(&l->select_step, v == identity(node, step), step == 3U)) {
         l->state = LSS_CONFIGURATION;
         reply(node, 0x44U, 0U);
     }
 }
 
 /* Identify remote slave, cs 0x46..0x4B in order: vendor, product, revision low/high, serial low/high. An exact number
- * (vendor, product) is checked as the range [v, v]; the low bound of a range is kept until its high bound comes. As in
- * switch_selective, a number that is not ours ends the sequence at once. */
+ * (vendor, product) is checked as the range [v, v]; the low bound of a range is kept until its high bound comes. */
 static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
 {
     co_lss_slave_t *l = &node->lss;
@@ -137,10 +142,7 @@ static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
         }
     }
     const uint32_t id = identity(node, (uint8_t)((step + 1U) >> 1)); /* steps 0, 1, 3, 5: 0x1018 sub 1..4 */
-    if (id < l->ident_low || id > v) {
-        l->ident_step = 0U;
-    } else if (step == 5U) {
-        l->ident_step = 0U;
+    if (last_in_sequence(&l->ident_step, l->ident_low <= id && id <= v, step == 5U)) {
         reply(node, 0x4FU, 0U);
     }
 }
