@@ -272,11 +272,9 @@ co_time_us_t co_lss_process(co_node_t *node)
         }
         co_node_event(node, CO_EV_LSS_ACTIVATE, 0U, 0U, kbit, 0U);
     }
-    if (l->silent_until != CO_NEVER) {
-        if (!co_time_reached(node->now, l->silent_until)) {
-            return l->silent_until;
-        }
-        l->silent_until = CO_NEVER; /* retired: a past time would look ahead again once 32-bit time wraps */
+    if (co_time_pending(node->now, l->silent_until)) {
+        return l->silent_until;
     }
+    l->silent_until = CO_NEVER; /* over (retired: a past time would look ahead again once 32-bit time wraps) */
     return CO_NEVER;
 }
