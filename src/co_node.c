@@ -461,17 +461,23 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
 
 typedef co_time_us_t (*service_process_t)(co_node_t *node);
 
+/* What a processing pass carries from one service to the next. */
+typedef struct pass {
+    co_node_t *node;
+    bool all;          /* at a deadline: every service runs */
+    co_time_us_t next; /* the earliest deadline so far */
+} pass_t;
+
 /* Runs a service if the pass runs it: all of them at a deadline, else those marked since they last ran. The mark is
- * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. next: the
- * earliest deadline so far; returns it with the service's. */
-static co_time_us_t run_service(co_node_t *node, unsigned service, bool all, service_process_t process,
-                                co_time_us_t next)
+ * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. */
+static void run_service(pass_t *pass, unsigned service, service_process_t process)
 {
-    if (!all && (node->wake & service) == 0U) {
-        return next;
+    co_node_t *node = pass->node;
+    if (!pass->all && (node->wake & service) == 0U) {
+        return;
     }
     node->wake = (uint8_t)(node->wake & ~service);
-    return co_min_time(next, process(node));
+    pass->next = co_min_time(pass->next, process(node));
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
@@ -490,39 +496,41 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
     /* At a deadline every service runs and the deadlines are taken afresh. Otherwise only the marked ones: the
      * others' deadlines are as they were, none earlier than next_due, which therefore stays a bound (at worst
      * early, when a marked service's deadline moved later: the pass then is a full one). */
-    const bool all = co_time_reached(now, node->next_due);
-    co_time_us_t next = all ? CO_NEVER : node->next_due;
+    pass_t pass = {node, co_time_reached(now, node->next_due), node->next_due};
+    if (pass.all) {
+        pass.next = CO_NEVER;
+    }
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
     if (node->txq.count > 0U && co_time_pending(now, node->lss.silent_until)) {
-        next = co_min_time(next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits for its end */
+        pass.next = co_min_time(pass.next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits */
     } else {
         txq_flush(node);
     }
-    next = run_service(node, CO_SVC_LSS, all, co_lss_process, next);
+    run_service(&pass, CO_SVC_LSS, co_lss_process);
     if (services_run(node)) {
-        next = run_service(node, CO_SVC_HB, all, co_hb_process, next);
+        run_service(&pass, CO_SVC_HB, co_hb_process);
 #if CO_CONFIG_NODE_GUARDING
-        next = run_service(node, CO_SVC_GUARD, all, co_guard_process, next);
+        run_service(&pass, CO_SVC_GUARD, co_guard_process);
 #endif
 #if CO_CONFIG_HB_CONSUMER
-        next = run_service(node, CO_SVC_HBC, all, co_hbc_process, next);
+        run_service(&pass, CO_SVC_HBC, co_hbc_process);
 #endif
-        next = run_service(node, CO_SVC_SDO, all, co_sdo_process, next);
+        run_service(&pass, CO_SVC_SDO, co_sdo_process);
 #if CO_CONFIG_SYNC
-        next = run_service(node, CO_SVC_SYNC, all, co_sync_process, next);
+        run_service(&pass, CO_SVC_SYNC, co_sync_process);
 #endif
-        next = run_service(node, CO_SVC_PDO, all, co_pdo_process, next);
-        next = run_service(node, CO_SVC_EMCY, all, co_emcy_process, next);
+        run_service(&pass, CO_SVC_PDO, co_pdo_process);
+        run_service(&pass, CO_SVC_EMCY, co_emcy_process);
     } else {
         node->wake = 0U; /* nothing but LSS runs; a reset that starts the services wakes them all */
     }
     if (node->txq.count > 0U) {
-        next = co_min_time(next, co_time_after(now, CO_TX_RETRY_US));
+        pass.next = co_min_time(pass.next, co_time_after(now, CO_TX_RETRY_US));
     }
     if (node->wake != 0U) {
-        next = now; /* a service earlier in the order was marked meanwhile (by a hook): call again at once */
+        pass.next = now; /* a service earlier in the order was marked meanwhile (by a hook): call again at once */
     }
-    node->next_due = co_min_time(node->next_due, next);
+    node->next_due = co_min_time(node->next_due, pass.next);
     return node->next_due;
 }
 
