@@ -496,8 +496,9 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
     /* At a deadline every service runs and the deadlines are taken afresh. Otherwise only the marked ones: the
      * others' deadlines are as they were, none earlier than next_due, which therefore stays a bound (at worst
      * early, when a marked service's deadline moved later: the pass then is a full one). */
-    pass_t pass = {node, co_time_reached(now, node->next_due), node->next_due};
-    if (pass.all) {
+    pass_t pass = {node, false, node->next_due};
+    if (co_time_reached(now, pass.next)) {
+        pass.all = true;
         pass.next = CO_NEVER;
     }
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
