@@ -216,17 +216,13 @@ static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
         }
         co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, answer);
         break;
-    case 0x5A:
-    case 0x5B:
-    case 0x5C:
-    case 0x5D:
-        answer = identity(node, (uint8_t)(cs - 0x5AU));
-        break;
-    case 0x5E:
-        answer = node->node_id;
-        break;
     default:
-        return;
+        if (cs < 0x5AU || cs > 0x5EU) {
+            return;
+        }
+        /* inquire vendor, product, revision, serial (0x1018 sub 1..4), node-ID */
+        answer = cs == 0x5EU ? node->node_id : identity(node, (uint8_t)(cs - 0x5AU));
+        break;
     }
     reply(node, cs, answer);
 }
