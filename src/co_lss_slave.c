@@ -181,50 +181,39 @@ static void fastscan(co_node_t *node, const uint8_t *d, uint32_t id_number)
 }
 #endif
 
-/* The configuration services; all but activate bit timing answer with cs and one number (an error code, an identity
- * number, the node-ID). */
+/* The configuration services but the inquiries: configure node-ID (0x11) and bit timing (0x13), activate bit timing
+ * (0x15), store configuration (0x17). All but activate bit timing answer with cs and an error code. */
 static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
 {
     co_lss_slave_t *l = &node->lss;
-    uint32_t answer = 0U;
-    switch (cs) {
-    case 0x11:   /* configure node-ID: d[1] */
-    case 0x13: { /* configure bit timing: d[1] the table (0: CiA 301's), d[2] the index */
+    uint32_t error = 0U;
+    if (cs == 0x11U || cs == 0x13U) { /* node-ID: d[1]; bit timing: d[1] the table (0: CiA 301's), d[2] the index */
         const bool node_id = cs == 0x11U;
         const uint8_t value = node_id ? d[1] : d[2];
         const bool ok = node_id ? co_lss_set_pending_node_id(node, value)
                                 : d[1] == 0U && co_lss_set_pending_bit_timing(node, value);
-        if (!ok) {
-            answer = 1U; /* out of range, not supported */
-            break;
+        if (ok) {
+            co_node_event(node, node_id ? CO_EV_LSS_NODE_ID : CO_EV_LSS_BIT_TIMING, 0U, 0U, value, 0U);
+        } else {
+            error = 1U; /* out of range, not supported */
         }
-        co_node_event(node, node_id ? CO_EV_LSS_NODE_ID : CO_EV_LSS_BIT_TIMING, 0U, 0U, value, 0U);
-        break;
-    }
-    case 0x15: {
+    } else if (cs == 0x15U) {
         const uint32_t delay = (uint32_t)co_get_u16(&d[1]) * 1000U;
         l->switch_pending = true;
         l->switch_at = co_time_after(node->now, delay);
         l->silent_until = co_time_after(node->now, 2U * delay);
         return; /* no answer */
-    }
-    case 0x17:
+    } else if (cs == 0x17U) {
         if (node->port->nvm_write == NULL || node->port->nvm_commit == NULL) {
-            answer = 1U; /* storing not supported */
+            error = 1U; /* storing not supported */
         } else if (co_store_lss_save(node, l->pending_node_id, l->pending_bit_timing) != CO_OK) {
-            answer = 2U; /* storage media access error */
+            error = 2U; /* storage media access error */
         }
-        co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, answer);
-        break;
-    default:
-        if (cs < 0x5AU || cs > 0x5EU) {
-            return;
-        }
-        /* inquire vendor, product, revision, serial (0x1018 sub 1..4), node-ID */
-        answer = cs == 0x5EU ? node->node_id : identity(node, (uint8_t)(cs - 0x5AU));
-        break;
+        co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, error);
+    } else {
+        return;
     }
-    reply(node, cs, answer);
+    reply(node, cs, error);
 }
 
 void co_lss_rx(co_node_t *node, const co_frame_t *f)
@@ -248,7 +237,12 @@ void co_lss_rx(co_node_t *node, const co_frame_t *f)
     } else if (cs == 0x51U) {
         fastscan(node, f->data, v);
 #endif
-    } else if (node->lss.state == LSS_CONFIGURATION) {
+    } else if (node->lss.state != LSS_CONFIGURATION) {
+        return; /* the services below are the configuration state's */
+    } else if (cs >= 0x5AU && cs <= 0x5EU) {
+        /* inquire vendor, product, revision, serial (0x1018 sub 1..4), node-ID */
+        reply(node, cs, cs == 0x5EU ? node->node_id : identity(node, (uint8_t)(cs - 0x5AU)));
+    } else {
         configure(node, cs, f->data);
     }
 }
