@@ -22,16 +22,23 @@ static void reply(co_node_t *node, uint8_t cs, uint32_t v)
     co_node_send(node, &f);
 }
 
+/* Power-on (the node zeroed: waiting state, no sequence under way): the node-ID and bit timing an LSS master stored,
+ * else the configured ones. */
 void co_lss_init(co_node_t *node)
 {
     co_lss_slave_t *l = &node->lss;
-    l->state = LSS_WAITING;
+    node->node_id = node->default_node_id;
+    l->active_bit_timing = node->default_bit_timing;
+    const co_nvm_status_t st = co_store_lss_load(node, &node->node_id, &l->active_bit_timing);
+    if (st == CO_NVM_LOADED && node->port->set_bit_rate != NULL && node->bit_rates_kbit[l->active_bit_timing] != 0U) {
+        (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[l->active_bit_timing]);
+    }
+    if (l->active_bit_timing >= CO_LSS_BIT_TIMING_COUNT) {
+        l->active_bit_timing = 0U; /* a bad configured default: index 0 of the table, never past its end */
+    }
+    co_node_event(node, CO_EV_NVM_LOADED, 0x7E5U, 0U, (uint32_t)st, 0U); /* the LSS area, once at power-on */
     l->pending_node_id = node->node_id;
     l->pending_bit_timing = l->active_bit_timing;
-    l->select_step = 0U;
-    l->ident_step = 0U;
-    l->fastscan_pos = 0U;
-    l->switch_pending = false;
     l->silent_until = CO_NEVER;
 }
 

@@ -234,18 +234,7 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         return CO_ERR_RANGE;
     }
     co_od_copy_defaults(node->od, 0U, (size_t)node->od->values_size, node->values);
-    node->node_id = cfg->node_id;
-    uint8_t *const bit_timing = &node->lss.active_bit_timing;
-    *bit_timing = cfg->bit_timing;
-    const co_nvm_status_t lss = co_store_lss_load(node, &node->node_id, bit_timing);
-    if (lss == CO_NVM_LOADED && node->port->set_bit_rate != NULL && node->bit_rates_kbit[*bit_timing] != 0U) {
-        (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[*bit_timing]);
-    }
-    if (*bit_timing >= CO_LSS_BIT_TIMING_COUNT) {
-        *bit_timing = 0U; /* a bad configured default: index 0 of the table, never past its end */
-    }
-    co_node_event(node, CO_EV_NVM_LOADED, 0x7E5U, 0U, (uint32_t)lss, 0U); /* the LSS area, once at power-on */
-    co_lss_init(node);
+    co_lss_init(node); /* the node-ID and bit timing */
     co_node_reset(node, CO_RESET_APPLICATION, now);
     return CO_OK;
 }
