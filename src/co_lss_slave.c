@@ -172,9 +172,8 @@ static void fastscan(co_node_t *node, const uint8_t *d, uint32_t id_number)
         if (bit_checked > 31U || lss_next > 3U || lss_sub != l->fastscan_pos) {
             return;
         }
-        const uint32_t mask = (uint32_t)(UINT32_MAX << bit_checked);
-        if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
-            return;
+        if (((id_number ^ identity(node, lss_sub)) >> bit_checked) != 0U) {
+            return; /* a bit from bit_checked up differs */
         }
         if (bit_checked == 0U) {
             l->fastscan_pos = lss_next;
