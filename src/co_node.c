@@ -66,7 +66,7 @@ static void tx_dropped(co_node_t *node, const co_frame_t *frame)
 
 void co_node_send(co_node_t *node, const co_frame_t *frame)
 {
-    if (node->lss.silent_until != CO_NEVER && !co_time_reached(node->now, node->lss.silent_until)) {
+    if (co_time_pending(node->now, node->lss.silent_until)) {
         node->stats.tx_suppressed++; /* CiA 305: no frame during the bit-rate switch */
         return;
     }
