@@ -224,8 +224,8 @@ static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
 
 void co_lss_rx(co_node_t *node, const co_frame_t *f)
 {
-    if (f->len != 8U || (f->flags & CO_FRAME_RTR) != 0U) {
-        return;
+    if (f->len != 8U) {
+        return; /* (always a data frame: co_node_take routes no remote frame) */
     }
     const uint8_t cs = f->data[0];
     const uint32_t v = co_get_u32(&f->data[1]);
