@@ -6,9 +6,6 @@
 
 static uint32_t period_us(const co_node_t *node) { return (uint32_t)node->hb.period_ms * 1000U; }
 
-/* A reset takes 0x1017 as a write of it would: one path, so the period's start is one copy of the code. */
-void co_hb_reset(co_node_t *node) { co_hb_written(node, NULL); }
-
 /* The node's state in one byte on 0x700 + node-ID: the heartbeat, and the boot-up (state Initialising, 0). */
 void co_hb_send(co_node_t *node)
 {
@@ -25,15 +22,6 @@ co_time_us_t co_hb_process(co_node_t *node)
         node->hb.due = co_next_on_grid(node->hb.due, period_us(node), node->now);
     }
     return node->hb.due;
-}
-
-uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
-{
-    (void)node;
-    (void)e;
-    (void)data;
-    (void)len;
-    return CO_ABORT_NONE; /* range limits come from the OD; device-specific steps from the device hook */
 }
 
 /* 0x1017 took a value (e NULL: at a reset, the dictionary's): a new period starts now. */
