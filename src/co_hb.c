@@ -6,10 +6,10 @@
 
 static uint32_t period_us(const co_node_t *node) { return (uint32_t)node->hb.period_ms * 1000U; }
 
-/* The node's state in one byte on 0x700 + node-ID: the heartbeat, and the boot-up (state Initialising, 0). */
-void co_hb_send(co_node_t *node)
+/* A state byte on 0x700 + node-ID: the heartbeat, and the boot-up (state Initialising, 0). */
+void co_hb_send(co_node_t *node, co_nmt_state_t state)
 {
-    const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)node->nmt_state}};
+    const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)state}};
     co_node_send(node, &f);
 }
 
@@ -17,7 +17,7 @@ co_time_us_t co_hb_process(co_node_t *node)
 {
     /* hb.due is CO_NEVER exactly when 0x1017 is 0 (co_hb_written sets both), and CO_NEVER is never reached. */
     if (co_time_reached(node->now, node->hb.due)) {
-        co_hb_send(node);
+        co_hb_send(node, node->nmt_state);
         /* Next deadline on the original grid; periods missed entirely (a very late call) are skipped. */
         node->hb.due = co_next_on_grid(node->hb.due, period_us(node), node->now);
     }

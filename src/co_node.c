@@ -179,7 +179,7 @@ void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
     co_pdo_reset(node);
     reset_hook(node, CO_RESET_COMMUNICATION);
     if (node->node_id != CO_NODE_ID_UNCONFIGURED) { /* CiA 305: an unconfigured node runs LSS only, no boot-up */
-        co_hb_send(node); /* the boot-up: the state byte of Initialising */
+        co_hb_send(node, CO_NMT_INITIALISING); /* the boot-up */
         co_node_set_state(node, CO_NMT_PRE_OPERATIONAL);
     }
     co_node_routes_update(node);

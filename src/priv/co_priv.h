@@ -221,8 +221,8 @@ void co_nmt_rx(co_node_t *node, const co_frame_t *f);
 void co_hb_written(co_node_t *node, const co_od_entry_t *e);
 /* A reset takes 0x1017 as a write of it would: one path, so the period's start is one copy of the code. */
 static inline void co_hb_reset(co_node_t *node) { co_hb_written(node, NULL); }
-/* Sends the node's state byte (node->nmt_state) on 0x700 + node-ID: a heartbeat, or in Initialising the boot-up. */
-void co_hb_send(co_node_t *node);
+/* Sends a state byte on 0x700 + node-ID: the heartbeat (node->nmt_state), or the boot-up (CO_NMT_INITIALISING). */
+void co_hb_send(co_node_t *node, co_nmt_state_t state);
 co_time_us_t co_hb_process(co_node_t *node);
 /* Any value of 0x1017 within its limits goes: range limits come from the OD, device-specific steps from the device
  * hook. */
