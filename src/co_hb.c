@@ -6,31 +6,22 @@
 
 static uint32_t period_us(const co_node_t *node) { return (uint32_t)node->hb.period_ms * 1000U; }
 
-/* A reset takes 0x1017 as a write of it would: one path, so the period's start is one copy of the code. */
-void co_hb_reset(co_node_t *node) { co_hb_written(node, NULL); }
+/* A state byte on 0x700 + node-ID: the heartbeat, and the boot-up (state Initialising, 0). */
+void co_hb_send(co_node_t *node, co_nmt_state_t state)
+{
+    const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)state}};
+    co_node_send(node, &f);
+}
 
 co_time_us_t co_hb_process(co_node_t *node)
 {
-    const uint32_t p = period_us(node);
-    if (p == 0U || node->hb.due == CO_NEVER) {
-        return node->hb.due = (p != 0U ? co_time_after(node->now, p) : CO_NEVER);
-    }
+    /* hb.due is CO_NEVER exactly when 0x1017 is 0 (co_hb_written sets both), and CO_NEVER is never reached. */
     if (co_time_reached(node->now, node->hb.due)) {
-        const co_frame_t f = {0x700U + node->node_id, 1U, 0U, {(uint8_t)node->nmt_state}};
-        co_node_send(node, &f);
+        co_hb_send(node, node->nmt_state);
         /* Next deadline on the original grid; periods missed entirely (a very late call) are skipped. */
-        node->hb.due = co_next_on_grid(node->hb.due, p, node->now);
+        node->hb.due = co_next_on_grid(node->hb.due, period_us(node), node->now);
     }
     return node->hb.due;
-}
-
-uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
-{
-    (void)node;
-    (void)e;
-    (void)data;
-    (void)len;
-    return CO_ABORT_NONE; /* range limits come from the OD; device-specific steps from the device hook */
 }
 
 /* 0x1017 took a value (e NULL: at a reset, the dictionary's): a new period starts now. */

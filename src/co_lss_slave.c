@@ -22,16 +22,23 @@ static void reply(co_node_t *node, uint8_t cs, uint32_t v)
     co_node_send(node, &f);
 }
 
+/* Power-on (the node zeroed: waiting state, no sequence under way): the node-ID and bit timing an LSS master stored,
+ * else the configured ones. */
 void co_lss_init(co_node_t *node)
 {
     co_lss_slave_t *l = &node->lss;
-    l->state = LSS_WAITING;
+    node->node_id = node->default_node_id;
+    l->active_bit_timing = node->default_bit_timing;
+    const co_nvm_status_t st = co_store_lss_load(node, &node->node_id, &l->active_bit_timing);
+    if (st == CO_NVM_LOADED && node->port->set_bit_rate != NULL && node->bit_rates_kbit[l->active_bit_timing] != 0U) {
+        (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[l->active_bit_timing]);
+    }
+    if (l->active_bit_timing >= CO_LSS_BIT_TIMING_COUNT) {
+        l->active_bit_timing = 0U; /* a bad configured default: index 0 of the table, never past its end */
+    }
+    co_node_event(node, CO_EV_NVM_LOADED, 0x7E5U, 0U, (uint32_t)st, 0U); /* the LSS area, once at power-on */
     l->pending_node_id = node->node_id;
     l->pending_bit_timing = l->active_bit_timing;
-    l->select_step = 0U;
-    l->ident_step = 0U;
-    l->fastscan_pos = 0U;
-    l->switch_pending = false;
     l->silent_until = CO_NEVER;
 }
 
@@ -77,15 +84,14 @@ co_status_t co_lss_apply_bit_timing(co_node_t *node)
 static void switch_global(co_node_t *node, uint8_t mode)
 {
     co_lss_slave_t *l = &node->lss;
-    if (mode == LSS_CONFIGURATION) {
-        l->state = LSS_CONFIGURATION;
-    } else if (mode == LSS_WAITING) {
-        l->state = LSS_WAITING;
-        /* An unconfigured node that got a node-ID starts at once (reset communication, boot-up) rather
-         * than waiting for NMT 0x82, as CANopenNode does; see docs/decisions.md. */
-        if (node->node_id == CO_NODE_ID_UNCONFIGURED && l->pending_node_id != CO_NODE_ID_UNCONFIGURED) {
-            co_node_reset(node, CO_RESET_COMMUNICATION, node->now);
-        }
+    if (mode == LSS_CONFIGURATION || mode == LSS_WAITING) {
+        l->state = mode;
+    }
+    /* An unconfigured node that got a node-ID starts at once (reset communication, boot-up) rather than waiting for
+     * NMT 0x82, as CANopenNode does; see docs/decisions.md. */
+    if (mode == LSS_WAITING && node->node_id == CO_NODE_ID_UNCONFIGURED &&
+        l->pending_node_id != CO_NODE_ID_UNCONFIGURED) {
+        co_node_reset(node, CO_RESET_COMMUNICATION, node->now);
     }
     l->select_step = 0U;
 }
@@ -102,9 +108,18 @@ static bool next_in_sequence(uint8_t *expected, uint8_t step)
     return true;
 }
 
-/* Switch state selective, cs 0x40..0x43: vendor, product, revision, serial. A number that is not ours ends the
- * sequence at once: its later frames are then out of order and answered by nothing, as a full sequence with one
- * wrong number would be. */
+/* A number of a sequence checked: one that is not ours ends the sequence at once (its later frames are then out of
+ * order and answered by nothing, as a full sequence with one wrong number would be), and so does the last. True when
+ * the last was ours: the whole sequence matched. */
+static bool last_in_sequence(uint8_t *expected, bool ours, bool last)
+{
+    if (!ours || last) {
+        *expected = 0U;
+    }
+    return ours && last;
+}
+
+/* Switch state selective, cs 0x40..0x43: vendor, product, revision, serial. */
 static void switch_selective(co_node_t *node, uint8_t cs, uint32_t v)
 {
     co_lss_slave_t *l = &node->lss;
@@ -112,10 +127,7 @@ static void switch_selective(co_node_t *node, uint8_t cs, uint32_t v)
     if (l->state != LSS_WAITING || !next_in_sequence(&l->select_step, step)) {
         return;
     }
-    if (v != identity(node, step)) {
-        l->select_step = 0U;
-    } else if (step == 3U) {
-        l->select_step = 0U;
+    if (last_in_sequence(&l->select_step, v == identity(node, step), step == 3U)) {
         l->state = LSS_CONFIGURATION;
         reply(node, 0x44U, 0U);
     }
@@ -137,13 +149,8 @@ static void identify_remote(co_node_t *node, uint8_t cs, uint32_t v)
         }
     }
     const uint32_t id = identity(node, (uint8_t)((step + 1U) >> 1)); /* steps 0, 1, 3, 5: 0x1018 sub 1..4 */
-    const bool in_range = l->ident_low <= id && id <= v;
-    l->ident_match = in_range && (step == 0U || l->ident_match);
-    if (step == 5U) {
-        l->ident_step = 0U;
-        if (l->ident_match) {
-            reply(node, 0x4FU, 0U);
-        }
+    if (last_in_sequence(&l->ident_step, l->ident_low <= id && id <= v, step == 5U)) {
+        reply(node, 0x4FU, 0U);
     }
 }
 
@@ -165,9 +172,8 @@ static void fastscan(co_node_t *node, const uint8_t *d, uint32_t id_number)
         if (bit_checked > 31U || lss_next > 3U || lss_sub != l->fastscan_pos) {
             return;
         }
-        const uint32_t mask = (uint32_t)(UINT32_MAX << bit_checked);
-        if (((id_number ^ identity(node, lss_sub)) & mask) != 0U) {
-            return;
+        if (((id_number ^ identity(node, lss_sub)) >> bit_checked) != 0U) {
+            return; /* a bit from bit_checked up differs */
         }
         if (bit_checked == 0U) {
             l->fastscan_pos = lss_next;
@@ -181,60 +187,45 @@ static void fastscan(co_node_t *node, const uint8_t *d, uint32_t id_number)
 }
 #endif
 
-/* The configuration services; all but activate bit timing answer with cs and one number (an error code, an identity
- * number, the node-ID). */
+/* The configuration services but the inquiries: configure node-ID (0x11) and bit timing (0x13), activate bit timing
+ * (0x15), store configuration (0x17). All but activate bit timing answer with cs and an error code. */
 static void configure(co_node_t *node, uint8_t cs, const uint8_t *d)
 {
     co_lss_slave_t *l = &node->lss;
-    uint32_t answer = 0U;
-    switch (cs) {
-    case 0x11:   /* configure node-ID: d[1] */
-    case 0x13: { /* configure bit timing: d[1] the table (0: CiA 301's), d[2] the index */
+    uint32_t error = 0U;
+    if (cs == 0x11U || cs == 0x13U) { /* node-ID: d[1]; bit timing: d[1] the table (0: CiA 301's), d[2] the index */
         const bool node_id = cs == 0x11U;
         const uint8_t value = node_id ? d[1] : d[2];
         const bool ok = node_id ? co_lss_set_pending_node_id(node, value)
                                 : d[1] == 0U && co_lss_set_pending_bit_timing(node, value);
-        if (!ok) {
-            answer = 1U; /* out of range, not supported */
-            break;
+        if (ok) {
+            co_node_event(node, node_id ? CO_EV_LSS_NODE_ID : CO_EV_LSS_BIT_TIMING, 0U, 0U, value, 0U);
+        } else {
+            error = 1U; /* out of range, not supported */
         }
-        co_node_event(node, node_id ? CO_EV_LSS_NODE_ID : CO_EV_LSS_BIT_TIMING, 0U, 0U, value, 0U);
-        break;
-    }
-    case 0x15: {
+    } else if (cs == 0x15U) {
         const uint32_t delay = (uint32_t)co_get_u16(&d[1]) * 1000U;
         l->switch_pending = true;
         l->switch_at = co_time_after(node->now, delay);
         l->silent_until = co_time_after(node->now, 2U * delay);
         return; /* no answer */
-    }
-    case 0x17:
+    } else if (cs == 0x17U) {
         if (node->port->nvm_write == NULL || node->port->nvm_commit == NULL) {
-            answer = 1U; /* storing not supported */
+            error = 1U; /* storing not supported */
         } else if (co_store_lss_save(node, l->pending_node_id, l->pending_bit_timing) != CO_OK) {
-            answer = 2U; /* storage media access error */
+            error = 2U; /* storage media access error */
         }
-        co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, answer);
-        break;
-    case 0x5A:
-    case 0x5B:
-    case 0x5C:
-    case 0x5D:
-        answer = identity(node, (uint8_t)(cs - 0x5AU));
-        break;
-    case 0x5E:
-        answer = node->node_id;
-        break;
-    default:
+        co_node_event(node, CO_EV_STORE, 0x7E5U, 0x17U, l->pending_node_id, error);
+    } else {
         return;
     }
-    reply(node, cs, answer);
+    reply(node, cs, error);
 }
 
 void co_lss_rx(co_node_t *node, const co_frame_t *f)
 {
-    if (f->len != 8U || (f->flags & CO_FRAME_RTR) != 0U) {
-        return;
+    if (f->len != 8U) {
+        return; /* (always a data frame: co_node_take routes no remote frame) */
     }
     const uint8_t cs = f->data[0];
     const uint32_t v = co_get_u32(&f->data[1]);
@@ -252,7 +243,12 @@ void co_lss_rx(co_node_t *node, const co_frame_t *f)
     } else if (cs == 0x51U) {
         fastscan(node, f->data, v);
 #endif
-    } else if (node->lss.state == LSS_CONFIGURATION) {
+    } else if (node->lss.state != LSS_CONFIGURATION) {
+        return; /* the services below are the configuration state's */
+    } else if (cs >= 0x5AU && cs <= 0x5EU) {
+        /* inquire vendor, product, revision, serial (0x1018 sub 1..4), node-ID */
+        reply(node, cs, cs == 0x5EU ? node->node_id : identity(node, (uint8_t)(cs - 0x5AU)));
+    } else {
         configure(node, cs, f->data);
     }
 }
@@ -272,11 +268,9 @@ co_time_us_t co_lss_process(co_node_t *node)
         }
         co_node_event(node, CO_EV_LSS_ACTIVATE, 0U, 0U, kbit, 0U);
     }
-    if (l->silent_until != CO_NEVER) {
-        if (!co_time_reached(node->now, l->silent_until)) {
-            return l->silent_until;
-        }
-        l->silent_until = CO_NEVER; /* retired: a past time would look ahead again once 32-bit time wraps */
+    if (co_time_pending(node->now, l->silent_until)) {
+        return l->silent_until;
     }
+    l->silent_until = CO_NEVER; /* over (retired: a past time would look ahead again once 32-bit time wraps) */
     return CO_NEVER;
 }

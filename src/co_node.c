@@ -66,7 +66,7 @@ static void tx_dropped(co_node_t *node, const co_frame_t *frame)
 
 void co_node_send(co_node_t *node, const co_frame_t *frame)
 {
-    if (node->lss.silent_until != CO_NEVER && !co_time_reached(node->now, node->lss.silent_until)) {
+    if (co_time_pending(node->now, node->lss.silent_until)) {
         node->stats.tx_suppressed++; /* CiA 305: no frame during the bit-rate switch */
         return;
     }
@@ -179,8 +179,7 @@ void co_node_reset(co_node_t *node, co_reset_t what, co_time_us_t now)
     co_pdo_reset(node);
     reset_hook(node, CO_RESET_COMMUNICATION);
     if (node->node_id != CO_NODE_ID_UNCONFIGURED) { /* CiA 305: an unconfigured node runs LSS only, no boot-up */
-        const co_frame_t bootup = {0x700U + node->node_id, 1U, 0U, {0U}};
-        co_node_send(node, &bootup);
+        co_hb_send(node, CO_NMT_INITIALISING); /* the boot-up */
         co_node_set_state(node, CO_NMT_PRE_OPERATIONAL);
     }
     co_node_routes_update(node);
@@ -236,18 +235,7 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
         return CO_ERR_RANGE;
     }
     co_od_copy_defaults(node->od, 0U, (size_t)node->od->values_size, node->values);
-    node->node_id = cfg->node_id;
-    uint8_t *const bit_timing = &node->lss.active_bit_timing;
-    *bit_timing = cfg->bit_timing;
-    const co_nvm_status_t lss = co_store_lss_load(node, &node->node_id, bit_timing);
-    if (lss == CO_NVM_LOADED && node->port->set_bit_rate != NULL && node->bit_rates_kbit[*bit_timing] != 0U) {
-        (void)node->port->set_bit_rate(node->port_ctx, node->bit_rates_kbit[*bit_timing]);
-    }
-    if (*bit_timing >= CO_LSS_BIT_TIMING_COUNT) {
-        *bit_timing = 0U; /* a bad configured default: index 0 of the table, never past its end */
-    }
-    co_node_event(node, CO_EV_NVM_LOADED, 0x7E5U, 0U, (uint32_t)lss, 0U); /* the LSS area, once at power-on */
-    co_lss_init(node);
+    co_lss_init(node); /* the node-ID and bit timing */
     co_node_reset(node, CO_RESET_APPLICATION, now);
     return CO_OK;
 }
@@ -463,17 +451,23 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
 
 typedef co_time_us_t (*service_process_t)(co_node_t *node);
 
+/* What a processing pass carries from one service to the next. */
+typedef struct pass {
+    co_node_t *node;
+    bool all;          /* at a deadline: every service runs */
+    co_time_us_t next; /* the earliest deadline so far */
+} pass_t;
+
 /* Runs a service if the pass runs it: all of them at a deadline, else those marked since they last ran. The mark is
- * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. next: the
- * earliest deadline so far; returns it with the service's. */
-static co_time_us_t run_service(co_node_t *node, unsigned service, bool all, service_process_t process,
-                                co_time_us_t next)
+ * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. */
+static void run_service(pass_t *pass, unsigned service, service_process_t process)
 {
-    if (!all && (node->wake & service) == 0U) {
-        return next;
+    co_node_t *node = pass->node;
+    if (!pass->all && (node->wake & service) == 0U) {
+        return;
     }
     node->wake = (uint8_t)(node->wake & ~service);
-    return co_min_time(next, process(node));
+    pass->next = co_min_time(pass->next, process(node));
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
@@ -492,39 +486,42 @@ co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
     /* At a deadline every service runs and the deadlines are taken afresh. Otherwise only the marked ones: the
      * others' deadlines are as they were, none earlier than next_due, which therefore stays a bound (at worst
      * early, when a marked service's deadline moved later: the pass then is a full one). */
-    const bool all = co_time_reached(now, node->next_due);
-    co_time_us_t next = all ? CO_NEVER : node->next_due;
+    pass_t pass = {node, false, node->next_due};
+    if (co_time_reached(now, pass.next)) {
+        pass.all = true;
+        pass.next = CO_NEVER;
+    }
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
     if (node->txq.count > 0U && co_time_pending(now, node->lss.silent_until)) {
-        next = co_min_time(next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits for its end */
+        pass.next = co_min_time(pass.next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits */
     } else {
         txq_flush(node);
     }
-    next = run_service(node, CO_SVC_LSS, all, co_lss_process, next);
+    run_service(&pass, CO_SVC_LSS, co_lss_process);
     if (services_run(node)) {
-        next = run_service(node, CO_SVC_HB, all, co_hb_process, next);
+        run_service(&pass, CO_SVC_HB, co_hb_process);
 #if CO_CONFIG_NODE_GUARDING
-        next = run_service(node, CO_SVC_GUARD, all, co_guard_process, next);
+        run_service(&pass, CO_SVC_GUARD, co_guard_process);
 #endif
 #if CO_CONFIG_HB_CONSUMER
-        next = run_service(node, CO_SVC_HBC, all, co_hbc_process, next);
+        run_service(&pass, CO_SVC_HBC, co_hbc_process);
 #endif
-        next = run_service(node, CO_SVC_SDO, all, co_sdo_process, next);
+        run_service(&pass, CO_SVC_SDO, co_sdo_process);
 #if CO_CONFIG_SYNC
-        next = run_service(node, CO_SVC_SYNC, all, co_sync_process, next);
+        run_service(&pass, CO_SVC_SYNC, co_sync_process);
 #endif
-        next = run_service(node, CO_SVC_PDO, all, co_pdo_process, next);
-        next = run_service(node, CO_SVC_EMCY, all, co_emcy_process, next);
+        run_service(&pass, CO_SVC_PDO, co_pdo_process);
+        run_service(&pass, CO_SVC_EMCY, co_emcy_process);
     } else {
         node->wake = 0U; /* nothing but LSS runs; a reset that starts the services wakes them all */
     }
     if (node->txq.count > 0U) {
-        next = co_min_time(next, co_time_after(now, CO_TX_RETRY_US));
+        pass.next = co_min_time(pass.next, co_time_after(now, CO_TX_RETRY_US));
     }
     if (node->wake != 0U) {
-        next = now; /* a service earlier in the order was marked meanwhile (by a hook): call again at once */
+        pass.next = now; /* a service earlier in the order was marked meanwhile (by a hook): call again at once */
     }
-    node->next_due = co_min_time(node->next_due, next);
+    node->next_due = co_min_time(node->next_due, pass.next);
     return node->next_due;
 }
 

@@ -343,8 +343,7 @@ typedef struct co_lss_slave {
     uint8_t pending_bit_timing;
     uint8_t active_bit_timing;
     uint8_t select_step;        /**< Switch-state-selective: next expected cs 0x40..0x43. */
-    uint8_t ident_step;         /**< Identify remote slave: next expected cs 0x46..0x4B. */
-    bool ident_match;
+    uint8_t ident_step;         /**< Identify remote slave: next expected cs 0x46..0x4B (0 also after a mismatch). */
     uint8_t fastscan_pos;       /**< LSSSub the slave expects next. */
     bool switch_pending;        /**< Activate bit timing in progress. */
     uint32_t ident_low;

@@ -218,10 +218,22 @@ void co_node_routes_update(co_node_t *node);
 void co_nmt_rx(co_node_t *node, const co_frame_t *f);
 
 /* ---- Heartbeat producer (co_hb.c) ---- */
-void co_hb_reset(co_node_t *node);
-co_time_us_t co_hb_process(co_node_t *node);
-uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 void co_hb_written(co_node_t *node, const co_od_entry_t *e);
+/* A reset takes 0x1017 as a write of it would: one path, so the period's start is one copy of the code. */
+static inline void co_hb_reset(co_node_t *node) { co_hb_written(node, NULL); }
+/* Sends a state byte on 0x700 + node-ID: the heartbeat (node->nmt_state), or the boot-up (CO_NMT_INITIALISING). */
+void co_hb_send(co_node_t *node, co_nmt_state_t state);
+co_time_us_t co_hb_process(co_node_t *node);
+/* Any value of 0x1017 within its limits goes: range limits come from the OD, device-specific steps from the device
+ * hook. */
+static inline uint32_t co_hb_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    (void)node;
+    (void)e;
+    (void)data;
+    (void)len;
+    return CO_ABORT_NONE;
+}
 
 /* ---- Heartbeat consumer (co_hb_consumer.c) ---- */
 void co_hbc_reset(co_node_t *node);

@@ -363,6 +363,13 @@ static void identify_remote_slave_mismatch_is_silent(void)
     /* a full good sequence still works afterwards */
     identify_remote(0x24EU, 0x1234U, 0U, 0xFFFFFFFFUL, 0U, 0xFFFFFFFFUL);
     EXPECT_LSS(0x4F, 0, 0, 0, 0, 0, 0, 0);
+    /* a mismatch, the rest of its sequence (silent), then a good one started at once */
+    lss_u32(0x46, 0x24EU);
+    lss_u32(0x47, 0x1235U);
+    lss_u32(0x48, 0U);
+    EXPECT_NONE();
+    identify_remote(0x24EU, 0x1234U, 0U, 0xFFFFFFFFUL, 0U, 0xFFFFFFFFUL);
+    EXPECT_LSS(0x4F, 0, 0, 0, 0, 0, 0, 0);
 }
 
 static void v74_fastscan_reset(void)
