@@ -155,7 +155,9 @@ bool co_emcy_is_active(const co_node_t *node, uint16_t code)
 void co_emcy_written(co_node_t *node)
 {
     node->emcy.cob_id = co_od_u32_or(node, 0x1014U, 0U, 0x80U + (uint32_t)node->node_id);
+#if CO_CONFIG_EMCY_INHIBIT
     node->emcy.inhibit_100us = (uint16_t)co_od_u32_or(node, 0x1015U, 0U, 0U);
+#endif
 }
 
 void co_emcy_reset(co_node_t *node)
@@ -166,21 +168,33 @@ void co_emcy_reset(co_node_t *node)
     node->emcy.n_active = 0U;
     node->emcy.q_count = 0U;
     node->emcy.q_head = 0U;
+#if CO_CONFIG_EMCY_INHIBIT
     node->emcy.next_allowed = CO_NEVER;
+#endif
     (void)update_register(node);
 }
+
+#if CO_CONFIG_EMCY_INHIBIT
+#define INHIBIT_END(em) CO_TIME32_RETIRE((em)->next_allowed)
+#else
+#define INHIBIT_END(em) CO_NEVER /* no inhibit time: nothing to wait for */
+#endif
 
 co_time_us_t co_emcy_process(co_node_t *node)
 {
     co_emcy_t *em = &node->emcy;
+#if CO_CONFIG_EMCY_INHIBIT
     co_time_retire(node->now, &em->next_allowed);
+#endif
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
-        return CO_TIME32_RETIRE(em->next_allowed); /* kept until the node leaves Stopped */
+        return INHIBIT_END(em); /* kept until the node leaves Stopped */
     }
     while (em->q_count > 0U) {
+#if CO_CONFIG_EMCY_INHIBIT
         if (co_time_pending(node->now, em->next_allowed)) {
             return em->next_allowed;
         }
+#endif
         const uint8_t *data = em->queue[em->q_head];
         em->q_head = (uint8_t)((em->q_head + 1U) % CO_EMCY_QUEUE_LEN);
         em->q_count--;
@@ -191,11 +205,13 @@ co_time_us_t co_emcy_process(co_node_t *node)
             f.flags = 0U;
             memcpy(f.data, data, 8U);
             co_node_send(node, &f);
+#if CO_CONFIG_EMCY_INHIBIT
             em->next_allowed =
                 em->inhibit_100us != 0U ? co_time_after(node->now, (uint32_t)em->inhibit_100us * 100U) : CO_NEVER;
+#endif
         }
     }
-    return CO_TIME32_RETIRE(em->next_allowed);
+    return INHIBIT_END(em);
 }
 
 uint32_t co_emcy_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored)

@@ -231,6 +231,7 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
     if (co_pdo_count(node) != CO_OK || co_sdo_count(node, cfg->sdo_servers, cfg->sdo_server_count) != CO_OK ||
         co_od_sub_count(node->od, 0x1016U) > (CO_CONFIG_HB_CONSUMER ? CO_HB_CONSUMER_MAX : 0U) ||
         (!CO_CONFIG_EMCY_HISTORY && co_od_has_index(node->od, 0x1003U)) ||
+        (!CO_CONFIG_EMCY_INHIBIT && co_od_has_index(node->od, 0x1015U)) ||
         node->route_cap < CO_RX_ROUTES_FIXED + node->n_rpdo + node->n_sdo_extra) {
         return CO_ERR_RANGE;
     }

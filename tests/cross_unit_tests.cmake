@@ -25,11 +25,11 @@ function(co_cross_unit_tests)
   target_link_libraries(co_test_support PUBLIC co_core unity)
   target_compile_options(co_test_support PRIVATE ${CO_WARNINGS})
 
-  # test_pdo_no_timers and test_emcy_no_history check the core compiled with a service part off, as on the host
+  # test_pdo_no_timers and test_emcy_fitted check the core compiled with a service part off, as on the host
   # (tests/CMakeLists.txt): each its own copy of the core and of the support it uses.
-  set(co_variant_tests test_pdo_no_timers test_emcy_no_history)
+  set(co_variant_tests test_pdo_no_timers test_emcy_fitted)
   set(co_variant_test_pdo_no_timers CO_CONFIG_PDO_TIMERS=0)
-  set(co_variant_test_emcy_no_history CO_CONFIG_EMCY_HISTORY=0)
+  set(co_variant_test_emcy_fitted CO_CONFIG_EMCY_HISTORY=0 CO_CONFIG_EMCY_INHIBIT=0)
   foreach(v IN LISTS co_variant_tests)
     add_library(co_core_${v} STATIC ${co_core_sources})
     target_include_directories(co_core_${v} PUBLIC ${CO_ROOT}/include PRIVATE ${CO_ROOT}/src)

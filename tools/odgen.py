@@ -503,6 +503,8 @@ def fitted_config(od: Od, c_name: str, eds_name: str) -> str:
         off.append(("CO_CONFIG_MPDO", "no object scanner/dispatching list 0x1FA0-0x1FFF, no mapping count that can be 0xFE/0xFF"))
     if 0x1003 not in indices:
         off.append(("CO_CONFIG_EMCY_HISTORY", "no pre-defined error field 0x1003"))
+    if 0x1015 not in indices:
+        off.append(("CO_CONFIG_EMCY_INHIBIT", "no EMCY inhibit time 0x1015"))
     if not has(0x1201, 0x127F):
         off.append(("CO_CONFIG_SDO_SERVERS", "no additional SDO server 0x1201-0x127F"))
     if not writable_maps:

@@ -18,6 +18,7 @@
  *   tell several nodes of one type apart (distinct serial numbers).
  * - PDO counts: 1 RPDO (both), 3 TPDOs (PRO IONIZER; the SDS has 2).
  * - No heartbeat consumer: neither dictionary has 0x1016.
+ * - No EMCY inhibit time: neither dictionary has 0x1015.
  * - EMCY: the defaults (8 active errors, 8 queued frames): the PRO IONIZER can have several warnings and
  *   errors active at once and logs when the list is full; keeping the default keeps its behaviour.
  * - 32-bit time (CO_CONFIG_TIME32): a Cortex-M or AVR firmware then has no 64-bit arithmetic in the core. The device
@@ -56,5 +57,6 @@
 #define CO_CONFIG_OD_COMPACT 1
 #define CO_CONFIG_OD_LIMITS_64 0
 #define CO_CONFIG_OD_LIMITS_16 1
+#define CO_CONFIG_EMCY_INHIBIT 0
 
 #endif /* CO_PROFILE_ELTEX_H */

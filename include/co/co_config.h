@@ -160,4 +160,11 @@
 #define CO_CONFIG_EMCY_HISTORY 1
 #endif
 
+/** 1: the EMCY inhibit time 0x1015 is compiled in. 0: EMCYs go out as they come (none of the three devices has
+ *  0x1015); co_node_init() refuses a dictionary that has 0x1015 (CO_ERR_RANGE), whose value would change nothing.
+ *  A generated <c_name>_od_config.h turns it off for a dictionary without it. */
+#ifndef CO_CONFIG_EMCY_INHIBIT
+#define CO_CONFIG_EMCY_INHIBIT 1
+#endif
+
 #endif /* CO_CONFIG_H */

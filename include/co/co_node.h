@@ -231,8 +231,10 @@ typedef struct co_emcy {
     uint8_t n_active;
     uint8_t q_head;
     uint8_t q_count;
+#if CO_CONFIG_EMCY_INHIBIT
     uint16_t inhibit_100us;     /**< 0x1015, kept here by the write path. */
     co_time_us_t next_allowed;  /**< Inhibit time 0x1015: earliest time of the next EMCY. */
+#endif
     uint32_t lost;              /**< EMCY frames dropped because the queue was full. */
     uint32_t cob_id;            /**< 0x1014 (or 0x80 + node-ID without it), kept here by the write path. */
     co_emcy_error_t active[CO_EMCY_ACTIVE_MAX];

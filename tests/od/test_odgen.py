@@ -206,13 +206,14 @@ def fitted(tmp_path, eds_text, profile_text=BASE_PROFILE):
 @pytest.mark.parametrize("device, off, caps", [
     ("pro-ionizer", {"CO_CONFIG_SYNC", "CO_CONFIG_NODE_GUARDING", "CO_CONFIG_HB_CONSUMER", "CO_CONFIG_MPDO",
                      "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64",
-                     "CO_CONFIG_PDO_TIMERS"},
+                     "CO_CONFIG_PDO_TIMERS", "CO_CONFIG_EMCY_INHIBIT"},
      {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 3}),
     ("sds", {"CO_CONFIG_SYNC", "CO_CONFIG_NODE_GUARDING", "CO_CONFIG_HB_CONSUMER", "CO_CONFIG_MPDO",
-             "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64", "CO_CONFIG_PDO_TIMERS"},
+             "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_PDO_DYNAMIC_MAPPING", "CO_CONFIG_OD_LIMITS_64", "CO_CONFIG_PDO_TIMERS",
+             "CO_CONFIG_EMCY_INHIBIT"},
      {"CO_RPDO_MAX": 1, "CO_TPDO_MAX": 2}),
     ("buerkert-flow-controller", {"CO_CONFIG_MPDO", "CO_CONFIG_SDO_SERVERS", "CO_CONFIG_OD_LIMITS_64",
-                                  "CO_CONFIG_EMCY_HISTORY"},
+                                  "CO_CONFIG_EMCY_HISTORY", "CO_CONFIG_EMCY_INHIBIT"},
      {"CO_RPDO_MAX": 4, "CO_TPDO_MAX": 4, "CO_HB_CONSUMER_MAX": 127}),
 ])
 def test_fitted_configuration_of_the_shipped_devices(tmp_path, device, off, caps):
@@ -250,6 +251,14 @@ def test_fitted_configuration_follows_the_objects(tmp_path):
     assert "[1003" not in without
     off, _ = fitted(tmp_path, without)
     assert "CO_CONFIG_EMCY_HISTORY" in off
+    # An EMCY inhibit time keeps its code; without one (none of the shipped devices has 0x1015), it is compiled out.
+    assert "CO_CONFIG_EMCY_INHIBIT" in off
+    inhibit = ("[1015]\nParameterName=Inhibit time EMCY\nObjectType=0x7\nDataType=0x0006\nAccessType=rw\n"
+               "DefaultValue=0\nPDOMapping=0\n\n")
+    with_inhibit = replace_list(eds.replace("[1000]\n", inhibit + "[1000]\n", 1), "OptionalObjects",
+                                sorted(optional_objects(eds) + ["0x1015"], key=lambda o: int(o, 16)))
+    off, _ = fitted(tmp_path, with_inhibit)
+    assert "CO_CONFIG_EMCY_INHIBIT" not in off
 
 
 def test_16_bit_limit_pairs_where_every_limit_fits(tmp_path):
