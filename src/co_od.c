@@ -697,14 +697,14 @@ void co_od_copy_defaults(const co_od_t *od, uint32_t offset, size_t len, void *d
 void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     const co_od_t *od = node->od;
-    for (uint16_t i = lower_bound_key(od, entry_key(first, 0U)); i < od->count && od->entries[i].index <= last; i++) {
+    for (unsigned i = lower_bound_key(od, entry_key(first, 0U)); i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *row = &od->entries[i];
-        const uint8_t subs = co_od_entry_subs(row);
+        const unsigned subs = co_od_entry_subs(row);
         co_od_copy_defaults(od, row->offset, (size_t)row->size * subs, node->values + row->offset);
         if ((row->flags & CO_OD_NODEID) != 0U && node->node_id != CO_NODE_ID_UNCONFIGURED) {
-            for (uint8_t k = 0U; k < subs; k++) {
+            for (unsigned k = 0U; k < subs; k++) {
                 co_od_entry_t one;
-                const co_od_entry_t *e = co_od_entry_at(row, k, &one);
+                const co_od_entry_t *e = co_od_entry_at(row, (uint8_t)k, &one);
                 co_od_entry_set_u32(node, e, co_od_entry_u32(node, e) + node->node_id);
             }
         }
