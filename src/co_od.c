@@ -11,7 +11,7 @@
 static uint32_t entry_key(uint16_t index, uint8_t sub) { return ((uint32_t)index << 8) | sub; }
 
 /* Index of the first row with a key >= key. */
-static uint16_t lower_bound_key(const co_od_t *od, uint32_t key)
+static unsigned lower_bound_key(const co_od_t *od, uint32_t key)
 {
     const co_od_entry_t *rows = od->entries;
     unsigned lo = 0U;
@@ -24,7 +24,7 @@ static uint16_t lower_bound_key(const co_od_t *od, uint32_t key)
             hi = mid;
         }
     }
-    return (uint16_t)lo;
+    return lo;
 }
 
 /* The object table's entry of index, or NULL (od->objects != NULL). */
