@@ -537,22 +537,15 @@ uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, siz
 {
     co_od_entry_t one;
     const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
-    if (e == NULL) {
-        *len = 0U;
-        return co_od_missing(node->od, index);
-    }
-    return co_od_read_entry(node, e, buf, cap, len, origin);
-}
-
-uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, size_t cap, size_t *len,
-                          co_od_origin_t origin)
-{
     uint32_t r;
     *len = 0U;
+    if (e == NULL) {
+        return co_od_missing(node->od, index);
+    }
     if (origin != CO_ORIGIN_LOCAL && (e->flags & CO_OD_READ) == 0U) {
         return (e->flags & CO_OD_WRITE) != 0U ? CO_ABORT_WRITE_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
-    if (e->index == 0x1003U) {
+    if (index == 0x1003U) {
         r = co_emcy_check_read(node, e);
         if (r != CO_ABORT_NONE) {
             return r;
