@@ -98,7 +98,8 @@ inline const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, ui
         return NULL;
     }
     const co_od_entry_t *r = &rows[lo - 1U];
-    return (unsigned)(sub - r->sub) < co_od_entry_subs(r) ? r : NULL;
+    /* its first sub-index, or one inside its run */
+    return (sub == r->sub || (unsigned)(sub - r->sub) < r->count) ? r : NULL;
 }
 
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one)
