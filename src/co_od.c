@@ -73,10 +73,9 @@ const co_od_entry_t *co_od_entry_at(const co_od_entry_t *row, uint8_t k, co_od_e
     return one;
 }
 
-/* The row that holds (index, sub), or NULL. Declared inline (an external definition all the same: co_priv.h
- * declares it without) so that co_od_find() has it inline where the compiler optimises for speed: every SDO
- * request and RPDO passes there. */
-inline const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub)
+/* The row that holds (index, sub), or NULL: co_od_find_row() and, inline where the compiler optimises for speed (every
+ * SDO request and RPDO passes there), co_od_find(). */
+static inline const co_od_entry_t *find_row(const co_od_t *od, uint16_t index, uint8_t sub)
 {
     const co_od_entry_t *rows = od->entries;
     unsigned end;
@@ -102,9 +101,11 @@ inline const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, ui
     return (sub == r->sub || (unsigned)(sub - r->sub) < r->count) ? r : NULL;
 }
 
+const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub) { return find_row(od, index, sub); }
+
 const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one)
 {
-    const co_od_entry_t *r = co_od_find_row(od, index, sub);
+    const co_od_entry_t *r = find_row(od, index, sub);
     return (r == NULL || r->sub == sub) ? r : co_od_entry_at(r, (uint8_t)(sub - r->sub), one);
 }
 
