@@ -575,9 +575,10 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
             configure_tpdo(node, n);
         }
     } else if (n < node->n_rpdo) {
-        const uint32_t was = node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
+        const co_rpdo_t *p = &node->rpdo[n];
+        const uint32_t was = p->valid ? p->cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
         configure_rpdo(node, n);
-        if ((node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
+        if ((p->valid ? p->cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
             co_node_routes_update(node); /* the frames it takes changed */
         }
     }
