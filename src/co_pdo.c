@@ -365,8 +365,8 @@ co_time_us_t co_pdo_process(co_node_t *node)
     }
 #endif
     const bool cos = node->cos_pending;
-    for (unsigned n = 0U; n < node->n_tpdo; n++) {
-        co_tpdo_t *p = &node->tpdo[n];
+    co_tpdo_t *const end = node->tpdo + node->n_tpdo;
+    for (co_tpdo_t *p = node->tpdo; p < end; p++) {
 #if CO_CONFIG_PDO_TIMERS
         co_time_retire(node->now, &p->next_allowed);
 #endif
