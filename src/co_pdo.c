@@ -435,8 +435,8 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
     }
     /* Entering or leaving Operational: timers and SYNC counts restart; on entering, every event-driven
      * TPDO is sent once at once (its first "change"), as CANopenNode does. */
-    for (unsigned n = 0U; n < node->n_tpdo; n++) {
-        co_tpdo_t *p = &node->tpdo[n];
+    co_tpdo_t *const end = node->tpdo + node->n_tpdo;
+    for (co_tpdo_t *p = node->tpdo; p < end; p++) {
         p->sent_once = false;
         p->event = false;
 #if CO_CONFIG_PDO_TIMERS
