@@ -25,8 +25,8 @@ static const uint8_t rpdo_msef[5] = {0x04U, 0U, 0U, 0U, 0U};
 static uint32_t highest_pdo(const co_od_t *od, uint16_t base, unsigned timer_subs)
 {
     uint32_t n = 0U;
-    for (unsigned i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U; i++) {
-        const co_od_entry_t *e = &od->entries[i];
+    const co_od_entry_t *const end = od->entries + od->count;
+    for (const co_od_entry_t *e = od->entries + co_od_first_row(od, base); e < end && e->index < base + 0x200U; e++) {
         const unsigned subs = e->count > 7U ? 0xFFU : ((1U << e->count) - 1U) | 1U; /* sub, sub + 1, ... (count 0: 1) */
         if (e->sub < 8U && ((timer_subs >> e->sub) & subs) != 0U) {
             return PDO_REFUSED;
