@@ -11,7 +11,7 @@
 static uint32_t entry_key(uint16_t index, uint8_t sub) { return ((uint32_t)index << 8) | sub; }
 
 /* Index of the first row with a key >= key. */
-static uint16_t lower_bound_key(const co_od_t *od, uint32_t key)
+static unsigned lower_bound_key(const co_od_t *od, uint32_t key)
 {
     const co_od_entry_t *rows = od->entries;
     unsigned lo = 0U;
@@ -24,7 +24,7 @@ static uint16_t lower_bound_key(const co_od_t *od, uint32_t key)
             hi = mid;
         }
     }
-    return (uint16_t)lo;
+    return lo;
 }
 
 /* The object table's entry of index, or NULL (od->objects != NULL). */
@@ -97,7 +97,8 @@ static inline const co_od_entry_t *find_row(const co_od_t *od, uint16_t index, u
         return NULL;
     }
     const co_od_entry_t *r = &rows[lo - 1U];
-    return (unsigned)(sub - r->sub) < co_od_entry_subs(r) ? r : NULL;
+    /* its first sub-index, or one inside its run */
+    return (sub == r->sub || (unsigned)(sub - r->sub) < r->count) ? r : NULL;
 }
 
 const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub) { return find_row(od, index, sub); }
@@ -534,29 +535,21 @@ static void comm_written(co_node_t *node, const co_od_entry_t *e)
     }
 }
 
-
 uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, size_t cap, size_t *len,
                     co_od_origin_t origin)
 {
     co_od_entry_t one;
     const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
-    if (e == NULL) {
-        *len = 0U;
-        return co_od_missing(node->od, index);
-    }
-    return co_od_read_entry(node, e, buf, cap, len, origin);
-}
-
-uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, size_t cap, size_t *len,
-                          co_od_origin_t origin)
-{
     uint32_t r;
     *len = 0U;
+    if (e == NULL) {
+        return co_od_missing(node->od, index);
+    }
     if (origin != CO_ORIGIN_LOCAL && (e->flags & CO_OD_READ) == 0U) {
         return (e->flags & CO_OD_WRITE) != 0U ? CO_ABORT_WRITE_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
 #if CO_CONFIG_EMCY_HISTORY
-    if (e->index == 0x1003U) {
+    if (index == 0x1003U) {
         r = co_emcy_check_read(node, e);
         if (r != CO_ABORT_NONE) {
             return r;
@@ -701,14 +694,14 @@ void co_od_copy_defaults(const co_od_t *od, uint32_t offset, size_t len, void *d
 void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last)
 {
     const co_od_t *od = node->od;
-    for (uint16_t i = lower_bound_key(od, entry_key(first, 0U)); i < od->count && od->entries[i].index <= last; i++) {
+    for (unsigned i = lower_bound_key(od, entry_key(first, 0U)); i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *row = &od->entries[i];
-        const uint8_t subs = co_od_entry_subs(row);
+        const unsigned subs = co_od_entry_subs(row);
         co_od_copy_defaults(od, row->offset, (size_t)row->size * subs, node->values + row->offset);
         if ((row->flags & CO_OD_NODEID) != 0U && node->node_id != CO_NODE_ID_UNCONFIGURED) {
-            for (uint8_t k = 0U; k < subs; k++) {
+            for (unsigned k = 0U; k < subs; k++) {
                 co_od_entry_t one;
-                const co_od_entry_t *e = co_od_entry_at(row, k, &one);
+                const co_od_entry_t *e = co_od_entry_at(row, (uint8_t)k, &one);
                 co_od_entry_set_u32(node, e, co_od_entry_u32(node, e) + node->node_id);
             }
         }

@@ -25,8 +25,8 @@ static const uint8_t rpdo_msef[5] = {0x04U, 0U, 0U, 0U, 0U};
 static uint32_t highest_pdo(const co_od_t *od, uint16_t base, unsigned timer_subs)
 {
     uint32_t n = 0U;
-    for (unsigned i = co_od_first_row(od, base); i < od->count && od->entries[i].index < base + 0x200U; i++) {
-        const co_od_entry_t *e = &od->entries[i];
+    const co_od_entry_t *const end = od->entries + od->count;
+    for (const co_od_entry_t *e = od->entries + co_od_first_row(od, base); e < end && e->index < base + 0x200U; e++) {
         const unsigned subs = e->count > 7U ? 0xFFU : ((1U << e->count) - 1U) | 1U; /* sub, sub + 1, ... (count 0: 1) */
         if (e->sub < 8U && ((timer_subs >> e->sub) & subs) != 0U) {
             return PDO_REFUSED;
@@ -365,8 +365,8 @@ co_time_us_t co_pdo_process(co_node_t *node)
     }
 #endif
     const bool cos = node->cos_pending;
-    for (unsigned n = 0U; n < node->n_tpdo; n++) {
-        co_tpdo_t *p = &node->tpdo[n];
+    co_tpdo_t *const end = node->tpdo + node->n_tpdo;
+    for (co_tpdo_t *p = node->tpdo; p < end; p++) {
 #if CO_CONFIG_PDO_TIMERS
         co_time_retire(node->now, &p->next_allowed);
 #endif
@@ -435,8 +435,8 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
     }
     /* Entering or leaving Operational: timers and SYNC counts restart; on entering, every event-driven
      * TPDO is sent once at once (its first "change"), as CANopenNode does. */
-    for (unsigned n = 0U; n < node->n_tpdo; n++) {
-        co_tpdo_t *p = &node->tpdo[n];
+    co_tpdo_t *const end = node->tpdo + node->n_tpdo;
+    for (co_tpdo_t *p = node->tpdo; p < end; p++) {
         p->sent_once = false;
         p->event = false;
 #if CO_CONFIG_PDO_TIMERS
@@ -575,9 +575,10 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
             configure_tpdo(node, n);
         }
     } else if (n < node->n_rpdo) {
-        const uint32_t was = node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
+        const co_rpdo_t *p = &node->rpdo[n];
+        const uint32_t was = p->valid ? p->cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
         configure_rpdo(node, n);
-        if ((node->rpdo[n].valid ? node->rpdo[n].cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
+        if ((p->valid ? p->cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
             co_node_routes_update(node); /* the frames it takes changed */
         }
     }

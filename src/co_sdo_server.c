@@ -15,8 +15,7 @@ enum { SDO_IDLE = CO_SDO_IDLE, SDO_SEG_DOWNLOAD = CO_SDO_SEG_DOWNLOAD, SDO_SEG_U
 
 void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len)
 {
-    co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
-    f.data[0] = cmd;
+    co_frame_t f = {s->tx_id, 8U, 0U, {cmd, 0U, 0U, 0U, 0U, 0U, 0U, 0U}};
     if (data != NULL) {
         memcpy(&f.data[1], data, len);
     }
@@ -25,10 +24,8 @@ void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const u
 
 void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len)
 {
-    co_frame_t f = {s->tx_id, 8U, 0U, {0U}};
-    f.data[0] = cmd;
-    co_put_u16(&f.data[1], s->index);
-    f.data[3] = s->sub;
+    /* the command, then the multiplexer: the index (little-endian) and the sub-index */
+    co_frame_t f = {s->tx_id, 8U, 0U, {cmd, (uint8_t)s->index, (uint8_t)(s->index >> 8), s->sub, 0U, 0U, 0U, 0U}};
     if (data != NULL) {
         memcpy(&f.data[4], data, len);
     }

@@ -155,9 +155,7 @@ bool co_od_exists(const co_od_t *od, uint16_t index, uint8_t sub);
 uint16_t co_od_first_row(const co_od_t *od, uint16_t index);
 /* The abort code of a row co_od_find did not find: 0x06020000 no such object, 0x06090011 no such sub-index. */
 uint32_t co_od_missing(const co_od_t *od, uint16_t index);
-/* co_od_read/co_od_write of a row already found (no second look-up). */
-uint32_t co_od_read_entry(co_node_t *node, const co_od_entry_t *e, void *buf, size_t cap, size_t *len,
-                          co_od_origin_t origin);
+/* co_od_write of a row already found (no second look-up). */
 uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *data, size_t len,
                            co_od_origin_t origin);
 /* Writes an entry's value from a buffer; len may be shorter for strings (rest zeroed). No checks. */
