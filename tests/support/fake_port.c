@@ -121,3 +121,15 @@ void fake_port_init(fake_port_t *fp, const co_time_us_t *clock)
 }
 
 void fake_port_clear(fake_port_t *fp) { fp->n_sent = 0U; }
+
+co_node_cfg_t fake_port_node_cfg(fake_port_t *fp, const co_od_t *od, void *values, uint8_t node_id)
+{
+    co_node_cfg_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.od = od;
+    cfg.values = values;
+    cfg.port = &fp->port;
+    cfg.port_ctx = fp;
+    cfg.node_id = node_id;
+    return cfg;
+}

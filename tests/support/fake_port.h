@@ -51,5 +51,8 @@ typedef struct fake_port {
 void fake_port_init(fake_port_t *fp, const co_time_us_t *clock);
 /* Forgets the recorded frames (keeps NVM). */
 void fake_port_clear(fake_port_t *fp);
+/* A node's configuration on this port: dictionary od with its values block, node-ID node_id, no hooks, no options
+ * (what a test with a dictionary of its own starts from). */
+co_node_cfg_t fake_port_node_cfg(fake_port_t *fp, const co_od_t *od, void *values, uint8_t node_id);
 
 #endif

@@ -3,7 +3,6 @@
  * still set 0x1001 and go out as EMCY, at once one after the other, and nothing keeps a history; a dictionary that has
  * 0x1003 or 0x1015 is refused by co_node_init (a history that never fills, an inhibit time that changes nothing). */
 #include <stddef.h>
-#include <string.h>
 
 #include "fake_port.h"
 #include "unity.h"
@@ -55,17 +54,7 @@ static fake_port_t port;
 static co_node_t node;
 static plain_values_t values;
 
-static co_node_cfg_t config(const co_od_t *od, void *vals)
-{
-    co_node_cfg_t cfg;
-    memset(&cfg, 0, sizeof cfg);
-    cfg.od = od;
-    cfg.values = vals;
-    cfg.port = &port.port;
-    cfg.port_ctx = &port;
-    cfg.node_id = 5U;
-    return cfg;
-}
+static co_node_cfg_t config(const co_od_t *od, void *vals) { return fake_port_node_cfg(&port, od, vals, 5U); }
 
 void setUp(void)
 {

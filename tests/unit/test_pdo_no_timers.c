@@ -2,7 +2,6 @@
  * a dictionary without PDO timers): event-driven TPDOs go at each change at once, RPDOs apply, nothing waits for a
  * timer; a dictionary that has timer sub-indices is refused by co_node_init (their values would change nothing). */
 #include <stddef.h>
-#include <string.h>
 
 #include "fake_port.h"
 #include "test_od.h"
@@ -71,17 +70,7 @@ static fake_port_t port;
 static co_node_t node;
 static lean_values_t values;
 
-static co_node_cfg_t config(const co_od_t *od, void *vals)
-{
-    co_node_cfg_t cfg;
-    memset(&cfg, 0, sizeof cfg);
-    cfg.od = od;
-    cfg.values = vals;
-    cfg.port = &port.port;
-    cfg.port_ctx = &port;
-    cfg.node_id = 5U;
-    return cfg;
-}
+static co_node_cfg_t config(const co_od_t *od, void *vals) { return fake_port_node_cfg(&port, od, vals, 5U); }
 
 void setUp(void)
 {
