@@ -14,13 +14,20 @@ function stamp(us) {
 }
 
 /**
- * One frame as candump -l writes it: the COB-ID in 3 hex digits (8 for a 29-bit one, whatever its value: the
- * digits are how can-utils tell the formats apart), the data in upper-case hex; a remote request `123#R`, with its
- * length after the R when it is not 0 (`123#R2`), as can-utils does.
+ * A COB-ID as candump writes it: 3 upper-case hex digits, 8 for a 29-bit one whatever its value (the digits are how
+ * can-utils tell the formats apart). eff: an extended frame.
+ */
+export function cobId(id, eff) {
+  return id.toString(16).toUpperCase().padStart(eff || id > 0x7FF ? 8 : 3, "0");
+}
+
+/**
+ * One frame as candump -l writes it: its COB-ID (cobId), the data in upper-case hex; a remote request `123#R`, with
+ * its length after the R when it is not 0 (`123#R2`), as can-utils does.
  * frame: {id, data (hex, as frame events give it), rtr, eff}.
  */
 export function line(us, iface, frame) {
-  const id = frame.id.toString(16).toUpperCase().padStart(frame.eff || frame.id > 0x7FF ? 8 : 3, "0");
+  const id = cobId(frame.id, frame.eff);
   const bytes = frame.data.length / 2;
   const payload = frame.rtr ? `R${bytes > 0 ? bytes : ""}` : frame.data.toUpperCase();
   return `${stamp(us)} ${iface} ${id}#${payload}`;

@@ -380,8 +380,9 @@ function lssSlave(bytes) {
 
 /**
  * What `frame` says: {kind (KINDS), node (the node-ID it concerns; null: none or all), text}.
- * frame: {id, data (hex, as frame events give it), rtr, eff (a 29-bit frame), dir ("tx": a node sent it; "rx": it came from the bus), node
- * (the sender, for tx), guarded (a node guarding request of this COB-ID came before: the answer's toggle)}.
+ * frame: {id, data (hex, as frame events give it), rtr, eff (a 29-bit frame), dir ("tx": a node sent it; "rx": it
+ * came from the bus), node (the sender, for tx), guarded (a node guarding request of this COB-ID came before: the
+ * answer's toggle)}.
  * pdo(frame, bytes): the PDO the frame is by the mapping read from its node, {name: "TPDO1", node, text: the values}
  * (web/pdomap.js), or null when it is not known (yet): the PDO is then named by the predefined connection set only.
  */

@@ -1,6 +1,7 @@
 // The trace's model: the frames received, each decoded once as it comes (web/decode.js), in a bounded ring; the
 // filter; the texts of a row. No DOM: tested with node --test (tests/web/js).
 
+import {cobId} from "./candump.js";
 import {KINDS, decode} from "./decode.js";
 import {Ring} from "./ring.js";
 
@@ -12,11 +13,6 @@ export const COLUMNS = [
   ["time", "time"], ["bus", "bus"], ["dir", "dir"], ["id", "COB-ID"], ["node", "node"], ["kind", "kind"],
   ["text", "decoded"], ["data", "data"],
 ].map(([field, title]) => ({field, title}));
-
-/** The COB-ID as candump writes it: 8 digits for an extended frame, whatever its value. */
-function hexId(id, eff) {
-  return id.toString(16).toUpperCase().padStart(eff || id > 0x7FF ? 8 : 3, "0");
-}
 
 /** "12.345": seconds.milliseconds of the emulator's clock (since it started). */
 export function sinceStart(timeUs) {
@@ -58,7 +54,7 @@ export function parseFilter({text = "", kind = "", node = ""} = {}) {
 }
 
 function searchText(entry) {
-  entry.search ??= `${hexId(entry.id, entry.eff)}#${entry.data} ${entry.kind} ${entry.text}`.toLowerCase();
+  entry.search ??= `${cobId(entry.id, entry.eff)}#${entry.data} ${entry.kind} ${entry.text}`.toLowerCase();
   return entry.search;
 }
 
@@ -149,7 +145,7 @@ export function cells(entry, {wall = false, clock = null} = {}) {
     time: wall && clock !== null ? wallClock(clock.unix_us + entry.time_us - clock.time_us) : sinceStart(entry.time_us),
     bus: entry.bus,
     dir: entry.dir,
-    id: hexId(entry.id, entry.eff),
+    id: cobId(entry.id, entry.eff),
     node: entry.about === null ? "" : String(entry.about),
     kind: entry.kind,
     text: entry.text,
