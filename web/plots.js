@@ -181,23 +181,28 @@ class PlotsView {
     this.#objectSelect.disabled = false;
   }
 
-  /** The list of series, each with its remove button. */
+  /** The list of series, each with its remove button. The item of a series still plotted is kept, not made anew:
+   * a click begun on one while another series is removed (the list redrawn between press and release) still lands. */
   #makeList() {
-    this.#list.replaceChildren(...this.#plotting.series.map((s) => {
-      const remove = element("button", {type: "button", className: "remove", textContent: "×",
-        title: "stop plotting this"});
-      remove.setAttribute("aria-label", `stop plotting ${s.object} of node ${nodeRef(s.key)}`);
-      remove.addEventListener("click", () => {
-        this.#plotting.remove(s.key, s.object);
-        this.#error = null;
-        this.#page.redraw();
-      });
-      const li = element("li", {}, element("span", {textContent:
-        `${nodeRef(s.key)} ${s.label}${s.unit ? ` [${s.unit}]` : ""}`}), remove);
-      li.dataset.node = s.key;
-      li.dataset.object = s.object;
-      return li;
-    }));
+    const kept = new Map([...this.#list.children].map((li) => [`${li.dataset.node} ${li.dataset.object}`, li]));
+    this.#list.replaceChildren(...this.#plotting.series.map((s) => kept.get(`${s.key} ${s.object}`) ??
+      this.#listItem(s)));
+  }
+
+  #listItem(s) {
+    const remove = element("button", {type: "button", className: "remove", textContent: "×",
+      title: "stop plotting this"});
+    remove.setAttribute("aria-label", `stop plotting ${s.object} of node ${nodeRef(s.key)}`);
+    remove.addEventListener("click", () => {
+      this.#plotting.remove(s.key, s.object);
+      this.#error = null;
+      this.#page.redraw();
+    });
+    const li = element("li", {}, element("span", {textContent:
+      `${nodeRef(s.key)} ${s.label}${s.unit ? ` [${s.unit}]` : ""}`}), remove);
+    li.dataset.node = s.key;
+    li.dataset.object = s.object;
+    return li;
   }
 
   /** The charts as the series group them: one that still fits is kept (with its zoom and cursor), others made. */

@@ -179,11 +179,15 @@ def test_the_picker_adds_any_numeric_object_and_remove_takes_it_away(page, start
     show_plots(driver)
     assert legends(plots(driver))["node 17@fakecan0 · V"] == ["0x6401:01 Read Effective High Voltage"]
     assert len(plots(driver)["series"]) == 15
-    # Removed: node 17's chart goes, and one of node 16's series.
+    # Removed: node 17's chart goes, and one of node 16's series. The second button is found before the first
+    # removal is drawn: the list keeps the items of the series that stay, so it is still there to be clicked.
+    second = driver.find_element("css selector",
+                                 '#view-plots .plots-series li[data-node="fakecan0/16"][data-object="0x6401:05"] button')
     driver.find_element("css selector",
                         '#view-plots .plots-series li[data-node="fakecan0/17"][data-object="0x6401:01"] button').click()
-    driver.find_element("css selector",
-                        '#view-plots .plots-series li[data-node="fakecan0/16"][data-object="0x6401:05"] button').click()
+    wait_plots(driver, "node 17's series gone from the list",
+               lambda v: not any(s.startswith("fakecan0/17 ") for s in v["series"]), 2.0)
+    second.click()
     expected = {**PRO_IONIZER_16, "node 16@fakecan0 · V": [s for s in PRO_IONIZER_16["node 16@fakecan0 · V"]
                                                            if not s.startswith("0x6401:05")]}
     view = wait_plots(driver, "two series removed", lambda v: legends(v) == expected, 2.0)
