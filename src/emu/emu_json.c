@@ -519,9 +519,9 @@ bool json_parse_frame_filter(const char *text, uint32_t *id, uint32_t *mask)
     }
     /* The frame format is part of the identity, as candump writes it and a SocketCAN filter with CAN_EFF_FLAG in
      * its mask tells it: an extended frame 0x181 is not TPDO1 of node 1, so a filter takes one format only, 29-bit
-     * frames when its COB-ID ends in x. */
+     * frames when its COB-ID ends in x. A bare "0x" is a hex prefix without digits, refused, not COB-ID 0 marked. */
     const size_t len = strlen(buf);
-    const bool eff = len > 1U && (buf[len - 1U] == 'x' || buf[len - 1U] == 'X');
+    const bool eff = len > 1U && (buf[len - 1U] == 'x' || buf[len - 1U] == 'X') && !(len == 2U && buf[0] == '0');
     if (eff) {
         buf[len - 1U] = '\0';
     }

@@ -358,7 +358,8 @@ def test_extended_frames_are_marked_and_taken_by_extended_filters_only(emulator,
     assert both.request(id=1, cmd="subscribe", events=["frame"], frames=["0x181", "0x00000181x"])["ok"]
     extended = Client(path)
     assert extended.request(id=1, cmd="subscribe", events=["frame"], frames="0x18FF0000x/0x1FFF0000")["ok"]
-    for bad in ("0x800", "0x18FF1234", "x", "0x181/0x7FFx"):  # 11 bits unless marked; x goes after the COB-ID
+    # 11 bits unless marked; x goes after the COB-ID; "0x" is a prefix without digits, not COB-ID 0 marked 29-bit
+    for bad in ("0x800", "0x18FF1234", "x", "0x181/0x7FFx", "0x", "0X/0x0"):
         answer = extended.request(id=2, cmd="subscribe", events=["frame"], frames=bad)
         assert answer["ok"] is False and "COB-IDx[/MASK]" in answer["error"], (bad, answer)
     raw = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
