@@ -209,7 +209,8 @@ uint16_t co_od_type_size(uint8_t type);
 
 /**
  * Reads an object's value through the full read path (existence, access for SDO, the device's read hook).
- * @param buf   receives at most cap bytes.
+ * @param buf   receives at most cap bytes: the value in CANopen wire format (numbers little-endian, as an SDO
+ *              carries them), whatever the CPU's byte order. co_od_get_u32() gives a number in native order.
  * @param len   receives the value's length (for VISIBLE_STRING, up to the first NUL).
  * @return      0, or the SDO abort code (e.g. CO_ABORT_WRITE_ONLY for SDO reads of write-only rows).
  */
@@ -220,6 +221,8 @@ uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, siz
  * Writes an object through the full write path: existence, access, length, limits, the protocol rules of
  * communication objects, the device's write hook, then the value, then its side effects (e.g. a new
  * heartbeat period takes effect at once). Strings may be shorter than their capacity (rest is zeroed).
+ * @param data  the value in CANopen wire format (numbers little-endian), whatever the CPU's byte order: a native
+ *              uint16_t passed here is reversed on a big-endian CPU; co_od_set_u8/u16/u32() take native numbers.
  * @return 0 when written, or the SDO abort code; nothing changes when an abort code is returned.
  */
 uint32_t co_od_write(co_node_t *node, uint16_t index, uint8_t sub, const void *data, size_t len,

@@ -177,6 +177,23 @@ static uint8_t sdo_read(uint16_t index, uint8_t sub, uint8_t out[4])
     return (uint8_t)(4U - ((r->data[0] >> 2) & 3U));
 }
 
+/* The n wire bytes (little-endian, as co_od_write takes them) of the low n bytes of v, on any host byte order. */
+static const uint8_t *wire(uint64_t v, size_t n, uint8_t out[8])
+{
+    for (size_t i = 0U; i < n; i++) {
+        out[i] = (uint8_t)(v >> (8U * i));
+    }
+    return out;
+}
+
+/* The bits of a float, as an integer: wire() then gives its wire bytes. */
+static uint32_t float_bits(float f)
+{
+    uint32_t bits;
+    memcpy(&bits, &f, sizeof bits);
+    return bits;
+}
+
 static void integer24_keeps_its_three_bytes_and_limits(void)
 {
     uint8_t out[4];
@@ -192,20 +209,16 @@ static void integer24_keeps_its_three_bytes_and_limits(void)
 
 static void real_and_unsigned64_limits_are_checked(void)
 {
-    const float ok = 10.0f, high = 10.5f, low = -0.5f;
-    uint8_t b[4];
-    memcpy(b, &ok, 4U);
-    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2003, 0, b, 4U));
-    memcpy(b, &high, 4U);
-    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, sdo_write(0x2003, 0, b, 4U));
-    memcpy(b, &low, 4U);
-    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, sdo_write(0x2003, 0, b, 4U));
+    uint8_t b[8];
+    TEST_ASSERT_EQUAL_HEX32(0U, sdo_write(0x2003, 0, wire(float_bits(10.0f), 4U, b), 4U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, sdo_write(0x2003, 0, wire(float_bits(10.5f), 4U, b), 4U));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_LOW, sdo_write(0x2003, 0, wire(float_bits(-0.5f), 4U, b), 4U));
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_INVALID_VALUE, sdo_write(0x2003, 0, (uint8_t[]){0x00, 0x00, 0xC0, 0x7F}, 4U)); /* NaN */
     TEST_ASSERT_TRUE(values.r32 == 10.0f);
     /* REAL64 and UNSIGNED64 through the local API (8 bytes do not fit an expedited transfer) */
     const uint64_t d_ok = 0x3FF8000000000000ULL, d_high = 0x3FF8000000000001ULL; /* 1.5, the next double */
-    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&node, 0x2004, 0, &d_ok, 8U, CO_ORIGIN_SDO));
-    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_write(&node, 0x2004, 0, &d_high, 8U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&node, 0x2004, 0, wire(d_ok, 8U, b), 8U, CO_ORIGIN_SDO));
+    TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_write(&node, 0x2004, 0, wire(d_high, 8U, b), 8U, CO_ORIGIN_SDO));
     const uint8_t top[8] = {0, 0, 0, 0, 0, 0, 0, 0x80}, over[8] = {1, 0, 0, 0, 0, 0, 0, 0x80}, under[8] = {0x0F};
     TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&node, 0x2005, 0, top, 8U, CO_ORIGIN_SDO));
     TEST_ASSERT_EQUAL_HEX32(CO_ABORT_VALUE_HIGH, co_od_write(&node, 0x2005, 0, over, 8U, CO_ORIGIN_SDO));
@@ -242,7 +255,8 @@ static void real_limits_agree_with_a_floating_point_comparison(void)
         float f;
         memcpy(&f, &bits, sizeof f);
         const uint32_t expected = real_limits_reference((double)f, &limits[LIM_R32_NARROW]);
-        const uint32_t got = co_od_write(&node, 0x2008, 0, &bits, 4U, CO_ORIGIN_SDO);
+        uint8_t b[8];
+        const uint32_t got = co_od_write(&node, 0x2008, 0, wire(bits, 4U, b), 4U, CO_ORIGIN_SDO);
         if (got != expected) {
             char what[64];
             snprintf(what, sizeof what, "REAL32 bits 0x%08lX", (unsigned long)bits);
@@ -262,7 +276,8 @@ static void real_limits_agree_with_a_floating_point_comparison(void)
         double d;
         memcpy(&d, &bits, sizeof d);
         const uint32_t expected = real_limits_reference(d, &limits[LIM_R64]);
-        const uint32_t got = co_od_write(&node, 0x2004, 0, &bits, 8U, CO_ORIGIN_SDO);
+        uint8_t b[8];
+        const uint32_t got = co_od_write(&node, 0x2004, 0, wire(bits, 8U, b), 8U, CO_ORIGIN_SDO);
         if (got != expected) {
             char what[64];
             snprintf(what, sizeof what, "REAL64 bits 0x%016llX", (unsigned long long)bits);

@@ -523,8 +523,8 @@ static void node_id_relative_row_changed_is_stored_as_value(void)
 static void save_while_unconfigured_keeps_relative_rows_relative(void)
 {
     fx_start(0xFFU, 0U);
-    const uint16_t hb = 300U;
-    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x1017, 0, &hb, 2U, CO_ORIGIN_LOCAL));
+    const uint8_t hb[2] = {0x2C, 0x01}; /* 300 ms, in wire bytes as co_od_write takes them */
+    TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x1017, 0, hb, 2U, CO_ORIGIN_LOCAL));
     const uint8_t sig[4] = {'s', 'a', 'v', 'e'};
     TEST_ASSERT_EQUAL_HEX32(0U, co_od_write(&fx.node, 0x1010, 1, sig, 4U, CO_ORIGIN_SDO));
     TEST_ASSERT_NULL(find_record(0x1800, 1));
