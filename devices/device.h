@@ -138,12 +138,15 @@ co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, 
  *  and boots. */
 co_status_t device_power_cycle(device_t *dev, co_time_us_t now);
 
-/** Feeds a received frame to the node. Returns co_node_rx's answer: true when the frame concerned this node
- *  (call device_process before sleeping), false when it was ignored (the node's deadline is unchanged). */
+/** Feeds a received frame to the node. Returns true when the frame left work for device_process (co_node_rx's
+ *  answer, or the model touched by one of its hooks: an SDO write of one of its objects), false when it was ignored
+ *  or handled whole (the node's deadline is unchanged). */
 static inline bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now)
 {
     dev->now = now; /* inline: every received frame comes this way */
-    return co_node_rx(&dev->node, frame, now);
+    const bool touched = dev->touched;
+    const bool pending = co_node_rx(&dev->node, frame, now);
+    return pending || (dev->touched && !touched);
 }
 
 /** Runs the model (when due or touched) and the core; returns the earliest deadline of both. Inline, as device_rx:

@@ -440,8 +440,7 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
 #else
         co_sdo_server_t *s = &node->sdo;
 #endif
-        co_sdo_rx(node, s, frame);
-        break;
+        return co_sdo_rx(node, s, frame); /* false: answered whole, nothing left for the pass */
     }
     default:
         co_rpdo_rx(node, n, frame);

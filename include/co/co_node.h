@@ -453,9 +453,11 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
  * Feeds one received frame (with its arrival time). Frames for other nodes/services are ignored: most in a few
  * instructions (a hash of the COB-IDs the node takes), the others after a search of its table (O(log COB-IDs)).
  * @return true when the frame concerned this node (NMT, LSS, its SDO/RPDO/SYNC/guarding COB-IDs, a consumed
- *         heartbeat): call co_node_process() before sleeping, as the frame may have changed the next deadline
- *         or queued an answer. false: the frame was ignored and the last deadline still holds, so a runner
- *         with many nodes on one bus may skip processing this node (calling it anyway is always correct).
+ *         heartbeat) and left work for the pass: call co_node_process() before sleeping, as the frame may have
+ *         changed the next deadline or queued an answer. false: the frame was ignored, or handled whole (an
+ *         expedited SDO request answered at once, no deadline moved forward), and the deadline co_node_process()
+ *         last returned still holds, so a runner with many nodes on one bus may skip processing this node
+ *         (calling it anyway is always correct).
  */
 bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
 
