@@ -123,6 +123,7 @@ struct device {
     uint8_t variant;               /**< Index into cls->variants. */
     co_time_us_t now;              /**< Time of the call in progress. */
     co_time_us_t step_due;         /**< What cls->step returned last. */
+    co_time_us_t core_due;         /**< What co_node_process returned last (device_rx asks co_node_settled). */
     bool touched;                  /**< Something that may change the model ran since (see step): step at the next
                                         process. */
 };
@@ -138,15 +139,22 @@ co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, 
  *  and boots. */
 co_status_t device_power_cycle(device_t *dev, co_time_us_t now);
 
-/** Feeds a received frame to the node. Returns true when the frame left work for device_process (co_node_rx's
- *  answer, or the model touched by one of its hooks: an SDO write of one of its objects), false when it was ignored
- *  or handled whole (the node's deadline is unchanged). */
+/** Feeds a received frame to the node. Returns co_node_rx's answer: true when the frame concerned this node
+ *  (call device_process before sleeping, unless device_settled says the frame left nothing for it), false when it
+ *  was ignored (the node's deadline is unchanged). */
 static inline bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_t now)
 {
     dev->now = now; /* inline: every received frame comes this way */
-    const bool touched = dev->touched;
-    const bool pending = co_node_rx(&dev->node, frame, now);
-    return pending || (dev->touched && !touched);
+    return co_node_rx(&dev->node, frame, now);
+}
+
+/** After a frame device_rx took: true when it left nothing for device_process, which would return what it last
+ *  returned: the core settled on its last deadline (co_node_settled: an expedited SDO request answered at once) and
+ *  the model not touched since before the frame (touched_before: dev->touched then; an SDO write of one of its
+ *  objects touches it). A runner of many nodes may then skip the node's pass. */
+static inline bool device_settled(const device_t *dev, bool touched_before)
+{
+    return (touched_before || !dev->touched) && co_node_settled(&dev->node, dev->core_due);
 }
 
 /** Runs the model (when due or touched) and the core; returns the earliest deadline of both. Inline, as device_rx:
@@ -164,6 +172,7 @@ static inline co_time_us_t device_process(device_t *dev, co_time_us_t now)
         next = dev->step_due;
     }
     const co_time_us_t core = co_node_process(&dev->node, now);
+    dev->core_due = core;
     return core < next ? core : next;
 }
 

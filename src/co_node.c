@@ -440,7 +440,8 @@ bool co_node_take(co_node_t *node, const co_frame_t *frame)
 #else
         co_sdo_server_t *s = &node->sdo;
 #endif
-        return co_sdo_rx(node, s, frame); /* false: answered whole, nothing left for the pass */
+        co_sdo_rx(node, s, frame);
+        break;
     }
     default:
         co_rpdo_rx(node, n, frame);
@@ -477,6 +478,12 @@ co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
         return node->next_due; /* nothing happened since the last pass and nothing is due */
     }
     return co_node_pass(node, now);
+}
+
+bool co_node_settled(const co_node_t *node, co_time_us_t deadline)
+{
+    /* co_node_process's early return, for the deadline it gave: only co_node_due() lowers next_due between passes. */
+    return node->wake == 0U && node->txq.count == 0U && node->next_due == deadline;
 }
 
 /* Not static, so that the compiler keeps it out of co_node_process: the early return above then saves no

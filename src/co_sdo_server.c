@@ -269,20 +269,19 @@ static void serve(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
     co_sdo_abort(node, s, CO_ABORT_COMMAND); /* block transfer switched off, unknown commands */
 }
 
-bool co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
+void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 {
-    const co_time_us_t due = node->next_due;
-    /* Not an SDO frame (DLC other than 8) and any request in Stopped (SDO is silent there): ignored. */
-    if (f->len == 8U && (node->nmt_state == CO_NMT_PRE_OPERATIONAL || node->nmt_state == CO_NMT_OPERATIONAL)) {
-        serve(node, s, f);
-        if (SDO_TRANSFERS && s->state != SDO_IDLE) {
-            s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US); /* the client's last frame starts the timeout */
-            co_node_wake(node, CO_SVC_SDO); /* the pass takes the deadline, and sends the segments of a block */
-        }
+    if (f->len != 8U) {
+        return; /* not an SDO frame: ignored */
     }
-    /* An expedited request is answered here: unless it began a transfer, queued its answer or moved a deadline
-     * forward (a write of 0x1017, of a mapped object), the pass would find nothing to do (co_node_rx's contract). */
-    return node->wake != 0U || node->txq.count != 0U || node->next_due != due;
+    if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
+        return; /* SDO is silent in Stopped */
+    }
+    serve(node, s, f);
+    if (SDO_TRANSFERS && s->state != SDO_IDLE) {
+        s->deadline = co_time_after(node->now, CO_SDO_TIMEOUT_US); /* the client's last frame starts the timeout */
+        co_node_wake(node, CO_SVC_SDO); /* the pass takes the deadline, and sends the segments of a block */
+    }
 }
 
 static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)

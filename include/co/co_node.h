@@ -453,11 +453,9 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
  * Feeds one received frame (with its arrival time). Frames for other nodes/services are ignored: most in a few
  * instructions (a hash of the COB-IDs the node takes), the others after a search of its table (O(log COB-IDs)).
  * @return true when the frame concerned this node (NMT, LSS, its SDO/RPDO/SYNC/guarding COB-IDs, a consumed
- *         heartbeat) and left work for the pass: call co_node_process() before sleeping, as the frame may have
- *         changed the next deadline or queued an answer. false: the frame was ignored, or handled whole (an
- *         expedited SDO request answered at once, no deadline moved forward), and the deadline co_node_process()
- *         last returned still holds, so a runner with many nodes on one bus may skip processing this node
- *         (calling it anyway is always correct).
+ *         heartbeat): call co_node_process() before sleeping, as the frame may have changed the next deadline
+ *         or queued an answer. false: the frame was ignored and the last deadline still holds, so a runner
+ *         with many nodes on one bus may skip processing this node (calling it anyway is always correct).
  */
 bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
 
@@ -469,6 +467,15 @@ bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
  *         service the pass had already run).
  */
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now);
+
+/**
+ * True when co_node_process() would do nothing now and return `deadline`, the deadline it last returned: no service
+ * was marked, no frame waits in the TX queue and no deadline moved forward since. For a runner of many nodes: a frame
+ * that concerned a node (co_node_rx() true) may have been handled whole inside co_node_rx(), e.g. an expedited SDO
+ * request answered at once; the runner may then skip that node's pass. Calling co_node_process() anyway is always
+ * correct; a runner that does not keep the deadline need not ask.
+ */
+bool co_node_settled(const co_node_t *node, co_time_us_t deadline);
 
 /**
  * The CAN-IDs of the frames this node takes, sorted: data frames of its services (LSS, NMT, SYNC, SDO servers,

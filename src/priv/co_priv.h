@@ -272,8 +272,7 @@ enum co_sdo_state {
 };
 co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capacity);
 void co_sdo_reset(co_node_t *node);
-/* A request: true when it left work for the pass (a transfer begun, an answer queued, a deadline moved forward). */
-bool co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
+void co_sdo_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
 co_time_us_t co_sdo_process(co_node_t *node);
 #if CO_CONFIG_SDO_SERVERS
 uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);

@@ -248,6 +248,29 @@ static void object_tables_find_what_the_rows_hold(void)
     check_object_table(&buerkert_fc_od);
 }
 
+/* device_settled, as canopen-emu asks it after each frame a node took: an SDO upload answered at once leaves nothing
+ * for device_process (it would return the same deadline and send nothing); an SDO write of one of the model's
+ * objects (0x2000 and up) touches the model, whose step must run. */
+static void a_request_answered_whole_leaves_the_device_settled_unless_it_touched_the_model(void)
+{
+    start(&buerkert_class);
+    const co_time_us_t due = device_process(&dev, now);
+    fake_port_clear(&port);
+    const co_frame_t upload = {0x610U, 8U, 0U, {0x40U, 0x18U, 0x10U, 0x01U}};
+    bool touched = dev.touched;
+    TEST_ASSERT_TRUE(device_rx(&dev, &upload, now));
+    TEST_ASSERT_TRUE(device_settled(&dev, touched));
+    TEST_ASSERT_EQUAL_UINT32(1U, port.n_sent);
+    TEST_ASSERT_EQUAL_UINT64(due, device_process(&dev, now));
+    TEST_ASSERT_EQUAL_UINT32(1U, port.n_sent);
+    const co_frame_t name = {0x610U, 8U, 0U, {0x27U, 0x02U, 0x20U, 0x01U, 'A', 'B', 'C'}}; /* 0x2002:01 = "ABC" */
+    touched = dev.touched;
+    TEST_ASSERT_TRUE(device_rx(&dev, &name, now));
+    TEST_ASSERT_EQUAL_UINT32(2U, port.n_sent);
+    TEST_ASSERT_EQUAL_HEX8(0x60U, port.sent[1].data[0]);
+    TEST_ASSERT_FALSE(device_settled(&dev, touched));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -259,5 +282,6 @@ int main(void)
     RUN_TEST(set_refuses_values_outside_the_unsigned_types_with_their_range);
     RUN_TEST(set_gives_signed_types_their_negative_half);
     RUN_TEST(a_value_that_wrapped_into_the_eltex_heartbeat_rule_is_refused);
+    RUN_TEST(a_request_answered_whole_leaves_the_device_settled_unless_it_touched_the_model);
     return UNITY_END();
 }

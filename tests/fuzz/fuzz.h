@@ -109,7 +109,9 @@ void fz_note_event(fz_t *h, const co_event_t *ev);
  * was (correctly) refused: the input ends there. h->port is ready. */
 bool fzt_init(fz_t *h, const uint8_t hdr[4]);
 void fzt_fini(fz_t *h);
-bool fzt_rx(fz_t *h, const co_frame_t *f);
+/* A frame: true when the node took it (co_node_rx / device_rx); *pending: it left work for the pass, as a runner of
+ * many nodes learns it (taken, and not co_node_settled / device_settled on the last deadline). */
+bool fzt_rx(fz_t *h, const co_frame_t *f, bool *pending);
 /* direct: the device target calls co_node_process without the model step. */
 co_time_us_t fzt_process(fz_t *h, bool direct);
 /* A control command / application call decoded from the input. Returns true when it may have changed

@@ -727,22 +727,6 @@ static co_time_us_t do_process(fz_t *h, bool direct)
     return next;
 }
 
-/* True when id is the request COB-ID of one of the node's SDO servers. */
-static bool sdo_request_id(const co_node_t *n, uint32_t id)
-{
-    if (n->sdo.rx_id == id) {
-        return true;
-    }
-#if CO_CONFIG_SDO_SERVERS
-    for (uint16_t i = 0U; i < n->n_sdo_extra; i++) {
-        if (n->sdo_extra[i].rx_id == id) {
-            return true;
-        }
-    }
-#endif
-    return false;
-}
-
 static void deliver(fz_t *h, const co_frame_t *f, bool process_after)
 {
     if (tracing()) {
@@ -760,26 +744,25 @@ static void deliver(fz_t *h, const co_frame_t *f, bool process_after)
      * runner retries those when the port has room). */
     const bool settled = h->settled && !h->dirty && h->next > h->now && h->node->txq.count == 0U;
     begin_call(h, FZ_CALL_RX, f);
-    const bool taken = fzt_rx(h, f);
+    bool pending = true;
+    const bool taken = fzt_rx(h, f, &pending);
     end_call(h, false);
     if (taken && !listed) {
         fz_fail(h, "co_node_rx took a frame on 0x%03lX, which co_node_rx_ids does not list", (unsigned long)f->id);
     }
-    /* An SDO request may be handled whole (answered at once): false then means "nothing left for the pass". */
-    if (!taken && listed && f->flags == 0U && f->len <= 8U && (f->id < 0x701U || f->id > 0x77FU) &&
-        !sdo_request_id(h->node, f->id)) {
+    if (!taken && listed && f->flags == 0U && f->len <= 8U && (f->id < 0x701U || f->id > 0x77FU)) {
         fz_fail(h, "co_node_rx ignored a data frame on 0x%03lX, which co_node_rx_ids lists", (unsigned long)f->id);
     }
-    if (!taken && settled) {
-        /* The skip oracle (co_node_rx's contract): a runner may skip the pass after false, so the pass must find
-         * nothing to do: no frame and the deadline it returned before. */
+    if (!pending && settled) {
+        /* The skip oracle: after a frame ignored, or taken and settled (co_node_settled, device_settled), a runner
+         * of many nodes skips the pass, so the pass must find nothing to do: no frame, the deadline it gave before. */
         const co_time_us_t before = h->next;
         const unsigned long sends = h->sends;
         const co_time_us_t next = do_process(h, false);
         if (h->sends != sends || next != before) {
-            fz_fail(h, "co_node_rx returned false for 0x%03lX, but the pass after it sent %lu frame(s) and returned "
-                       "%llu (before: %llu)", (unsigned long)f->id, h->sends - sends, (unsigned long long)next,
-                    (unsigned long long)before);
+            fz_fail(h, "the frame on 0x%03lX left nothing for the pass (%s), but the pass sent %lu frame(s) and "
+                       "returned %llu (before: %llu)", (unsigned long)f->id, taken ? "settled" : "ignored",
+                    h->sends - sends, (unsigned long long)next, (unsigned long long)before);
         }
         return;
     }

@@ -254,7 +254,12 @@ void fzt_fini(fz_t *h)
     g_core.values = NULL;
 }
 
-bool fzt_rx(fz_t *h, const co_frame_t *f) { return co_node_rx(g_core.node, f, h->now); }
+bool fzt_rx(fz_t *h, const co_frame_t *f, bool *pending)
+{
+    const bool taken = co_node_rx(g_core.node, f, h->now);
+    *pending = taken && !co_node_settled(g_core.node, h->next);
+    return taken;
+}
 
 co_time_us_t fzt_process(fz_t *h, bool direct)
 {

@@ -154,7 +154,13 @@ void fzt_fini(fz_t *h)
     g_dev = NULL;
 }
 
-bool fzt_rx(fz_t *h, const co_frame_t *f) { return device_rx(g_dev, f, h->now); }
+bool fzt_rx(fz_t *h, const co_frame_t *f, bool *pending)
+{
+    const bool touched = g_dev->touched;
+    const bool taken = device_rx(g_dev, f, h->now);
+    *pending = taken && !device_settled(g_dev, touched);
+    return taken;
+}
 
 co_time_us_t fzt_process(fz_t *h, bool direct)
 {

@@ -1,6 +1,5 @@
-/* Frame routing by COB-ID (co_node_rx_ids, CO_EV_RX_FILTER), co_node_rx's answer (is there work for the pass), and the
- * processing pass that runs only what changed (co_node_process's early return, co_node_values_changed,
- * co_od_changed). */
+/* Frame routing by COB-ID (co_node_rx_ids, CO_EV_RX_FILTER), and the processing pass that runs only what changed
+ * (co_node_process's early return, co_node_settled, co_node_values_changed, co_od_changed). */
 #include "fixture.h"
 
 void setUp(void) { fx_start(5U, 0U); }
@@ -40,11 +39,7 @@ static void every_other_frame_is_ignored_and_every_listed_one_taken(void)
         k = (uint16_t)(k + (listed ? 1U : 0U));
         const co_frame_t data = {id, 8U, 0U, {0U}};
         const co_frame_t remote = {id, 0U, CO_FRAME_RTR, {0U}};
-        const uint32_t sent = fx.port.n_sent;
-        /* An SDO request is answered at once (here: an abort of command 0x00) and leaves nothing for the pass: false,
-         * but taken, as its answer shows. */
-        const bool taken = co_node_rx(&fx.node, &data, fx.now) || fx.port.n_sent != sent ||
-                           co_node_rx(&fx.node, &remote, fx.now);
+        const bool taken = co_node_rx(&fx.node, &data, fx.now) || co_node_rx(&fx.node, &remote, fx.now);
         if (taken != listed) {
             TEST_FAIL_MESSAGE(listed ? "a listed COB-ID was ignored" : "a COB-ID not listed was taken");
         }
@@ -107,50 +102,66 @@ static void a_pass_with_nothing_new_returns_the_same_deadline_and_sends_nothing(
     TEST_ASSERT_EQUAL_UINT64(due, fx.port.sent_at[0]);
 }
 
-/* co_node_rx's answer: false after an expedited SDO request it answered at once (a runner of many nodes then skips
- * the pass), true when the request left something for the pass: a transfer begun, an answer queued, a deadline moved
- * forward. Each false is checked the way a runner relies on it: the pass finds nothing (no frame, the same deadline). */
-static void an_sdo_request_answered_at_once_leaves_nothing_for_the_pass(void)
+/* co_node_settled: after an expedited SDO request answered inside co_node_rx the node is settled on the deadline its
+ * pass last returned (a runner of many nodes then skips the pass); not after a request that left something for the
+ * pass: a transfer begun, an answer queued, a deadline moved forward. Each settled case is checked the way a runner
+ * relies on it: the pass finds nothing (no frame, the same deadline). */
+static void an_sdo_request_answered_at_once_leaves_the_node_settled(void)
 {
     co_time_us_t due = fx_process();
+    TEST_ASSERT_TRUE(co_node_settled(&fx.node, due));
+    TEST_ASSERT_FALSE(co_node_settled(&fx.node, due + 1U)); /* not the deadline the pass gave */
     const co_frame_t upload = {0x605U, 8U, 0U, {0x40U, 0x00U, 0x10U, 0x00U}};
     fake_port_clear(&fx.port);
-    TEST_ASSERT_FALSE(co_node_rx(&fx.node, &upload, fx.now));
+    TEST_ASSERT_TRUE(co_node_rx(&fx.node, &upload, fx.now));
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x585U)); /* answered */
+    TEST_ASSERT_TRUE(co_node_settled(&fx.node, due));
     TEST_ASSERT_EQUAL_UINT64(due, fx_process());
     TEST_ASSERT_EQUAL_UINT32(1U, fx.port.n_sent);
     /* 0x1017 = 100 ms: the heartbeat's deadline comes before the one the runner has */
     const co_frame_t hb = {0x605U, 8U, 0U, {0x2BU, 0x17U, 0x10U, 0x00U, 100U, 0x00U}};
     TEST_ASSERT_TRUE(co_node_rx(&fx.node, &hb, fx.now));
+    TEST_ASSERT_FALSE(co_node_settled(&fx.node, due));
     due = fx_process();
     TEST_ASSERT_EQUAL_UINT64(fx.now + 100000U, due);
     /* the same value again 10 ms later: the heartbeat keeps its deadline, nothing new for the pass */
     fx.now += 10000U;
     fake_port_clear(&fx.port);
-    TEST_ASSERT_FALSE(co_node_rx(&fx.node, &hb, fx.now));
+    TEST_ASSERT_TRUE(co_node_rx(&fx.node, &hb, fx.now));
+    TEST_ASSERT_TRUE(co_node_settled(&fx.node, due));
     TEST_ASSERT_EQUAL_UINT32(1U, fx_count(0x585U));
     TEST_ASSERT_EQUAL_UINT64(due, fx_process());
     TEST_ASSERT_EQUAL_UINT32(1U, fx.port.n_sent);
     /* a refused request (no such object) is answered whole too */
     const co_frame_t missing = {0x605U, 8U, 0U, {0x40U, 0x34U, 0x12U, 0x00U}};
-    TEST_ASSERT_FALSE(co_node_rx(&fx.node, &missing, fx.now));
+    TEST_ASSERT_TRUE(co_node_rx(&fx.node, &missing, fx.now));
+    TEST_ASSERT_TRUE(co_node_settled(&fx.node, due));
     TEST_ASSERT_EQUAL_HEX8(0x80U, fx.port.sent[1].data[0]);
     /* the answer queued behind a busy port: the pass sends it */
     fx.port.busy_count = 1U;
     TEST_ASSERT_TRUE(co_node_rx(&fx.node, &upload, fx.now));
+    TEST_ASSERT_FALSE(co_node_settled(&fx.node, due));
     TEST_ASSERT_EQUAL_UINT32(2U, fx.port.n_sent);
     (void)fx_process();
     TEST_ASSERT_EQUAL_UINT32(2U, fx_count(0x585U) - 1U);
+    /* an NMT command that changes the state marks every service; one that keeps it changes nothing */
+    due = fx_process();
+    const co_frame_t preop = {0x000U, 2U, 0U, {0x80U, 0x05U}}, start = {0x000U, 2U, 0U, {0x01U, 0x05U}};
+    TEST_ASSERT_TRUE(co_node_rx(&fx.node, &preop, fx.now));
+    TEST_ASSERT_TRUE(co_node_settled(&fx.node, due));
+    TEST_ASSERT_TRUE(co_node_rx(&fx.node, &start, fx.now));
+    TEST_ASSERT_FALSE(co_node_settled(&fx.node, due));
 }
 
-static void a_segmented_transfer_begun_is_left_for_the_pass(void)
+static void a_segmented_transfer_begun_leaves_work_for_the_pass(void)
 {
     fx_start(5U, CO_OPT_SDO_SEGMENTED);
-    (void)fx_process();
+    const co_time_us_t due = fx_process();
     const co_frame_t name = {0x605U, 8U, 0U, {0x40U, 0x09U, 0x10U, 0x00U}}; /* 0x1009: longer than 4 bytes */
     fake_port_clear(&fx.port);
     TEST_ASSERT_TRUE(co_node_rx(&fx.node, &name, fx.now));
     TEST_ASSERT_EQUAL_HEX8(0x41U, fx.port.sent[0].data[0]); /* segmented upload initiated */
+    TEST_ASSERT_FALSE(co_node_settled(&fx.node, due));
     TEST_ASSERT_EQUAL_UINT64(fx.now + CO_SDO_TIMEOUT_US, fx_process()); /* the transfer's timeout */
 }
 
@@ -218,8 +229,8 @@ int main(void)
     RUN_TEST(the_list_follows_the_configuration);
     RUN_TEST(a_sync_cob_id_shared_with_an_rpdo_stays_sync);
     RUN_TEST(a_pass_with_nothing_new_returns_the_same_deadline_and_sends_nothing);
-    RUN_TEST(an_sdo_request_answered_at_once_leaves_nothing_for_the_pass);
-    RUN_TEST(a_segmented_transfer_begun_is_left_for_the_pass);
+    RUN_TEST(an_sdo_request_answered_at_once_leaves_the_node_settled);
+    RUN_TEST(a_segmented_transfer_begun_leaves_work_for_the_pass);
     RUN_TEST(a_value_written_around_the_api_is_seen_only_when_told);
     RUN_TEST(a_communication_parameter_written_around_the_api_takes_effect_when_told);
     RUN_TEST(a_timer_restarted_by_a_frame_keeps_its_deadline);
