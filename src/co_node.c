@@ -480,12 +480,6 @@ co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
     return co_node_pass(node, now);
 }
 
-bool co_node_settled(const co_node_t *node, co_time_us_t deadline)
-{
-    /* co_node_process's early return, for the deadline it gave: only co_node_due() lowers next_due between passes. */
-    return node->wake == 0U && node->txq.count == 0U && node->next_due == deadline;
-}
-
 /* Not static, so that the compiler keeps it out of co_node_process: the early return above then saves no
  * registers. */
 co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)

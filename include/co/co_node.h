@@ -475,7 +475,12 @@ co_time_us_t co_node_process(co_node_t *node, co_time_us_t now);
  * request answered at once; the runner may then skip that node's pass. Calling co_node_process() anyway is always
  * correct; a runner that does not keep the deadline need not ask.
  */
-bool co_node_settled(const co_node_t *node, co_time_us_t deadline);
+static inline bool co_node_settled(const co_node_t *node, co_time_us_t deadline)
+{
+    /* co_node_process's early return, for the deadline it gave: only co_node_due() lowers next_due between passes.
+     * Inline: a runner asks it for every frame a node took. */
+    return node->wake == 0U && node->txq.count == 0U && node->next_due == deadline;
+}
 
 /**
  * The CAN-IDs of the frames this node takes, sorted: data frames of its services (LSS, NMT, SYNC, SDO servers,
