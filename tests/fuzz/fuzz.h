@@ -44,7 +44,7 @@ typedef struct fz {
     co_time_us_t next;        /* deadline returned by the last process call */
     bool dirty;               /* a frame arrived since the last process call */
     unsigned long sends;      /* calls of the port's send, all of them (the skip oracle counts them) */
-    bool settled;             /* the last call was a process call: its deadline is all a runner knows it must keep */
+    bool after_process;       /* the last call was a (device) process call: its deadline is all a runner keeps */
 
     /* Set by the target at init. */
     co_node_t *node;

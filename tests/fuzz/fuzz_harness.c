@@ -486,7 +486,7 @@ static void begin_call(fz_t *h, fz_call_t call, const co_frame_t *f)
 {
     co_node_t *n = h->node;
     h->call = call;
-    h->settled = false; /* do_process sets it after its call */
+    h->after_process = false; /* do_process sets it after its call */
     if (f != NULL) {
         h->rx = *f;
     } else {
@@ -723,7 +723,7 @@ static co_time_us_t do_process(fz_t *h, bool direct)
     }
     h->next = next;
     h->dirty = false;
-    h->settled = !direct; /* a core-only call's deadline leaves the model's out */
+    h->after_process = !direct; /* a core-only call's deadline leaves the model's out */
     return next;
 }
 
@@ -742,7 +742,7 @@ static void deliver(fz_t *h, const co_frame_t *f, bool process_after)
     }
     /* The pass of the last process call still holds: no other call since, its deadline ahead, no frame queued (a
      * runner retries those when the port has room). */
-    const bool settled = h->settled && !h->dirty && h->next > h->now && h->node->txq.count == 0U;
+    const bool settled = h->after_process && !h->dirty && h->next > h->now && h->node->txq.count == 0U;
     begin_call(h, FZ_CALL_RX, f);
     bool pending = true;
     const bool taken = fzt_rx(h, f, &pending);
