@@ -159,7 +159,32 @@ typedef struct co_od {
     /** Bytes of the defaults image; 0: all values_size. The generator puts the values whose default is 0 last and
      *  leaves them out of the image. */
     uint32_t defaults_size;
+#if !CO_CONFIG_OD_COMPACT
+    /** The objects by index, hashed (default layout only), or NULL: a look-up by index then searches the object table
+     *  (a binary search; the compact layout always does). 1 << object_slot_bits slots, at least twice n_objects, so
+     *  that some are empty; a slot holds an object's number + 1, 0 when empty. An index's object is in the first
+     *  slot from co_od_object_slot() on (the next, wrapping at the end) that is empty or holds it: what
+     *  co_od_object_slots_fill() writes, and tools/odgen.py for generated tables. */
+    const uint16_t *object_slots;
+    uint8_t object_slot_bits; /**< 1..17. */
+#endif
 } co_od_t;
+
+#if !CO_CONFIG_OD_COMPACT
+/** The first slot to look at for index in a table of 1 << bits slots (Fibonacci hashing: the top bits of a 32-bit
+ *  product, so the objects of one block of indices spread over the table). */
+static inline uint32_t co_od_object_slot(uint16_t index, uint8_t bits)
+{
+    return (uint32_t)(((uint32_t)index * 0x9E3779B1UL) & 0xFFFFFFFFUL) >> (32U - bits);
+}
+
+/** The object_slot_bits of a table for n objects: the smallest table at least twice their number (at least 2). */
+uint8_t co_od_object_slot_bits(uint16_t n_objects);
+
+/** Fills slots (1 << bits of them, bits from co_od_object_slot_bits(n_objects) or more) with the objects, for a
+ *  dictionary built at run time; false (slots unusable) when bits is out of range or too small for n_objects. */
+bool co_od_object_slots_fill(const co_od_object_t *objects, uint16_t n_objects, uint16_t *slots, uint8_t bits);
+#endif
 
 /** A row's limits, or NULL when it has none (either layout). */
 static inline const co_od_limits_t *co_od_entry_limits(const co_od_t *od, const co_od_entry_t *e)

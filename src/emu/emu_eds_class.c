@@ -21,6 +21,7 @@ typedef struct eds_class {
     eds_file_t *file;        /* owns the names */
     co_od_entry_t *rows;
     co_od_object_t *objects; /* the object table of rows (co_od_t.objects) */
+    uint16_t *object_slots;  /* the objects hashed by index (co_od_t.object_slots) */
     co_od_limits_t *limits;
     uint8_t *defaults;
     const char **names;
@@ -190,6 +191,7 @@ static void free_class(eds_class_t *c)
     }
     free(c->rows);
     free(c->objects);
+    free(c->object_slots);
     free(c->limits);
     free(c->defaults);
     free(c->names);
@@ -278,6 +280,13 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
             c->object_names[c->od.n_objects] = object != NULL ? object->name : NULL;
             c->od.n_objects++;
         }
+    }
+    /* Without room for the hash (or past 65,534 objects) look-ups search the object table: slower, as right. */
+    const uint8_t bits = co_od_object_slot_bits(c->od.n_objects);
+    c->object_slots = calloc((size_t)1U << bits, sizeof *c->object_slots);
+    if (c->object_slots != NULL && co_od_object_slots_fill(c->objects, c->od.n_objects, c->object_slots, bits)) {
+        c->od.object_slots = c->object_slots;
+        c->od.object_slot_bits = bits;
     }
     device_class_t *cls = &c->cls;
     cls->name = c->name;

@@ -205,7 +205,8 @@ static void a_value_that_wrapped_into_the_eltex_heartbeat_rule_is_refused(void)
 }
 
 /* The generated object table gives every look-up the answer the rows alone give (the search without it): the same
- * row, or for a sub-index inside a run the same narrowed copy. */
+ * row, or for a sub-index inside a run the same narrowed copy; its generated hash (default layout) the object the
+ * table's search gives. */
 static void check_object_table(const co_od_t *od)
 {
     co_od_t rows_only = *od;
@@ -218,6 +219,9 @@ static void check_object_table(const co_od_t *od)
         TEST_ASSERT_EQUAL_HEX16(o->index, od->entries[o->first].index);
         TEST_ASSERT_TRUE(o->first == 0U || od->entries[o->first - 1U].index != o->index);
     }
+#if !CO_CONFIG_OD_COMPACT
+    TEST_ASSERT_NOT_NULL(od->object_slots); /* od's look-ups below go through its hash, the rows_only's through none */
+#endif
     static const uint8_t probe_subs[] = {0U, 1U, 2U, 3U, 7U, 0x7FU, 0xFEU, 0xFFU};
     for (uint32_t index = 0U; index <= 0xFFFFU; index++) {
         const bool present = co_od_has_index(&rows_only, (uint16_t)index);

@@ -119,10 +119,14 @@ static const test_od_values_t defaults = {
 };
 
 const co_od_t test_od = {
-    "test-device", entries, (uint16_t)(sizeof entries / sizeof entries[0]), &defaults,
-    (uint32_t)sizeof(test_od_values_t), 0x7E570D01UL,
-    1U << CO_T_UNSIGNED8, /* dummy UNSIGNED8 entries in RPDOs (test_pdo) */
-    NULL, 0U,             /* no object table: look-ups search the rows (the generated tables have one) */
-    limits,
-    0U, /* the whole defaults image */
+    .name = "test-device",
+    .entries = entries,
+    .count = (uint16_t)(sizeof entries / sizeof entries[0]),
+    .defaults = &defaults,
+    .values_size = (uint32_t)sizeof(test_od_values_t),
+    .signature = 0x7E570D01UL,
+    .dummy_usage = 1U << CO_T_UNSIGNED8, /* dummy UNSIGNED8 entries in RPDOs (test_pdo) */
+    .objects = NULL, /* no object table: look-ups search the rows (the generated tables have one, and a hash) */
+    .limits = limits,
+    .defaults_size = 0U, /* the whole defaults image */
 };

@@ -529,8 +529,9 @@ static const co_od_entry_t gap_entries[] = {
     G(0x1018, 1, CO_T_UNSIGNED32, CO_OD_READ, vendor),
 };
 static const gap_values_t gap_defaults = {0x191UL, 0U, 0U, {0x11UL, 0x33UL, 0x44UL, 0x55UL}, 1U, 0x39UL};
-static const co_od_t gap_od = {"gap", gap_entries, (uint16_t)(sizeof gap_entries / sizeof gap_entries[0]),
-                               &gap_defaults, (uint32_t)sizeof(gap_values_t), 0x6A90UL, 0U, NULL, 0U, NULL, 0U};
+static const co_od_t gap_od = {.name = "gap", .entries = gap_entries,
+                               .count = (uint16_t)(sizeof gap_entries / sizeof gap_entries[0]), .defaults = &gap_defaults,
+                               .values_size = (uint32_t)sizeof(gap_values_t), .signature = 0x6A90UL};
 
 static void history_with_a_sub_index_the_table_lacks(void)
 {

@@ -45,9 +45,10 @@ static const plain_values_t plain_defaults = {
     .identity_n = 4U, .sdo_n = 2U,
 };
 
-static const co_od_t plain_od = {"plain", plain_rows, (uint16_t)(sizeof plain_rows / sizeof plain_rows[0]),
-                                 &plain_defaults, (uint32_t)sizeof(plain_values_t), 0x1EA9U, 0U, NULL, 0U,
-                                 NULL, (uint32_t)sizeof plain_defaults};
+static const co_od_t plain_od = {.name = "plain", .entries = plain_rows,
+                                 .count = (uint16_t)(sizeof plain_rows / sizeof plain_rows[0]),
+                                 .defaults = &plain_defaults, .values_size = (uint32_t)sizeof(plain_values_t),
+                                 .signature = 0x1EA9U, .defaults_size = (uint32_t)sizeof plain_defaults};
 
 static co_time_us_t now;
 static fake_port_t port;
@@ -72,8 +73,9 @@ static co_node_t other; /* a node of another dictionary (one, for a small target
 static co_status_t init_variant(const co_od_entry_t *rows, uint16_t count)
 {
     static plain_values_t other_values;
-    const co_od_t od = {"variant", rows, count, &plain_defaults, (uint32_t)sizeof(plain_values_t), 0x1EAAU, 0U, NULL,
-                        0U, NULL, (uint32_t)sizeof plain_defaults};
+    const co_od_t od = {.name = "variant", .entries = rows, .count = count, .defaults = &plain_defaults,
+                        .values_size = (uint32_t)sizeof(plain_values_t), .signature = 0x1EAAU,
+                        .defaults_size = (uint32_t)sizeof plain_defaults};
     const co_node_cfg_t cfg = config(&od, &other_values);
     return co_node_init(&other, &cfg, now);
 }

@@ -100,8 +100,9 @@ static const mpdo_values_t defaults = {
     .x2000_n = 2U, .x2000_1 = 0x1234U, .x2000_2 = 0xA1B2C3D4UL, .x2001 = 0x5AU, .x2002 = 7U,
     .x2100_n = 1U,
 };
-static const co_od_t od = {"mpdo", entries, (uint16_t)(sizeof entries / sizeof entries[0]), &defaults,
-                           (uint32_t)sizeof(mpdo_values_t), 0x3DB0A11CUL, 0U, NULL, 0U, NULL, 0U};
+static const co_od_t od = {.name = "mpdo", .entries = entries, .count = (uint16_t)(sizeof entries / sizeof entries[0]),
+                           .defaults = &defaults, .values_size = (uint32_t)sizeof(mpdo_values_t),
+                           .signature = 0x3DB0A11CUL};
 
 static fake_port_t port;
 static co_time_us_t now;

@@ -44,8 +44,10 @@ static const co_od_entry_t mini_entries[] = {
     M(0x6000, 0, CO_T_UNSIGNED8, CO_OD_READ | CO_OD_TPDO, input),
 };
 static const mini_values_t mini_defaults = {0x00000191UL, 0U, 50U, 1U, 0x39UL, 2U, 0x180UL, 255U, 1U, 0x60000008UL, 0U};
-static const co_od_t mini_od = {"mini", mini_entries, (uint16_t)(sizeof mini_entries / sizeof mini_entries[0]),
-                                &mini_defaults, (uint32_t)sizeof(mini_values_t), 0x12345678UL, 0U, NULL, 0U, NULL, 0U};
+static const co_od_t mini_od = {.name = "mini", .entries = mini_entries,
+                                .count = (uint16_t)(sizeof mini_entries / sizeof mini_entries[0]),
+                                .defaults = &mini_defaults, .values_size = (uint32_t)sizeof(mini_values_t),
+                                .signature = 0x12345678UL};
 
 /* One bus: every node's port records into the same fake port; frames are delivered to all nodes. */
 static fake_port_t bus;

@@ -55,6 +55,66 @@ static void lookup(void)
     TEST_ASSERT_EQUAL_UINT8(3U, co_od_sub_count(&test_od, 0x1400));
 }
 
+/* Three ways to the same rows: the rows alone (test_od), an object table built from them, and that table hashed
+ * (default layout): every index and sub-index gets the same answer. */
+static void an_object_table_and_its_hash_find_what_the_rows_hold(void)
+{
+    static co_od_object_t objects[64];
+    co_od_t by_object = test_od;
+    by_object.n_objects = 0U;
+    for (uint16_t i = 0U; i < test_od.count; i++) {
+        if (i == 0U || test_od.entries[i - 1U].index != test_od.entries[i].index) {
+            TEST_ASSERT_TRUE(by_object.n_objects < 64U);
+            objects[by_object.n_objects].index = test_od.entries[i].index;
+            objects[by_object.n_objects++].first = i;
+        }
+    }
+    by_object.objects = objects;
+    co_od_t hashed = by_object;
+#if !CO_CONFIG_OD_COMPACT
+    static uint16_t slots[128];
+    const uint8_t bits = co_od_object_slot_bits(by_object.n_objects);
+    TEST_ASSERT_TRUE((1U << bits) >= 2U * by_object.n_objects && (1U << bits) < 4U * by_object.n_objects);
+    TEST_ASSERT_TRUE((1U << bits) <= 128U);
+    TEST_ASSERT_FALSE(co_od_object_slots_fill(objects, by_object.n_objects, slots, (uint8_t)(bits - 1U)));
+    TEST_ASSERT_FALSE(co_od_object_slots_fill(objects, by_object.n_objects, slots, 18U));
+    TEST_ASSERT_TRUE(co_od_object_slots_fill(objects, by_object.n_objects, slots, bits));
+    unsigned used = 0U;
+    for (unsigned k = 0U; k < (1U << bits); k++) {
+        used += slots[k] != 0U ? 1U : 0U;
+    }
+    TEST_ASSERT_EQUAL_UINT(by_object.n_objects, used);
+    hashed.object_slots = slots;
+    hashed.object_slot_bits = bits;
+#endif
+    static const uint8_t subs[] = {0U, 1U, 2U, 3U, 4U, 5U, 8U, 9U, 0x7FU, 0xFEU, 0xFFU};
+    for (uint32_t index = 0U; index <= 0xFFFFU; index++) {
+        for (size_t i = 0U; i < sizeof subs; i++) {
+            co_od_entry_t one_a;
+            co_od_entry_t one_b;
+            co_od_entry_t one_c;
+            const co_od_entry_t *a = co_od_find(&test_od, (uint16_t)index, subs[i], &one_a);
+            const co_od_entry_t *b = co_od_find(&by_object, (uint16_t)index, subs[i], &one_b);
+            const co_od_entry_t *c = co_od_find(&hashed, (uint16_t)index, subs[i], &one_c);
+            TEST_ASSERT_TRUE(a == NULL ? b == NULL && c == NULL
+                                       : b != NULL && c != NULL && a->index == b->index && a->index == c->index &&
+                                             a->sub == subs[i] && b->sub == subs[i] && c->sub == subs[i] &&
+                                             a->offset == b->offset && a->offset == c->offset);
+        }
+        TEST_ASSERT_EQUAL(co_od_has_index(&test_od, (uint16_t)index), co_od_has_index(&hashed, (uint16_t)index));
+    }
+#if !CO_CONFIG_OD_COMPACT
+    /* A table of the caller's with no empty slot: a look-up of an index it lacks ends (NULL), never loops. */
+    for (unsigned k = 0U; k < 4U; k++) {
+        slots[k] = (uint16_t)(k + 1U);
+    }
+    hashed.object_slot_bits = 2U;
+    hashed.n_objects = 4U;
+    TEST_ASSERT_NULL(co_od_find(&hashed, 0x6000U, 0U, &(co_od_entry_t){0}));
+    TEST_ASSERT_NOT_NULL(co_od_find(&hashed, objects[2].index, 0U, &(co_od_entry_t){0}));
+#endif
+}
+
 /* A value inside a run is its own: writes and reads of 0x1016:03 touch its 4 bytes of the array, no other. */
 static void a_run_holds_one_value_per_sub_index(void)
 {
@@ -207,6 +267,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(lookup);
     RUN_TEST(a_run_holds_one_value_per_sub_index);
+    RUN_TEST(an_object_table_and_its_hash_find_what_the_rows_hold);
     RUN_TEST(type_sizes);
     RUN_TEST(limits_at_their_bounds);
     RUN_TEST(local_access_bypasses_access_rights_not_sizes);

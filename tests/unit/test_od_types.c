@@ -87,8 +87,9 @@ static const co_od_entry_t rows[] = {
 typedef char six_tpdos_in_rows[N_TPDO == 6U ? 1 : -1]; /* TPDO_ROWS above are written out for 6 */
 
 static types_values_t defaults;
-static co_od_t od = {"types", rows, (uint16_t)(sizeof rows / sizeof rows[0]), &defaults, (uint32_t)sizeof(types_values_t),
-                     0x7E5700D1UL, 1U << CO_T_UNSIGNED16, NULL, 0U, limits, 0U};
+static co_od_t od = {.name = "types", .entries = rows, .count = (uint16_t)(sizeof rows / sizeof rows[0]),
+                     .defaults = &defaults, .values_size = (uint32_t)sizeof(types_values_t), .signature = 0x7E5700D1UL,
+                     .dummy_usage = 1U << CO_T_UNSIGNED16, .limits = limits};
 
 static fake_port_t port;
 static co_time_us_t now;

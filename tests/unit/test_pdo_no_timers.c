@@ -61,9 +61,10 @@ static const lean_values_t lean_defaults = {
     .rpdo_n = 2U, .rpdo_type = 255U, .rpdo_map_n = 1U, .tpdo_n = 2U, .tpdo_type = 255U, .tpdo_map_n = 1U,
 };
 
-static const co_od_t lean_od = {"lean", lean_rows, (uint16_t)(sizeof lean_rows / sizeof lean_rows[0]),
-                                &lean_defaults, (uint32_t)sizeof(lean_values_t), 0x1EA7U, 0U, NULL, 0U,
-                                NULL, (uint32_t)sizeof lean_defaults};
+static const co_od_t lean_od = {.name = "lean", .entries = lean_rows,
+                                .count = (uint16_t)(sizeof lean_rows / sizeof lean_rows[0]), .defaults = &lean_defaults,
+                                .values_size = (uint32_t)sizeof(lean_values_t), .signature = 0x1EA7U,
+                                .defaults_size = (uint32_t)sizeof lean_defaults};
 
 static co_time_us_t now;
 static fake_port_t port;
@@ -111,8 +112,9 @@ typedef struct extra_values {
 static co_status_t init_variant(const co_od_entry_t *rows, uint16_t count)
 {
     static extra_values_t other_values;
-    const co_od_t od = {"variant", rows, count, &lean_defaults, (uint32_t)sizeof(extra_values_t), 0x1EA8U, 0U, NULL,
-                        0U, NULL, (uint32_t)sizeof lean_defaults};
+    const co_od_t od = {.name = "variant", .entries = rows, .count = count, .defaults = &lean_defaults,
+                        .values_size = (uint32_t)sizeof(extra_values_t), .signature = 0x1EA8U,
+                        .defaults_size = (uint32_t)sizeof lean_defaults};
     const co_node_cfg_t cfg = config(&od, &other_values);
     return co_node_init(&other, &cfg, now);
 }

@@ -47,8 +47,9 @@ static const co_od_entry_t entries[] = {
 static const channels_values_t defaults = {
     0x00000191UL, 0U, 1U, 1U, 2U, {0x600UL, 0x580UL}, 3U, {0x80000000UL, 0x80000000UL}, 0U,
     2U, {0x6C1UL, 0x6D1UL}, 0x11223344UL, "two servers"};
-static const co_od_t od = {"channels", entries, (uint16_t)(sizeof entries / sizeof entries[0]), &defaults,
-                           (uint32_t)sizeof(channels_values_t), 0x5D0C4A11UL, 0U, NULL, 0U, NULL, 0U};
+static const co_od_t od = {.name = "channels", .entries = entries,
+                           .count = (uint16_t)(sizeof entries / sizeof entries[0]), .defaults = &defaults,
+                           .values_size = (uint32_t)sizeof(channels_values_t), .signature = 0x5D0C4A11UL};
 
 static fake_port_t port;
 static co_time_us_t now;
