@@ -57,7 +57,7 @@ void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, con
         co_sdo_start(s, CO_SDO_BLK_DOWNLOAD, size);
         s->crc = client_crc;
         s->blksize = download_block_size(0U); /* a constant */
-        co_sdo_respond(node, s, 0xA4U, &s->blksize, 1U); /* server CRC support: always */
+        co_sdo_respond(node, s, 0xA4U, s->blksize); /* server CRC support: always */
         return;
     }
     const uint8_t blksize = data[0];
@@ -77,9 +77,7 @@ void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, con
     co_sdo_start(s, CO_SDO_BLK_UPLOAD_START, (uint32_t)len);
     s->crc = client_crc;
     s->blksize = blksize;
-    uint8_t size[4];
-    co_put_u32(size, (uint32_t)len);
-    co_sdo_respond(node, s, 0xC6U, size, 4U); /* server CRC support, size indicated */
+    co_sdo_respond(node, s, 0xC6U, (uint32_t)len); /* server CRC support, size indicated */
 }
 
 static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t *frame)

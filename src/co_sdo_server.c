@@ -22,22 +22,22 @@ void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const u
     co_node_send(node, &f);
 }
 
-void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len)
+/* An expedited upload answers with the buffer's first 4 bytes, read whole (co_sdo_upload_answer), set to 0 before
+ * the object is read into it (co_sdo_read_object). */
+typedef char sdo_buffer_holds_an_expedited_value[CO_SDO_BUF_SIZE >= 4U ? 1 : -1];
+
+void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, uint32_t data)
 {
     /* the command, then the multiplexer: the index (little-endian) and the sub-index */
     co_frame_t f = {s->tx_id, 8U, 0U, {cmd, (uint8_t)s->index, (uint8_t)(s->index >> 8), s->sub, 0U, 0U, 0U, 0U}};
-    if (data != NULL) {
-        memcpy(&f.data[4], data, len);
-    }
+    co_put_u32(&f.data[4], data);
     co_node_send(node, &f);
 }
 
 void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint32_t code)
 {
-    uint8_t d[4];
-    co_put_u32(d, code);
     s->state = SDO_IDLE; /* before the frame goes out: the port sees no transfer open behind an abort */
-    co_sdo_respond(node, s, 0x80U, d, 4U);
+    co_sdo_respond(node, s, 0x80U, code);
     node->stats.sdo_aborts++;
     co_node_event(node, CO_EV_SDO_ABORT, s->index, s->sub, 0U, code);
 }
@@ -81,13 +81,14 @@ static void download_expedited(co_node_t *node, co_sdo_server_t *s, uint8_t cmd,
         co_sdo_abort(node, s, r);
         return;
     }
-    co_sdo_respond(node, s, 0x60U, NULL, 0U);
+    co_sdo_respond(node, s, 0x60U, 0U);
 }
 
 /* Reads the object of the request into the transfer buffer. False (and the abort sent) when it cannot be read. */
 bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, size_t *len)
 {
     *len = 0U;
+    co_put_u32(s->buf, 0U); /* an expedited answer sends these 4 bytes: 0 past a shorter value */
     uint32_t r = co_od_read(node, s->index, s->sub, s->buf, sizeof s->buf, len, CO_ORIGIN_SDO);
     if (r == CO_ABORT_LENGTH_HIGH) { /* larger than any transfer buffer */
         const bool large_transfers = segmented_enabled(node) || (node->options & CO_OPT_SDO_BLOCK) != 0U;
@@ -108,16 +109,14 @@ void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, size_t len)
     if (len <= 4U && (len != 0U || !segmented)) {
         /* An empty string without segmented transfer: one NUL byte, the shortest expedited answer (0x4F). */
         const size_t shown = len != 0U ? len : 1U;
-        co_sdo_respond(node, s, (uint8_t)(0x43U | ((4U - shown) << 2)), s->buf, len);
+        co_sdo_respond(node, s, (uint8_t)(0x43U | ((4U - shown) << 2)), co_get_u32(s->buf)); /* 0 past len */
         return;
     }
     if (!segmented) {
         co_sdo_abort(node, s, CO_ABORT_UNSUPPORTED_ACCESS); /* > 4 bytes need segmented transfer */
         return;
     }
-    uint8_t size[4];
-    co_put_u32(size, (uint32_t)len);
-    co_sdo_respond(node, s, 0x41U, size, 4U);
+    co_sdo_respond(node, s, 0x41U, (uint32_t)len);
     co_sdo_start(s, SDO_SEG_UPLOAD, (uint32_t)len);
 }
 
@@ -242,7 +241,7 @@ static void serve(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
             return;
         }
         co_sdo_start(s, SDO_SEG_DOWNLOAD, size);
-        co_sdo_respond(node, s, 0x60U, NULL, 0U);
+        co_sdo_respond(node, s, 0x60U, 0U);
         return;
     }
     if (cmd == 0x40U) {

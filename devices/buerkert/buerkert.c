@@ -533,12 +533,15 @@ static uint32_t bk_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t
                             co_od_origin_t origin)
 {
     bk_model_t *m = model_of(dev);
-    const bk_stored_t before = stored_of(m);
     (void)len;
     const uint32_t key = ((uint32_t)e->index << 8) | e->sub;
     if (origin == CO_ORIGIN_NVM) {
         return check_stored(dev, key, data);
     }
+    if (e->index < 0x2000U) {
+        return CO_ABORT_NONE; /* the communication objects are the core's: the model has no rule for them */
+    }
+    const bk_stored_t before = stored_of(m);
     switch (key) {
     case 0x254001U: {
         if (!isfinite(wire_float(data))) {

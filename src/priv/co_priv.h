@@ -279,9 +279,9 @@ uint32_t co_sdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8
 void co_sdo_written(co_node_t *node, const co_od_entry_t *e);
 #endif
 /* The transfer's object (s->index, s->sub) is the request's from its initiate on, or 0 and 0 (a segment with no
- * transfer open). A response to the client: cmd, the object's multiplexer, then len <= 4 bytes of data (NULL:
- * zeros). */
-void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len);
+ * transfer open). A response to the client: cmd, the object's multiplexer, then the four data bytes, data as a
+ * little-endian number (a size, an abort code, an expedited value: co_get_u32 of its bytes, 0 past them). */
+void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, uint32_t data);
 /* A frame of a transfer without multiplexer: cmd, then len <= 7 bytes of data (NULL: zeros). */
 void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const uint8_t *data, size_t len);
 /* Ends the transfer with an abort of its object. */
