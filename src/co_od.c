@@ -43,7 +43,9 @@ bool co_od_object_slots_fill(const co_od_object_t *objects, uint16_t n_objects, 
         return false;
     }
     const uint32_t mask = (uint32_t)((1UL << bits) - 1U);
-    memset(slots, 0, (mask + 1U) * sizeof *slots);
+    for (uint32_t h = 0U; h <= mask; h++) {
+        slots[h] = 0U;
+    }
     for (uint16_t k = 0U; k < n_objects; k++) {
         uint32_t h = co_od_object_slot(objects[k].index, bits);
         while (slots[h] != 0U) {
