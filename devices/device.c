@@ -155,6 +155,7 @@ co_status_t device_init(device_t *dev, const device_class_t *cls, void *values, 
     }
     dev->hooks.on_write = tramp_write;
     dev->hooks.on_read = tramp_read;
+    dev->hooks.first_index = cls->hooks_first_index;
     dev->hooks.on_nmt_change = tramp_nmt;
     dev->hooks.on_reset = tramp_reset;
     dev->hooks.on_event = tramp_event;

@@ -71,6 +71,8 @@ typedef struct device_class {
     /** The core's hooks, with dev as context (any may be NULL). */
     uint32_t (*on_write)(device_t *dev, const co_od_entry_t *e, const uint8_t *data, size_t len, co_od_origin_t origin);
     uint32_t (*on_read)(device_t *dev, const co_od_entry_t *e);
+    /** on_write and on_read see objects from this index on only (co_hooks_t.first_index); 0: every object. */
+    uint16_t hooks_first_index;
     void (*on_nmt_change)(device_t *dev, co_nmt_state_t from, co_nmt_state_t to);
     void (*on_reset)(device_t *dev, co_reset_t what);
     /** Advances the model to now (values move, timers run). Returns its next deadline or CO_NEVER. Called at that

@@ -337,7 +337,7 @@ static size_t value_len(co_node_t *node, const co_od_entry_t *e)
 static uint32_t write_hook(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len,
                            co_od_origin_t origin)
 {
-    if (node->hooks != NULL && node->hooks->on_write != NULL) {
+    if (node->hooks != NULL && node->hooks->on_write != NULL && e->index >= node->hooks->first_index) {
         return node->hooks->on_write(node->hooks_ctx, node, e, data, len, origin);
     }
     return CO_ABORT_NONE;
@@ -345,7 +345,7 @@ static uint32_t write_hook(co_node_t *node, const co_od_entry_t *e, const uint8_
 
 static uint32_t read_hook(co_node_t *node, const co_od_entry_t *e)
 {
-    if (node->hooks != NULL && node->hooks->on_read != NULL) {
+    if (node->hooks != NULL && node->hooks->on_read != NULL && e->index >= node->hooks->first_index) {
         return node->hooks->on_read(node->hooks_ctx, node, e);
     }
     return CO_ABORT_NONE;

@@ -538,9 +538,7 @@ static uint32_t bk_on_write(device_t *dev, const co_od_entry_t *e, const uint8_t
     if (origin == CO_ORIGIN_NVM) {
         return check_stored(dev, key, data);
     }
-    if (e->index < 0x2000U) {
-        return CO_ABORT_NONE; /* the communication objects are the core's: the model has no rule for them */
-    }
+    /* (objects from 0x2000 on only: hooks_first_index; the communication objects are the core's) */
     const bk_stored_t before = stored_of(m);
     switch (key) {
     case 0x254001U: {
@@ -903,6 +901,7 @@ const device_class_t buerkert_class = {
     .power_on = bk_power_on,
     .on_write = bk_on_write,
     .on_read = bk_on_read,
+    .hooks_first_index = 0x2000U, /* no rule for a communication object: they are the core's */
     .on_nmt_change = NULL,
     .on_reset = bk_on_reset,
     .step = bk_step,

@@ -114,6 +114,13 @@ typedef struct co_hooks {
      * with code 0): the store can still fail after this hook.
      */
     co_status_t (*on_store)(void *ctx, co_node_t *node, uint16_t index, uint8_t sub);
+    /**
+     * on_read and on_write are called for objects from this index on only; 0: for every object. A device whose
+     * hooks have rules for its own objects alone (0x2000 on) spares every access to a communication object two
+     * indirect calls: a master's configuration of a node (heartbeat, PDO parameters, ...) is such accesses only.
+     * Stored values being loaded are checked by on_write the same way (from this index on).
+     */
+    uint16_t first_index;
 } co_hooks_t;
 
 /** Options, per node (usually per device type). */

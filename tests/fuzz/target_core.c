@@ -160,7 +160,8 @@ static void hk_event(void *ctx, co_node_t *node, const co_event_t *ev)
     fz_note_event(c->h, ev);
 }
 
-static const co_hooks_t hooks = {hk_write, hk_read, hk_nmt, hk_reset, hk_event, NULL};
+static const co_hooks_t hooks = {
+    .on_write = hk_write, .on_read = hk_read, .on_nmt_change = hk_nmt, .on_reset = hk_reset, .on_event = hk_event};
 
 static void set_refusal(core_ctx_t *c, uint8_t preset)
 {

@@ -72,7 +72,8 @@ static co_status_t hook_store(void *ctx, co_node_t *node, uint16_t index, uint8_
     return f->store_fail ? CO_ERR_IO : CO_OK;
 }
 
-co_hooks_t fixture_hooks = {hook_write, hook_read, hook_nmt, hook_reset, hook_event, hook_store};
+co_hooks_t fixture_hooks = {.on_write = hook_write, .on_read = hook_read, .on_nmt_change = hook_nmt, .on_reset = hook_reset,
+                             .on_event = hook_event, .on_store = hook_store};
 
 void fx_start(uint8_t id, uint32_t options) { fx_start_at(id, options, 0U); }
 

@@ -6,7 +6,7 @@ void setUp(void)
     fx_start(5U, 0U);
     fake_port_clear(&fx.port);
 }
-void tearDown(void) {}
+void tearDown(void) { fixture_hooks.first_index = 0U; /* a test may set it; the others see every object */ }
 
 #define SDO(...)                                                                          \
     do {                                                                                  \
@@ -290,6 +290,28 @@ static void read_hook_can_hide_an_entry(void)
     EXPECT(0x4B, 0x00, 0x20, 0x00, 0xF4, 0x01, 0x00, 0x00);
 }
 
+/* co_hooks_t.first_index: below it neither hook is called, so neither can refuse a write nor hide an entry. */
+static void hooks_see_objects_from_their_first_index_only(void)
+{
+    fixture_hooks.first_index = 0x2000U;
+    fx.refuse_code = CO_ABORT_DEVICE_STATE; /* every write the hook sees is refused */
+    fx.hide_index = 0x1017U;
+    const uint32_t reads = fx.read_hooks;
+    const uint32_t writes = fx.write_hooks;
+    SDO(0x2B, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0); /* 0x1017 = 1000 ms */
+    EXPECT(0x60, 0x17, 0x10, 0x00, 0, 0, 0, 0);
+    SDO(0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0);
+    EXPECT(0x4B, 0x17, 0x10, 0x00, 0xE8, 0x03, 0x00, 0x00);
+    TEST_ASSERT_EQUAL_UINT32(reads, fx.read_hooks);
+    TEST_ASSERT_EQUAL_UINT32(writes, fx.write_hooks);
+    SDO(0x2B, 0x00, 0x20, 0x00, 0xE8, 0x03, 0, 0); /* 0x2000: seen, refused */
+    EXPECT(0x80, 0x00, 0x20, 0x00, 0x22, 0x00, 0x00, 0x08);
+    SDO(0x40, 0x00, 0x20, 0x00, 0, 0, 0, 0); /* seen, its default */
+    EXPECT(0x4B, 0x00, 0x20, 0x00, 0xF4, 0x01, 0x00, 0x00);
+    TEST_ASSERT_EQUAL_UINT32(reads + 1U, fx.read_hooks);
+    TEST_ASSERT_EQUAL_UINT32(writes + 1U, fx.write_hooks);
+}
+
 static void sdo_abort_is_reported_as_event(void)
 {
     fx.n_events = 0U;
@@ -355,6 +377,7 @@ int main(void)
     RUN_TEST(device_hook_can_refuse_with_its_code);
     RUN_TEST(read_hook_runs_before_every_upload);
     RUN_TEST(read_hook_can_hide_an_entry);
+    RUN_TEST(hooks_see_objects_from_their_first_index_only);
     RUN_TEST(sdo_abort_is_reported_as_event);
     RUN_TEST(sdo_on_new_node_id);
     RUN_TEST(pdo_parameters_follow_node_id);
