@@ -155,10 +155,16 @@ static inline const co_od_entry_t *find_row(const co_od_t *od, uint16_t index, u
 
 const co_od_entry_t *co_od_find_row(const co_od_t *od, uint16_t index, uint8_t sub) { return find_row(od, index, sub); }
 
-const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one)
+/* co_od_find(), inline where the compiler optimises for speed into the reads and writes of this file. */
+static inline const co_od_entry_t *find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one)
 {
     const co_od_entry_t *r = find_row(od, index, sub);
     return (r == NULL || r->sub == sub) ? r : co_od_entry_at(r, (uint8_t)(sub - r->sub), one);
+}
+
+const co_od_entry_t *co_od_find(const co_od_t *od, uint16_t index, uint8_t sub, co_od_entry_t *one)
+{
+    return find(od, index, sub, one);
 }
 
 bool co_od_exists(const co_od_t *od, uint16_t index, uint8_t sub) { return co_od_find_row(od, index, sub) != NULL; }
@@ -591,7 +597,7 @@ uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, siz
                     co_od_origin_t origin)
 {
     co_od_entry_t one;
-    const co_od_entry_t *e = co_od_find(node->od, index, sub, &one);
+    const co_od_entry_t *e = find(node->od, index, sub, &one);
     uint32_t r;
     *len = 0U;
     if (e == NULL) {

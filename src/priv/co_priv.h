@@ -291,9 +291,10 @@ void co_sdo_start(co_sdo_server_t *s, uint8_t state, uint32_t size);
 uint32_t co_sdo_download_checks(const co_node_t *node, const co_sdo_server_t *s, bool sized, uint32_t size,
                                 bool staged);
 void co_sdo_download_end(co_node_t *node, co_sdo_server_t *s, uint32_t len, bool crc_ok, uint8_t answer);
+#if CO_CONFIG_SDO_BLOCK
+/* The upload initiate's read and answer, for the block upload (which may switch to it). */
 bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, size_t *len);
 void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, size_t len);
-#if CO_CONFIG_SDO_BLOCK
 void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *data);
 bool co_sdo_block_rx(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f);
 co_time_us_t co_sdo_block_process(co_node_t *node, co_sdo_server_t *s);
