@@ -31,11 +31,11 @@ void events_fault(emu_node_t *n, const char *kind, const char *action, const cha
 void events_frame_publish(emu_t *emu, emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at);
 
 /** A frame on the bus at time at: sent by from, or received (from NULL). Inline: every frame comes this way, and
- *  without a session (the common case) it costs a comparison, not a call. */
+ *  without a session (the common case) it costs a comparison, not a call. bus->emu is set (before bus_open). */
 static inline void events_frame(emu_bus_t *bus, const emu_node_t *from, const co_frame_t *f, co_time_us_t at)
 {
     emu_t *emu = bus->emu;
-    if (emu != NULL && emu->n_sessions != 0U) {
+    if (emu->n_sessions != 0U) {
         events_frame_publish(emu, bus, from, f, at);
     }
 }

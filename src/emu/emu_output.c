@@ -48,9 +48,8 @@ static output_stream_t streams[N_STREAMS] = {{.name = "stderr", .what = "log", .
 static co_time_us_t output_start;
 static int output_log_level;
 static bool output_ready;
-/* A line was put or dropped since output_flush last found both streams idle: the main loop's flush and poll entries
- * cost a test, not a look at both streams, in the common pass where nothing was logged. */
-static bool output_busy;
+/* See emu_output.h. */
+bool output_busy;
 
 static void setup(output_stream_t *s)
 {
@@ -283,11 +282,8 @@ static bool write_some(output_stream_t *s)
     return false;
 }
 
-bool output_flush(void)
+bool output_flush_busy(void)
 {
-    if (!output_busy) {
-        return false; /* the common pass: nothing written, nothing held back */
-    }
     for (int i = 0; i < N_STREAMS; i++) {
         output_stream_t *s = &streams[i];
         while (s->len > 0U && s->how != WRITE_NOWHERE && write_some(s)) {

@@ -52,9 +52,16 @@ void output_set_reply_sink(reply_sink_fn fn, void *ctx);
 /** One whole line (newline included) on stdout as it is, whatever the reply sink: the stdin session's output. */
 void output_reply_line(const char *line, size_t len);
 
+/** A line was put or dropped since output_flush last found both streams idle (read only: the output module's). */
+extern bool output_busy;
+
+/** output_flush's work when output_busy. */
+bool output_flush_busy(void);
+
 /** Writes what the streams can take now, without blocking. Call once per pass of the main loop. Returns whether
- *  bytes wait still (or drops wait to be reported): only then has output_poll_fds anything to add. */
-bool output_flush(void);
+ *  bytes wait still (or drops wait to be reported): only then has output_poll_fds anything to add. Inline: the
+ *  common pass, nothing logged, costs the loop a test, not a call. */
+static inline bool output_flush(void) { return output_busy && output_flush_busy(); }
 
 /** Adds a POLLOUT entry to pfd for each stream with bytes waiting (at most 2); returns how many. */
 nfds_t output_poll_fds(struct pollfd *pfd);

@@ -85,6 +85,10 @@ void socketcan_close(socketcan_t *c);
  *  returned n (errno set when it failed) and is not a plain success on an interface known to be up. */
 co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n);
 
+/* CO_FRAME_RTR (bit 0) moved to CAN_RTR_FLAG (bit 30) and back with a shift: no branch per frame. */
+#define SOCKETCAN_RTR_SHIFT 30U
+typedef char socketcan_rtr_flags_line_up[(CO_FRAME_RTR << SOCKETCAN_RTR_SHIFT) == CAN_RTR_FLAG ? 1 : -1];
+
 /** co_port_t.send for this channel (ctx = socketcan_t *). Inline, the write and its plain success: every frame a
  *  node sends comes this way, and a layer of call for it cost as much as the rest of the success path. */
 static inline co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
@@ -92,7 +96,7 @@ static inline co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
     socketcan_t *c = (socketcan_t *)ctx;
     struct can_frame cf;
     memset(&cf, 0, sizeof cf);
-    cf.can_id = (frame->id & CAN_SFF_MASK) | ((frame->flags & CO_FRAME_RTR) != 0U ? CAN_RTR_FLAG : 0U);
+    cf.can_id = (frame->id & CAN_SFF_MASK) | ((canid_t)(frame->flags & CO_FRAME_RTR) << SOCKETCAN_RTR_SHIFT);
     cf.can_dlc = frame->len;
     memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
     ssize_t n = -1;
@@ -142,7 +146,7 @@ static inline int socketcan_read(socketcan_t *c, co_frame_t *frame)
         if (c->rx_msgs[k].msg_len == sizeof *cf && (cf->can_id & (CAN_ERR_FLAG | CAN_EFF_FLAG)) == 0U &&
             c->rx_since_query && !c->down) {
             frame->id = cf->can_id & CAN_SFF_MASK;
-            frame->flags = (uint8_t)((cf->can_id & CAN_RTR_FLAG) != 0U ? CO_FRAME_RTR : 0U);
+            frame->flags = (uint8_t)((cf->can_id >> SOCKETCAN_RTR_SHIFT) & CO_FRAME_RTR);
             frame->len = cf->can_dlc > 8U ? 8U : cf->can_dlc;
             memcpy(frame->data, cf->data, sizeof frame->data); /* all 8: bytes past len are undefined on receive */
             return 1;
