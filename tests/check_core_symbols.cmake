@@ -27,6 +27,11 @@ list(REMOVE_DUPLICATES undefined)
 foreach(name IN LISTS undefined)
   list(FIND defined "${name}" d)
   list(FIND allowed "${name}" a)
+  # The linker's own symbol, not a library's: position-independent code refers to it where it takes an address
+  # through the GOT (Debian's gcc builds PIE by default; at -O0 co_node.c takes its services' addresses that way).
+  if(name STREQUAL "_GLOBAL_OFFSET_TABLE_")
+    continue()
+  endif()
   if(d EQUAL -1 AND a EQUAL -1)
     list(APPEND bad "external reference: ${name}")
   endif()
