@@ -72,6 +72,10 @@ static void check_entry(const core_ctx_t *c, const co_node_t *node, const co_od_
         own->type != e->type) {
         fz_fail(c->h, "%s hook called with an entry that is not one of the object dictionary's", hook);
     }
+    if (e != NULL && e->index < node->hooks->first_index) {
+        fz_fail(c->h, "%s hook called for 0x%04X, below the hooks' first index 0x%04X", hook, e->index,
+                node->hooks->first_index);
+    }
 }
 
 static uint32_t hk_write(void *ctx, co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len,
@@ -162,6 +166,13 @@ static void hk_event(void *ctx, co_node_t *node, const co_event_t *ev)
 
 static const co_hooks_t hooks = {
     .on_write = hk_write, .on_read = hk_read, .on_nmt_change = hk_nmt, .on_reset = hk_reset, .on_event = hk_event};
+/* The same for the objects from 0x2000 on only (record 10's bit 5): no read or write hook below. */
+static const co_hooks_t hooks_from_0x2000 = {.on_write = hk_write,
+                                             .on_read = hk_read,
+                                             .on_nmt_change = hk_nmt,
+                                             .on_reset = hk_reset,
+                                             .on_event = hk_event,
+                                             .first_index = 0x2000U};
 
 static void set_refusal(core_ctx_t *c, uint8_t preset)
 {
@@ -373,10 +384,15 @@ bool fzt_app(fz_t *h, fz_in_t *in)
         (void)co_abort_text(fz_u32(in));
         return false;
     }
-    case 10:
-        c->actions = (uint8_t)(fz_u8(in) & 0x1FU);
+    case 10: {
+        const uint8_t b = fz_u8(in);
+        c->actions = (uint8_t)(b & 0x1FU);
+        /* co_hooks_t.first_index; kept in the configuration too, so a power cycle keeps the choice. */
+        c->cfg.hooks = (b & 0x20U) != 0U ? &hooks_from_0x2000 : &hooks;
+        node->hooks = c->cfg.hooks;
         set_refusal(c, fz_u8(in));
         return false;
+    }
     case 11: {
         const uint8_t k = fz_u8(in);
         c->refuse_code = refuse_codes[k % (sizeof refuse_codes / sizeof refuse_codes[0])];
