@@ -194,6 +194,12 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
     if (cfg->node_id == 0U || (cfg->node_id > 127U && cfg->node_id != CO_NODE_ID_UNCONFIGURED)) {
         return CO_ERR_ARG;
     }
+#if !CO_CONFIG_OD_COMPACT
+    /* A caller's own hash of the objects: a size outside 1..17 bits would shift by 32 or more in every look-up. */
+    if (cfg->od->object_slots != NULL && (cfg->od->object_slot_bits < 1U || cfg->od->object_slot_bits > 17U)) {
+        return CO_ERR_ARG;
+    }
+#endif
     memset(node, 0, sizeof *node);
     node->od = cfg->od;
     node->values = (uint8_t *)cfg->values;

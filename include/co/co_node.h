@@ -449,7 +449,8 @@ struct co_node {
  * Powers the node on: loads the LSS configuration and stored parameters through the port, initialises
  * every object, and (when the node-ID is configured) sends the boot-up frame and enters Pre-operational.
  * An unconfigured node (0xFF) runs only the LSS slave until a master gives it a node-ID.
- * @return CO_OK, CO_ERR_ARG (NULL pointers, node-ID 0 or 128..254, no send function), CO_ERR_RANGE (the
+ * @return CO_OK, CO_ERR_ARG (NULL pointers, node-ID 0 or 128..254, no send function, an OD whose object_slots
+ *         are set with object_slot_bits outside 1..17), CO_ERR_RANGE (the
  *         OD declares more PDOs than the PDO arrays hold (co_node_cfg_t.rpdo/tpdo, else CO_RPDO_MAX/CO_TPDO_MAX),
  *         more additional SDO servers than co_node_cfg_t.sdo_servers holds, more heartbeat-consumer entries
  *         than co_config.h allows, or PDO timer sub-indices with CO_CONFIG_PDO_TIMERS 0).

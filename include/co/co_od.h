@@ -166,7 +166,7 @@ typedef struct co_od {
      *  slot from co_od_object_slot() on (the next, wrapping at the end) that is empty or holds it: what
      *  co_od_object_slots_fill() writes, and tools/odgen.py for generated tables. */
     const uint16_t *object_slots;
-    uint8_t object_slot_bits; /**< 1..17. */
+    uint8_t object_slot_bits; /**< 1..17 (co_node_init refuses others with object_slots set). */
 #endif
 } co_od_t;
 

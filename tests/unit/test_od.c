@@ -260,6 +260,20 @@ static void init_rejects_bad_configuration(void)
     no_send.send = NULL;
     cfg.port = &no_send;
     TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, &cfg, 0U));
+#if !CO_CONFIG_OD_COMPACT
+    /* an object hash of a size no look-up can use (1..17 bits), the same table with a usable one taken */
+    static uint16_t slots[4];
+    co_od_t od = test_od;
+    od.object_slots = slots;
+    cfg = fx.cfg;
+    cfg.od = &od;
+    od.object_slot_bits = 0U;
+    TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, &cfg, 0U));
+    od.object_slot_bits = 18U;
+    TEST_ASSERT_EQUAL_INT(CO_ERR_ARG, co_node_init(&n, &cfg, 0U));
+    od.object_slot_bits = 2U; /* every slot empty: no object table, so look-ups search the rows */
+    TEST_ASSERT_EQUAL_INT(CO_OK, co_node_init(&n, &cfg, 0U));
+#endif
 }
 
 int main(void)
