@@ -152,11 +152,12 @@ static inline bool device_rx(device_t *dev, const co_frame_t *frame, co_time_us_
 
 /** After a frame device_rx took: true when it left nothing for device_process, which would return what it last
  *  returned: the core settled on its last deadline (co_node_settled: an expedited SDO request answered at once) and
- *  the model not touched since before the frame (touched_before: dev->touched then; an SDO write of one of its
- *  objects touches it). A runner of many nodes may then skip the node's pass. */
-static inline bool device_settled(const device_t *dev, bool touched_before)
+ *  the model not touched (an SDO or RPDO write of one of its objects, an event, an NMT change touch it; so does
+ *  what the model's own step raised in device_process's second round, rarely: then the next pass runs its step). A
+ *  runner of many nodes may then skip the node's pass. */
+static inline bool device_settled(const device_t *dev)
 {
-    return (touched_before || !dev->touched) && co_node_settled(&dev->node, dev->core_due);
+    return !dev->touched && co_node_settled(&dev->node, dev->core_due);
 }
 
 /** Runs the model (when due or touched) and the core; returns the earliest deadline of both. Inline, as device_rx:
@@ -164,18 +165,26 @@ static inline bool device_settled(const device_t *dev, bool touched_before)
 static inline co_time_us_t device_process(device_t *dev, co_time_us_t now)
 {
     dev->now = now;
-    co_time_us_t next = CO_NEVER;
-    if (dev->cls->step != NULL) {
+    if (dev->cls->step == NULL) {
+        dev->touched = false; /* no model to follow anything */
+        dev->core_due = co_node_process(&dev->node, now);
+        return dev->core_due;
+    }
+    for (unsigned round = 0U;; round++) {
         if (dev->touched || now >= dev->step_due) {
             dev->touched = false;
             dev->step_due = dev->cls->step(dev, now);
             co_node_values_changed(&dev->node); /* the models write their process values directly */
         }
-        next = dev->step_due;
+        dev->core_due = co_node_process(&dev->node, now);
+        /* What the core's pass did may concern the model (a timeout, an EMCY, an NMT change: dev->touched): its
+         * step runs now, not at its next deadline, which the runner would sleep until. Once: the EMCY a step raises
+         * touches the model too, and the step that follows it changes nothing more. */
+        if (!dev->touched || round == 1U) {
+            break;
+        }
     }
-    const co_time_us_t core = co_node_process(&dev->node, now);
-    dev->core_due = core;
-    return core < next ? core : next;
+    return dev->core_due < dev->step_due ? dev->core_due : dev->step_due;
 }
 
 /** Runs a control command: the device's own first, then the common ones (see device.c). */

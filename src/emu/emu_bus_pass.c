@@ -19,8 +19,7 @@ static inline void deliver_word(emu_bus_t *b, const co_frame_t *f, size_t base, 
         bits &= bits - 1U;
         emu_node_t *n = b->nodes[i];
         if (i != sender && i < b->n_nodes && (faults_none(&n->faults) || faults_rx(n, f, now))) {
-            const bool touched = n->dev.touched;
-            if (device_rx(&n->dev, f, now) && !device_settled(&n->dev, touched)) {
+            if (device_rx(&n->dev, f, now) && !device_settled(&n->dev)) {
                 node_mark_dirty(n); /* not for an SDO request answered whole: the pass would find nothing */
             }
         }

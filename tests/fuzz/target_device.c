@@ -156,9 +156,8 @@ void fzt_fini(fz_t *h)
 
 bool fzt_rx(fz_t *h, const co_frame_t *f, bool *pending)
 {
-    const bool touched = g_dev->touched;
     const bool taken = device_rx(g_dev, f, h->now);
-    *pending = taken && !device_settled(g_dev, touched);
+    *pending = taken && !device_settled(g_dev);
     return taken;
 }
 
