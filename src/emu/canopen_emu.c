@@ -111,7 +111,7 @@ int main(int argc, char **argv)
         {"quiet", no_argument, NULL, 'q'},           {"help", no_argument, NULL, 'h'},
         {"version", no_argument, NULL, 'V'},         {"control-socket", required_argument, NULL, 'u'},
         {"control-tcp", required_argument, NULL, 't'}, {"rules", required_argument, NULL, 'r'},
-        {"web", required_argument, NULL, 'w'},
+        {"web", required_argument, NULL, 'w'},       {"control-token-file", required_argument, NULL, 'T'},
         {NULL, 0, NULL, 0}};
     const char *rules[16];
     size_t n_rules = 0U;
@@ -154,6 +154,9 @@ int main(int argc, char **argv)
             if (!host_port_option("--control-tcp", "5020", optarg, &config.control_tcp)) {
                 return 2;
             }
+            break;
+        case 'T':
+            config.control_token_file = optarg;
             break;
         case 'w':
             if (!host_port_option("--web", "8080", optarg, &config.web)) {

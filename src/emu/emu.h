@@ -115,6 +115,7 @@ typedef struct emu {
     emu_web_t web;
     emu_session_t *sessions[MAX_SESSIONS]; /* those that may subscribe to events */
     size_t n_sessions;
+    size_t session_turn;    /* the session sessions_work begins with: each pass goes on where the last one stopped */
     bool in_command;        /* a command runs: a device's messages are its reply, not events */
     bool command_restricted; /* the command line running comes from a restricted session (emu_session_t) */
     bool quit;

@@ -22,6 +22,8 @@ void usage(FILE *out)
             "      --control -         read control commands from stdin even when it is not a terminal\n"
             "      --control-socket PATH  accept control clients on a Unix socket (mode 0600)\n"
             "      --control-tcp HOST:PORT  accept control clients on TCP (127.0.0.1:5020; port 0: any free one)\n"
+            "      --control-token-file FILE  TCP clients must first say hello with the token in FILE (required\n"
+            "                          when --control-tcp is not a loopback address)\n"
             "      --web HOST:PORT     serve the web view to browsers (127.0.0.1:8080, then open\n"
             "                          http://127.0.0.1:8080/; port 0: any free one; docs/web.md)\n"
             "      --script FILE       run control commands from FILE ('@MS command' lines, see canopen-emu(1))\n"

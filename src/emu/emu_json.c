@@ -241,8 +241,15 @@ static json_t *node_summary(const emu_t *emu, const emu_node_t *n)
 
 static void cmd_hello(const request_t *q)
 {
-    static const char *const fields[] = {NULL};
+    /* "token": the first request of a connection that needs one (emu_session_lines.c checks it); taken and
+     * ignored elsewhere, so that a client may always send it. */
+    static const char *const fields[] = {"token", NULL};
     if (!only_fields(q, fields)) {
+        return;
+    }
+    const json_t *token = json_object_get(q->req, "token");
+    if (token != NULL && !json_is_string(token)) {
+        fail(q->s, q->id, "hello: \"token\" must be a string");
         return;
     }
     json_t *r = response(q->id, true);

@@ -345,6 +345,66 @@ static json_t *object_row(emu_node_t *n, const co_od_entry_t *e, bool values)
     return o;
 }
 
+/* Rows of an `objects` answer written per piece of its stream: some 0.1 ms of work and a few KiB, so that the
+ * pass's budget (SESSION_PASS_BUDGET_US) is kept and the reader's output grows in small steps. */
+#define OBJECTS_ROWS_PER_PIECE 32U
+
+/* Writes the rows of st's node from its place on, at most max of them ("," before each but the first), through
+ * emit; false once the last row is written (the answer's "]}" is the caller's). */
+static bool objects_rows(emu_t *emu, session_stream_t *st, unsigned max, void (*emit)(void *ctx, const char *, size_t),
+                         void *ctx)
+{
+    emu_node_t *n = (emu_node_t *)st->node;
+    const co_od_t *od = n->dev.cls->od;
+    n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
+    emu->in_command = true;
+    unsigned written = 0U;
+    while (st->entry < od->count && written < max) {
+        const co_od_entry_t *row = &od->entries[st->entry];
+        if (st->sub >= co_od_entry_subs(row)) {
+            st->entry++;
+            st->sub = 0U;
+            continue;
+        }
+        co_od_entry_t one;
+        json_t *o = object_row(n, co_od_entry_at(row, st->sub, &one), st->values);
+        st->sub++;
+        char *text = o != NULL ? json_dumps(o, JSON_COMPACT) : NULL;
+        json_decref(o);
+        if (text != NULL) {
+            if (st->count++ > 0U) {
+                emit(ctx, ",", 1U);
+            }
+            emit(ctx, text, strlen(text));
+            free(text);
+            written++;
+        }
+    }
+    emu->in_command = false;
+    node_mark_dirty(n);
+    return st->entry < od->count;
+}
+
+static void emit_to_stream(void *ctx, const char *text, size_t len) { session_stream_write((emu_session_t *)ctx, text, len); }
+
+/* session_stream_t.step of `objects`: the next rows, then the end of the line. */
+static bool objects_step(emu_t *emu, emu_session_t *s)
+{
+    if (objects_rows(emu, &s->stream, OBJECTS_ROWS_PER_PIECE, emit_to_stream, s)) {
+        return true;
+    }
+    session_stream_write(s, "]}\n", 3U);
+    return false;
+}
+
+static void emit_to_buffer(void *ctx, const char *text, size_t len)
+{
+    (void)byte_buffer_append((byte_buffer_t *)ctx, text, len, (size_t)-1); /* out of memory: the line is cut short */
+}
+
+/* A large dictionary's answer is megabytes (12,357 entries: some 3 MB with values): it is streamed, written as the
+ * client takes it (emu_session_work.c), with the same bytes as one answer built at once. A session that cannot
+ * stream (stdin's) gets it at once. */
 void cmd_objects(const request_t *q)
 {
     static const char *const fields[] = {"node", "values", NULL};
@@ -357,23 +417,31 @@ void cmd_objects(const request_t *q)
         fail(q->s, q->id, "objects: \"values\" must be true or false");
         return;
     }
-    const co_od_t *od = n->dev.cls->od;
-    json_t *rows = json_array();
-    n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
-    q->emu->in_command = true;
-    for (uint16_t i = 0U; i < od->count; i++) {
-        for (uint8_t k = 0U; k < co_od_entry_subs(&od->entries[i]); k++) {
-            co_od_entry_t one;
-            json_t *o = object_row(n, co_od_entry_at(&od->entries[i], k, &one), json_is_true(jv));
-            if (o != NULL) {
-                (void)json_array_append_new(rows, o);
-            }
-        }
-    }
-    q->emu->in_command = false;
-    node_mark_dirty(n);
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
-    (void)json_object_set_new(r, "objects", rows);
-    send_response(q->s, r);
+    char *head = json_dumps(r, JSON_COMPACT); /* {"id":..,"ok":true,"node":N}: the rows go before its '}' */
+    json_decref(r);
+    if (head == NULL) {
+        fail(q->s, q->id, "out of memory");
+        return;
+    }
+    head[strlen(head) - 1U] = '\0';
+    static const char objects_key[] = ",\"objects\":[";
+    const session_stream_t stream = {.step = objects_step, .node = n, .values = json_is_true(jv)};
+    if (session_stream_start(q->s, &stream)) {
+        session_stream_write(q->s, head, strlen(head));
+        session_stream_write(q->s, objects_key, sizeof objects_key - 1U);
+        free(head);
+        return;
+    }
+    byte_buffer_t whole = {NULL, 0U, 0U};
+    emit_to_buffer(&whole, head, strlen(head));
+    emit_to_buffer(&whole, objects_key, sizeof objects_key - 1U);
+    free(head);
+    session_stream_t st = stream;
+    while (objects_rows(q->emu, &st, UINT_MAX, emit_to_buffer, &whole)) {
+    }
+    emit_to_buffer(&whole, "]}\n", 3U);
+    q->s->write(q->s->ctx, whole.data, whole.len);
+    byte_buffer_free(&whole);
 }

@@ -69,6 +69,15 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             run_command(emu, line);
             commands = true;
         }
+        /* The sessions' waiting lines and streamed answers, within the pass's budget and never past the nodes'
+         * earliest deadline (the first unit always runs): many busy clients cannot hold the loop (emu_session.h). */
+        bool sessions_pending = false;
+        if (emu->n_sessions > 0U) {
+            const co_time_us_t t = socketcan_now_us();
+            const co_time_us_t budget_end = t + SESSION_PASS_BUDGET_US;
+            sessions_pending = sessions_work(emu, next < budget_end ? next : budget_end);
+            commands = true;
+        }
         if (commands) {
             now = socketcan_now_us(); /* the nodes run at the time after the commands, which may have taken long */
         }
@@ -101,7 +110,7 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
         }
         sockets_index = nfds;
         if (sockets) {
-            sockets_flush(&emu->sockets);
+            sockets_tidy(emu, &emu->sockets);
             nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
         }
         web_index = nfds;
@@ -110,7 +119,8 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             nfds += web_poll_fds(&emu->web, &pfd[web_index], now, &next);
         }
         struct timespec ts;
-        const int ready = ppoll(pfd, nfds, emu_poll_timeout(next, now, &ts), NULL);
+        /* work left for the sessions: no sleep, the next pass goes on with it after the nodes' turn */
+        const int ready = ppoll(pfd, nfds, emu_poll_timeout(sessions_pending ? now : next, now, &ts), NULL);
         if (ready < 0) {
             if (errno != EINTR) {
                 output_error("poll: %s", strerror(errno));

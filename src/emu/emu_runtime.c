@@ -36,16 +36,32 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
         }
         logline(LOG_NORMAL, "control: listening on unix %s", cfg->control_socket);
     }
+    if (cfg->control_token_file != NULL && cfg->control_tcp == NULL) {
+        output_error("--control-token-file is the token of --control-tcp, which is not given");
+        return 1;
+    }
     if (cfg->control_tcp != NULL) {
+        if (cfg->control_token_file != NULL &&
+            sockets_load_token(&emu->sockets, cfg->control_token_file, err, sizeof err) != 0) {
+            output_error("%s", err);
+            return 1;
+        }
         bool remote = false;
         if (sockets_listen_tcp(&emu->sockets, cfg->control_tcp, &remote, err, sizeof err) != 0) {
             output_error("%s", err);
             return 1;
         }
-        logline(LOG_NORMAL, "control: listening on tcp %s", emu->sockets.tcp_name);
+        if (remote && emu->sockets.tcp_token == NULL) {
+            /* Whoever reaches the port would control the nodes, and write files with export-dcf. */
+            output_error("--control-tcp %s is not a loopback address: give --control-token-file FILE too (clients "
+                         "then say hello with its token first), or listen on 127.0.0.1", emu->sockets.tcp_name);
+            return 1;
+        }
+        logline(LOG_NORMAL, "control: listening on tcp %s%s", emu->sockets.tcp_name,
+                emu->sockets.tcp_token != NULL ? " (clients give the token first)" : "");
         if (remote) {
-            logline(LOG_QUIET, "control: warning: tcp %s is not a loopback address: whoever can reach it controls the "
-                    "emulated nodes (no authentication)", emu->sockets.tcp_name);
+            logline(LOG_QUIET, "control: warning: tcp %s is not a loopback address: whoever has the token controls "
+                    "the emulated nodes, and the connection is not encrypted", emu->sockets.tcp_name);
         }
     }
     if (cfg->web != NULL) {

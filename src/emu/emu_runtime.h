@@ -19,6 +19,7 @@ typedef struct emu_config {
     bool control;                    /* commands from stdin */
     const char *control_socket;      /* Unix socket path, or NULL */
     const char *control_tcp;         /* HOST:PORT, or NULL */
+    const char *control_token_file;  /* the token TCP clients must give first, or NULL (required off loopback) */
     const char *web;                 /* HOST:PORT of the web view, or NULL */
     int log_level;
 } emu_config_t;

@@ -27,13 +27,35 @@ int event_kind_of(const char *name)
     return -1;
 }
 
+/* emu_session_t.write: to the transport, or held behind a streamed answer's line (which must stay whole). */
+static void session_write_line(void *ctx, const char *line, size_t len)
+{
+    emu_session_t *s = (emu_session_t *)ctx;
+    if (s->stream.step == NULL) {
+        s->transport_write(s->transport_ctx, line, len);
+    } else if (!s->overflow && !byte_buffer_append(&s->held, line, len, SESSION_HELD_MAX)) {
+        s->overflow = true; /* events it does not read: the transport closes it */
+    }
+}
+
 void session_init(emu_session_t *s, const char *name, void (*write)(void *ctx, const char *line, size_t len), void *ctx)
 {
     memset(s, 0, sizeof *s);
     (void)snprintf(s->name, sizeof s->name, "%s", name);
-    s->write = write;
-    s->ctx = ctx;
+    s->transport_write = write;
+    s->transport_ctx = ctx;
+    s->write = session_write_line;
+    s->ctx = s;
+    s->output_high = SESSION_OUTPUT_HIGH;
     line_reader_init(&s->lines);
+}
+
+void session_free(emu_session_t *s)
+{
+    byte_buffer_free(&s->in);
+    byte_buffer_free(&s->held);
+    s->lines_waiting = 0U;
+    s->stream.step = NULL;
 }
 
 void session_printf(emu_session_t *s, const char *fmt, ...)

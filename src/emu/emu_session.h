@@ -12,6 +12,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "co/co.h"
+#include "emu_buffer.h"
 #include "emu_lines.h"
 
 struct emu;
@@ -60,10 +62,43 @@ typedef struct session_node_filter {
     const struct emu_bus *bus; /* NULL: any */
 } session_node_filter_t;
 
+/** Bytes of request lines a session may have waiting to run (a web exchange's whole body and its newline fit); a
+ *  transport reads no more from its client while they fill this. */
+#define SESSION_INPUT_MAX (16U * 1024U + 1U)
+/** A session whose transport holds this many bytes unread runs nothing more, and its streamed answer pauses,
+ *  until the reader takes some: a client that does not read costs no work, and a large answer never piles up. */
+#define SESSION_OUTPUT_HIGH (64U * 1024U)
+/** Bytes of events a session may have held while its streamed answer is being written (as CLIENT_OUTPUT_MAX). */
+#define SESSION_HELD_MAX (1024U * 1024U)
+
+struct emu_session;
+
+/** An answer written piece by piece (emu_session_work.c): `objects` of a device with thousands of entries is
+ *  megabytes. Its line is written as the reader takes it, its output_high at most waiting; events that come
+ *  meanwhile are held and follow the answer's line. */
+typedef struct session_stream {
+    /** Writes the next piece (session_stream_write); false once the answer's line is complete. */
+    bool (*step)(struct emu *emu, struct emu_session *s);
+    void *node;         /* the step's own state: objects' node, entry, sub-index and whether with values */
+    uint16_t entry;
+    uint8_t sub;
+    bool values;
+    unsigned long count;    /* pieces (rows) written so far */
+} session_stream_t;
+
 typedef struct emu_session {
-    /** Writes one whole line, newline included; must not block (a transport buffers or drops). */
+    /** Writes one whole line, newline included; never blocks. Events and every answer go through it: to the
+     *  transport, or held while a stream is being written (ctx is the session itself). */
     void (*write)(void *ctx, const char *line, size_t len);
     void *ctx;
+    /** The transport's writer and its context, as session_init was given them (a transport buffers or drops). */
+    void (*transport_write)(void *ctx, const char *line, size_t len);
+    void *transport_ctx;
+    /** The transport's output waiting unread, for the session to pause at SESSION_OUTPUT_HIGH; NULL: a transport
+     *  that takes every line at once (stdin's), which gets no streamed answers either. */
+    const byte_buffer_t *unread;
+    size_t output_high;         /* unread bytes at which the session pauses (SESSION_OUTPUT_HIGH unless its
+                                 * transport says otherwise: a web session's reader takes everything at once) */
     char name[64];              /* for the log: "stdin", "client 3 (unix)" */
     line_reader_t lines;
     uint32_t events;            /* bit per event_kind_t subscribed */
@@ -74,10 +109,58 @@ typedef struct emu_session {
     size_t n_frames;
     bool restricted;            /* a web session: commands that stop the emulator or write a file are refused
                                  * (command_restriction, emu_commands.h) */
+    /* A line server's (a control socket client's) guards, emu_session_lines.c: */
+    bool refuse_http;           /* a first line that is an HTTP request line ends the session, nothing of it runs */
+    const char *token;          /* non-NULL: the first line must be hello with this token, or the session ends */
+    bool authenticated;         /* the token was given */
+    unsigned long lines_seen;   /* lines the session sent, refused ones too */
+    /* Set by the session, acted on by its transport (which closes it): */
+    const char *hang_up;        /* why the session must end (a static text for the log), NULL: it goes on */
+    bool overflow;              /* more than SESSION_HELD_MAX of events waited behind a streamed answer */
+    /* Work waiting (emu_session_work.c): */
+    byte_buffer_t in;           /* bytes received and not yet run: whole lines, then at most a partial one */
+    size_t lines_waiting;       /* newlines in `in` */
+    session_stream_t stream;    /* step non-NULL: an answer is being written */
+    byte_buffer_t held;         /* events written while the stream runs */
 } emu_session_t;
 
 /** A session with no subscriptions, writing through write(ctx, ...). */
 void session_init(emu_session_t *s, const char *name, void (*write)(void *ctx, const char *line, size_t len), void *ctx);
+
+/** Frees what the session holds (its waiting input, a stream's held events); the transport frees the rest. */
+void session_free(emu_session_t *s);
+
+/* ---- Work waiting, and the pass's budget for it (emu_session_work.c) ------------------------------------------ */
+
+/** Work of all sessions together in one pass of the main loop, at most (beyond the first unit): node deadlines
+ *  and frames come between. */
+#define SESSION_PASS_BUDGET_US 2000U
+
+/** Bytes the session can still take as input (SESSION_INPUT_MAX less what waits). */
+size_t session_input_room(const emu_session_t *s);
+
+/** Queues bytes a client sent (at most session_input_room); they run in sessions_work, a line at a time. */
+void session_input(struct emu *emu, emu_session_t *s, const char *data, size_t n);
+
+/** Whether work waits for the session (a line to run, a stream to continue), whatever its output. */
+bool session_busy(const emu_session_t *s);
+
+/** Runs waiting work of every session of emu, round-robin, one unit at a time (a line, or a piece of a stream),
+ *  until none is left that may run (a session whose reader lags at its output_high waits) or stop_at has
+ *  passed (the clock is read after each unit; the first unit always runs). Returns whether work that may run is
+ *  left: the loop then does not sleep. */
+bool sessions_work(struct emu *emu, co_time_us_t stop_at);
+
+/** Runs waiting work of s alone, at most max_units units (lines, pieces of a stream), while it may run: what a
+ *  web exchange answers at once (emu_web_sessions.c); the rest waits for sessions_work. */
+void session_work_units(struct emu *emu, emu_session_t *s, unsigned max_units);
+
+/** Starts a streamed answer: step will be called until it returns false. false when the session cannot stream
+ *  (unread NULL): the caller answers at once. */
+bool session_stream_start(emu_session_t *s, const session_stream_t *stream);
+
+/** A piece of the streamed answer's line, to the transport. */
+void session_stream_write(emu_session_t *s, const char *data, size_t n);
 
 /** Feeds bytes the session sent; runs each complete line (lines after a `quit` are not run). A line longer than
  *  COMMAND_LINE_MAX or holding a NUL byte is refused (emu_session_lines.c). */

@@ -23,6 +23,7 @@ void sockets_init(emu_sockets_t *k)
     k->unix_fd = -1;
     k->tcp_fd = -1;
     k->next_number = 1U;
+    log_limit_init(&k->refusals, "refused or closed control connections", LOG_QUIET);
 }
 
 int sockets_listen_unix(emu_sockets_t *k, const char *path, char *err, size_t errlen)
@@ -88,6 +89,49 @@ int sockets_listen_tcp(emu_sockets_t *k, const char *host_port, bool *remote, ch
     return 0;
 }
 
+int sockets_load_token(emu_sockets_t *k, const char *path, char *err, size_t errlen)
+{
+    const int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+    if (fd < 0) {
+        const int e = errno;
+        (void)snprintf(err, errlen, "--control-token-file %s: %s", path, strerror(e));
+        return e;
+    }
+    char text[SOCKETS_TOKEN_MAX + 3U]; /* the token, "\r\n", and one more byte to see a longer file */
+    struct stat st;
+    ssize_t n = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) ? read(fd, text, sizeof text) : -1;
+    (void)close(fd);
+    if (n < 0) {
+        (void)snprintf(err, errlen, "--control-token-file %s: not a readable regular file", path);
+        return EINVAL;
+    }
+    size_t len = (size_t)n;
+    if (len > 0U && text[len - 1U] == '\n') {
+        len--;
+    }
+    if (len > 0U && text[len - 1U] == '\r') {
+        len--;
+    }
+    bool printable = true;
+    for (size_t i = 0U; i < len; i++) {
+        printable = printable && text[i] > ' ' && text[i] < 0x7F;
+    }
+    if (len < SOCKETS_TOKEN_MIN || len > SOCKETS_TOKEN_MAX || !printable) {
+        (void)snprintf(err, errlen, "--control-token-file %s: the token must be one line of %u to %u printable "
+                       "characters without spaces (e.g. from: head -c 24 /dev/urandom | base64)", path,
+                       SOCKETS_TOKEN_MIN, SOCKETS_TOKEN_MAX);
+        return EINVAL;
+    }
+    memcpy(k->tcp_token_text, text, len);
+    k->tcp_token_text[len] = '\0';
+    k->tcp_token = k->tcp_token_text;
+    if ((st.st_mode & (S_IRWXG | S_IRWXO)) != 0U) {
+        logline(LOG_QUIET, "control: warning: --control-token-file %s can be read by other users (chmod 600 it)",
+                path);
+    }
+    return 0;
+}
+
 /* ---- Clients ---------------------------------------------------------------------------------------------- */
 
 static void client_write(void *ctx, const char *line, size_t len)
@@ -126,7 +170,8 @@ static void accept_clients(emu_t *emu, emu_sockets_t *k, int listen_fd, const ch
             static const char full[] = "{\"id\":null,\"ok\":false,\"error\":\"too many control clients (at most 64)\"}\n";
             (void)send(fd, full, sizeof full - 1U, MSG_NOSIGNAL | MSG_DONTWAIT);
             (void)close(fd);
-            logline(LOG_QUIET, "control: a %s client refused: %d are connected already", how, MAX_CLIENTS);
+            log_limited(&k->refusals, socketcan_now_us(), "control: a %s client refused: %d are connected already",
+                        how, MAX_CLIENTS);
             continue;
         }
         control_client_t *c = calloc(1U, sizeof *c);
@@ -138,6 +183,11 @@ static void accept_clients(emu_t *emu, emu_sockets_t *k, int listen_fd, const ch
         char name[64];
         (void)snprintf(name, sizeof name, "client %lu (%s)", k->next_number++, how);
         session_init(&c->session, name, client_write, c);
+        c->session.unread = &c->out;
+        c->session.refuse_http = true; /* on both sockets: a browser may reach a Unix socket through a proxy too */
+        if (listen_fd == k->tcp_fd) {
+            c->session.token = k->tcp_token;
+        }
         k->clients[k->n_clients++] = c;
         events_add_session(emu, &c->session);
         logline(LOG_VERBOSE, "control: %s connected", name);
@@ -147,13 +197,16 @@ static void accept_clients(emu_t *emu, emu_sockets_t *k, int listen_fd, const ch
 static void client_close(emu_t *emu, emu_sockets_t *k, size_t i)
 {
     control_client_t *c = k->clients[i];
-    if (c->overflow) {
-        logline(LOG_QUIET, "control: %s disconnected: it left more than %u bytes unread", c->session.name,
-                CLIENT_OUTPUT_MAX);
+    if (c->overflow || c->session.overflow) {
+        log_limited(&k->refusals, socketcan_now_us(), "control: %s disconnected: it left more than %u bytes unread",
+                    c->session.name, CLIENT_OUTPUT_MAX);
+    } else if (c->session.hang_up != NULL) {
+        log_limited(&k->refusals, socketcan_now_us(), "control: %s closed: %s", c->session.name, c->session.hang_up);
     } else {
         logline(LOG_VERBOSE, "control: %s disconnected", c->session.name);
     }
     events_remove_session(emu, &c->session);
+    session_free(&c->session);
     (void)close(c->fd);
     byte_buffer_free(&c->out);
     free(c);
@@ -173,8 +226,11 @@ nfds_t sockets_poll_fds(const emu_sockets_t *k, struct pollfd *pfd, nfds_t max)
         }
     }
     for (size_t i = 0U; i < k->n_clients && n < max; i++) {
-        pfd[n].fd = k->clients[i]->fd;
-        pfd[n].events = (short)(POLLIN | (k->clients[i]->out.len > 0U ? POLLOUT : 0));
+        const control_client_t *c = k->clients[i];
+        /* No POLLIN while its input is full or it ended: what it sends waits in the kernel, and it is not read. */
+        const bool reading = !c->eof && c->session.hang_up == NULL && session_input_room(&c->session) > 0U;
+        pfd[n].fd = c->fd;
+        pfd[n].events = (short)((reading ? POLLIN : 0) | (c->out.len > 0U ? POLLOUT : 0));
         pfd[n].revents = 0;
         n++;
     }
@@ -183,14 +239,16 @@ nfds_t sockets_poll_fds(const emu_sockets_t *k, struct pollfd *pfd, nfds_t max)
 
 static void client_read(emu_t *emu, control_client_t *c)
 {
-    /* At most CLIENT_READ_MAX bytes a pass (some 11 JSON requests, about 0.3 ms of work): a client that floods the
-     * socket gets its share, and the nodes' deadlines come in between (docs/performance.md measures it). */
+    /* Only what its session has room for: lines run later, within the pass's budget (emu_session_work.c). */
+    const size_t room = session_input_room(&c->session);
     char chunk[CLIENT_READ_MAX];
-    const ssize_t r = recv(c->fd, chunk, sizeof chunk, MSG_DONTWAIT);
+    const ssize_t r = recv(c->fd, chunk, room < sizeof chunk ? room : sizeof chunk, MSG_DONTWAIT);
     if (r > 0) {
-        session_feed(emu, &c->session, chunk, (size_t)r);
-    } else if (r == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
-        c->gone = true; /* a line it did not finish is not run */
+        session_input(emu, &c->session, chunk, (size_t)r);
+    } else if (r == 0) {
+        c->eof = true; /* its lines still run and are answered (a half-closed client reads); a partial one does not */
+    } else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+        c->gone = true;
     }
 }
 
@@ -213,25 +271,47 @@ void sockets_service(emu_t *emu, emu_sockets_t *k, const struct pollfd *pfd, nfd
             if (c->fd != pfd[i].fd) {
                 continue;
             }
-            if ((pfd[i].revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+            const bool can_read = !c->eof && session_input_room(&c->session) > 0U;
+            if ((pfd[i].revents & (POLLIN | POLLHUP | POLLERR)) != 0 && can_read) {
                 client_read(emu, c);
+            } else if ((pfd[i].revents & (POLLHUP | POLLERR)) != 0 && c->eof) {
+                c->gone = true; /* it hung up after its input ended: nobody reads the answers any more */
             }
             break;
         }
     }
-    sockets_flush(k);
-    for (size_t j = k->n_clients; j > 0U; j--) {
-        if (k->clients[j - 1U]->gone || k->clients[j - 1U]->overflow) {
-            client_close(emu, k, j - 1U);
-        }
-    }
+    sockets_tidy(emu, k);
 }
 
-void sockets_flush(emu_sockets_t *k)
+static void sockets_flush(emu_sockets_t *k)
 {
     for (size_t j = 0U; j < k->n_clients; j++) {
         client_flush(k->clients[j]);
     }
+}
+
+/* Whether a client ended: gone, overflowing, hung up by its session (after its last answer left, if it reads), or
+ * done after the end of its input. */
+static bool client_ended(const control_client_t *c)
+{
+    if (c->gone || c->overflow || c->session.overflow) {
+        return true;
+    }
+    if (c->session.hang_up != NULL || c->eof) {
+        return !session_busy(&c->session) && c->out.len == 0U;
+    }
+    return false;
+}
+
+void sockets_tidy(emu_t *emu, emu_sockets_t *k)
+{
+    sockets_flush(k);
+    for (size_t j = k->n_clients; j > 0U; j--) {
+        if (client_ended(k->clients[j - 1U])) {
+            client_close(emu, k, j - 1U);
+        }
+    }
+    log_limit_tick(&k->refusals, socketcan_now_us());
 }
 
 void sockets_close(emu_t *emu, emu_sockets_t *k)

@@ -41,7 +41,7 @@ static enum MHD_Result open_session(emu_web_t *w, struct MHD_Connection *c, co_t
     web_session_t *s = web_session_open(w->emu, w, now, &full);
     if (s == NULL) {
         if (full) {
-            logline(LOG_QUIET, "web: a session refused: %d are open already", WEB_SESSIONS_MAX);
+            log_limited(&w->refusals, now, "web: a session refused: %d are open already", WEB_SESSIONS_MAX);
         }
         return web_send_error(c, MHD_HTTP_SERVICE_UNAVAILABLE, true,
                               full ? "too many web sessions (at most 8)" : "cannot open a session", NULL);
@@ -55,12 +55,12 @@ static enum MHD_Result open_session(emu_web_t *w, struct MHD_Connection *c, co_t
     return web_send(c, MHD_HTTP_OK, r, true);
 }
 
-/* POST /api/session/ID: the body's request lines run as the session's (some maybe later: WEB_FEED_MAX), then
+/* POST /api/session/ID: the body's request lines run as the session's (some maybe later: WEB_EXCHANGE_UNITS), then
  * everything that waits for the session comes back, one line each. */
 static enum MHD_Result exchange(emu_web_t *w, struct MHD_Connection *c, const web_request_t *q, co_time_us_t now)
 {
     web_session_t *s = web_session_find(w, q->id);
-    if (s == NULL || s->overflow) { /* an overflowing one is removed, and logged, at the end of this pass */
+    if (s == NULL || s->overflow || s->session.overflow) { /* an overflowing one is removed, and logged, at the end of this pass */
         return web_send_error(c, MHD_HTTP_NOT_FOUND, true, "no such session (expired or dropped): open a new one",
                               NULL);
     }
@@ -193,11 +193,11 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **state, enum
 static void on_log(void *cls, const char *fmt, va_list ap) __attribute__((format(printf, 2, 0)));
 static void on_log(void *cls, const char *fmt, va_list ap)
 {
-    (void)cls;
+    emu_web_t *w = (emu_web_t *)cls;
     char text[512];
     (void)vsnprintf(text, sizeof text, fmt, ap);
     text[strcspn(text, "\n")] = '\0';
-    logline(LOG_NORMAL, "web: %s", text);
+    log_limited(&w->server_log, socketcan_now_us(), "web: %s", text); /* a client's bad requests, at a bounded rate */
 }
 
 /* ---- Start, main loop, stop ------------------------------------------------------------------------------------- */
@@ -208,6 +208,8 @@ void web_init(emu_web_t *w)
     w->epoll_fd = -1;
     w->listener.fd = -1;
     w->next_number = 1U;
+    log_limit_init(&w->refusals, "refused web sessions", LOG_QUIET);
+    log_limit_init(&w->server_log, "lines of the web server", LOG_NORMAL);
 }
 
 /* web/index.html with the token where the placeholder is. */
@@ -311,6 +313,8 @@ void web_service(emu_t *emu, emu_web_t *w, const struct pollfd *pfd, nfds_t n, c
         (void)MHD_run(w->daemon); /* accepts, reads, answers: the callbacks above, without blocking */
     }
     web_sessions_service(emu, w, now);
+    log_limit_tick(&w->refusals, now);
+    log_limit_tick(&w->server_log, now);
 }
 
 void web_stop(emu_t *emu, emu_web_t *w)

@@ -11,8 +11,9 @@
  * A web session is a control session (emu_session.h) whose output waits in a buffer of its own for the browser's
  * next exchange; commands take exactly the path of the control socket's, but a web session may not stop the
  * emulator or write a file (emu_session_t.restricted). Nothing a browser does blocks the nodes: sockets are
- * non-blocking, at most WEB_FEED_MAX bytes of a session's requests run per pass of the main loop, and the limits
- * below bound what any number of browsers can hold.
+ * non-blocking, an exchange runs at most WEB_EXCHANGE_UNITS of its requests at once and the rest wait for the
+ * main loop's budget of all sessions' work (emu_session_work.c), and the limits below bound what any number of
+ * browsers can hold.
  */
 #ifndef EMU_WEB_H
 #define EMU_WEB_H
@@ -22,6 +23,7 @@
 #include <stddef.h>
 
 #include "co/co.h"
+#include "emu_log_limit.h"
 #include "emu_tcp.h"
 
 struct emu;
@@ -34,8 +36,9 @@ struct web_session;
 #define WEB_SESSION_IDLE_US (10U * 1000000U)
 /** Bytes of one request's body (request lines); more gets 413. */
 #define WEB_BODY_MAX (16U * 1024U)
-/** Bytes of a session's requests run per pass of the main loop, as a control client's (CLIENT_READ_MAX). */
-#define WEB_FEED_MAX 512U
+/** Units of work (request lines, pieces of a streamed answer) an exchange runs at once, so that its answers come
+ *  back with it; the rest run within the main loop's budget and come with a later exchange. */
+#define WEB_EXCHANGE_UNITS 16U
 /** Bytes of answers and events one session may have waiting; more and it is dropped (as CLIENT_OUTPUT_MAX). */
 #define WEB_OUTPUT_MAX (1024U * 1024U)
 /** HTTP connections at once, and from one address. */
@@ -60,6 +63,8 @@ typedef struct emu_web {
     size_t n_sessions;
     unsigned long next_number;      /* sessions are numbered from 1 in the log */
     struct emu *emu;                /* for libmicrohttpd's callbacks */
+    log_limit_t refusals;           /* "a session refused" lines, rate-limited */
+    log_limit_t server_log;         /* libmicrohttpd's own lines (a client's bad requests), rate-limited */
 } emu_web_t;
 
 void web_init(emu_web_t *w);
@@ -72,8 +77,8 @@ int web_start(struct emu *emu, emu_web_t *w, const char *host_port, char *err, s
  *  deadline: libmicrohttpd's timeout, a session's expiry, now when requests of a session wait to run. */
 nfds_t web_poll_fds(emu_web_t *w, struct pollfd *pfd, co_time_us_t now, co_time_us_t *next);
 
-/** After poll: lets libmicrohttpd serve (when its descriptor woke or it asked to run), runs waiting requests of
- *  each session (WEB_FEED_MAX bytes), removes expired and overflowing sessions. pfd, n as web_poll_fds gave. */
+/** After poll: lets libmicrohttpd serve (when its descriptor woke or it asked to run; an exchange runs some of its
+ *  session's requests), removes expired and overflowing sessions. pfd, n as web_poll_fds gave. */
 void web_service(struct emu *emu, emu_web_t *w, const struct pollfd *pfd, nfds_t n, co_time_us_t now);
 
 /** Ends every session and connection, closes the socket (nothing waits: a browser asks again). */

@@ -56,6 +56,8 @@ web_session_t *web_session_open(emu_t *emu, emu_web_t *w, co_time_us_t now, bool
     (void)snprintf(name, sizeof name, "web session %lu", s->number);
     session_init(&s->session, name, session_write, s);
     s->session.restricted = true;
+    s->session.unread = &s->out;
+    s->session.output_high = WEB_OUTPUT_MAX / 4U; /* the browser takes all of it with each exchange */
     w->sessions[w->n_sessions++] = s;
     events_add_session(emu, &s->session);
     logline(LOG_VERBOSE, "web: %s opened", name);
@@ -80,34 +82,18 @@ web_session_t *web_session_find(emu_web_t *w, const char *id)
     return found;
 }
 
-/* Runs up to WEB_FEED_MAX bytes of the waiting request lines (a line cut here is completed by the next call). */
-static void feed(emu_t *emu, web_session_t *s)
-{
-    const size_t n = s->in_len < WEB_FEED_MAX ? s->in_len : WEB_FEED_MAX;
-    if (n == 0U) {
-        return;
-    }
-    const size_t at = s->in_start;
-    s->in_start += n;
-    s->in_len -= n;
-    session_feed(emu, &s->session, s->in + at, n);
-}
-
 bool web_session_queue(emu_t *emu, web_session_t *s, const char *body, size_t len, co_time_us_t now)
 {
     s->last_exchange = now;
     const bool end_line = len > 0U && body[len - 1U] != '\n'; /* a line never spans two exchanges */
-    if (len + (end_line ? 1U : 0U) > sizeof s->in - s->in_len) {
+    if (len + (end_line ? 1U : 0U) > session_input_room(&s->session)) {
         return false;
     }
-    memmove(s->in, s->in + s->in_start, s->in_len);
-    s->in_start = 0U;
-    memcpy(s->in + s->in_len, body, len);
-    s->in_len += len;
+    session_input(emu, &s->session, body, len);
     if (end_line) {
-        s->in[s->in_len++] = '\n';
+        session_input(emu, &s->session, "\n", 1U);
     }
-    feed(emu, s);
+    session_work_units(emu, &s->session, WEB_EXCHANGE_UNITS);
     return true;
 }
 
@@ -119,6 +105,7 @@ void web_session_remove(emu_t *emu, emu_web_t *w, web_session_t *s, int log_leve
         logline(log_level, "web: %s %s", s->session.name, why);
     }
     events_remove_session(emu, &s->session);
+    session_free(&s->session);
     for (size_t i = 0U; i < w->n_sessions; i++) {
         if (w->sessions[i] == s) {
             w->sessions[i] = w->sessions[--w->n_sessions];
@@ -133,10 +120,7 @@ void web_sessions_service(emu_t *emu, emu_web_t *w, co_time_us_t now)
 {
     for (size_t i = w->n_sessions; i > 0U; i--) {
         web_session_t *s = w->sessions[i - 1U];
-        if (!s->overflow) {
-            feed(emu, s);
-        }
-        if (s->overflow) {
+        if (s->overflow || s->session.overflow) {
             char why[96];
             (void)snprintf(why, sizeof why, "dropped: more than %u bytes waited for its next exchange", WEB_OUTPUT_MAX);
             web_session_remove(emu, w, s, LOG_QUIET, why);
@@ -153,7 +137,7 @@ co_time_us_t web_sessions_deadline(const emu_web_t *w, co_time_us_t now)
     co_time_us_t next = CO_NEVER;
     for (size_t i = 0U; i < w->n_sessions; i++) {
         const web_session_t *s = w->sessions[i];
-        if (s->in_len > 0U || s->overflow) {
+        if (s->overflow || s->session.overflow) {
             return now;
         }
         const co_time_us_t expiry = s->last_exchange + WEB_SESSION_IDLE_US;

@@ -24,9 +24,6 @@ typedef struct web_session {
     char id[WEB_ID_HEX + 1];
     byte_buffer_t out;              /* answers and events since the last exchange */
     bool overflow;                  /* more than WEB_OUTPUT_MAX waited: dropped at the next pass */
-    char in[WEB_BODY_MAX + 1];      /* request lines not run yet (a body, and the newline ending its last line) */
-    size_t in_start;
-    size_t in_len;
     co_time_us_t last_exchange;
 } web_session_t;
 
@@ -40,8 +37,9 @@ web_session_t *web_session_open(struct emu *emu, emu_web_t *w, co_time_us_t now,
 /** The session with this id, or NULL (compared in constant time: an id is a credential). */
 web_session_t *web_session_find(emu_web_t *w, const char *id);
 
-/** An exchange's request lines: queued behind what still waits (a last line without newline is ended), then up to
- *  WEB_FEED_MAX bytes run at once. false, with nothing queued, when they do not fit beside what waits. */
+/** An exchange's request lines: queued behind what still waits in the session (a last line without newline is
+ *  ended), then up to WEB_EXCHANGE_UNITS units of its work run at once. false, with nothing queued, when they do not
+ *  fit beside what waits. */
 bool web_session_queue(struct emu *emu, web_session_t *s, const char *body, size_t len, co_time_us_t now);
 
 /** What waits for the browser, handed over (free() it; NULL when nothing waits). */
@@ -50,11 +48,10 @@ char *web_session_take_output(web_session_t *s, size_t *len);
 /** Removes a session: unregistered from events, freed. why (for the log) is NULL for a quiet removal. */
 void web_session_remove(struct emu *emu, emu_web_t *w, web_session_t *s, int log_level, const char *why);
 
-/** Once per pass: runs up to WEB_FEED_MAX bytes of each session's waiting requests, removes the sessions that
- *  overflowed or expired (logged). */
+/** Once per pass: removes the sessions that overflowed or expired (logged). Their requests run in sessions_work. */
 void web_sessions_service(struct emu *emu, emu_web_t *w, co_time_us_t now);
 
-/** The sessions' next deadline: now while requests wait to run, else the earliest expiry; CO_NEVER with none. */
+/** The sessions' next deadline: now when one overflowed, else the earliest expiry; CO_NEVER with none. */
 co_time_us_t web_sessions_deadline(const emu_web_t *w, co_time_us_t now);
 
 #endif /* EMU_WEB_SESSIONS_H */

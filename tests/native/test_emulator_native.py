@@ -252,7 +252,7 @@ def test_control_sockets_and_faults_run_clean(tmp_path):
     """The control sockets, the JSON framing, the subscriptions and the protocol faults under the sanitizers (the vcan
     suite holds their behaviour: test_control_socket.py, test_faults.py): 20 clients with JSON and text requests,
     malformed and overlong lines, NUL bytes and random bytes, clients that vanish mid-line, one that subscribes to
-    every frame and never reads until it is cut off, faults that hold, change and drop frames while SDO traffic
+    every frame and never reads until its events cut it off (its own requests wait meanwhile), faults that hold, change and drop frames while SDO traffic
     runs; quit by JSON with status 0."""
     import json
     ctl = tmp_path / "ctl.sock"
@@ -304,6 +304,13 @@ def test_control_sockets_and_faults_run_clean(tmp_path):
             for node in NODES:
                 bus.send(0x600 + node, upload(0x1018, 1))
             time.sleep(0.2)
+        # the greedy client's "help" lines wait while its answers wait unread (they cost no work); the frame events
+        # it subscribed to (text lines of some 50 bytes since its `subscribe all`) pile up until it is cut off
+        for k in range(60000):
+            bus.send(0x7E0, k.to_bytes(4, "little"))
+        watch = select.poll()  # the emulator closes it: its end of the socket hangs up (nothing of it is read here)
+        watch.register(greedy, select.POLLRDHUP)
+        assert watch.poll(20000), "the greedy client was not cut off"
         clients[0].sendall(b'{"cmd":"set","node":16,"object":"0x1017","va')  # vanishes mid-line
         clients[0].close()
         for c in clients[1:]:

@@ -438,16 +438,41 @@ def test_at_most_eight_sessions(emu):
         assert emu.exchange(session, f'{{"id":{k},"cmd":"hello"}}').lines()[0]["id"] == k
 
 
-def test_a_session_overflowing_its_buffer_is_dropped(emu):
-    """80 requests of ~25 kB answers each: the first 512 bytes of the body run at once and come back; the rest run
-    in the next passes, pile up past 1 MiB unasked for, and the session is dropped (logged); a new one works."""
+def test_a_session_whose_browser_does_not_ask_pauses_and_loses_nothing(emu):
+    """80 requests of ~25 kB answers each (2 MB): an exchange answers what it ran at once; the rest run only while
+    less than a quarter of WEB_OUTPUT_MAX waits for the browser, so a browser that does not ask costs no work and
+    is not dropped; the next exchanges bring every answer, whole, in order."""
     session = emu.open_session()
     request = '{"id":1,"cmd":"objects","node":16,"values":true}'
-    answer = emu.exchange(session, *[request] * 80)
-    assert answer.status == 200
-    lines = answer.lines()
-    assert len(lines) == 512 // (len(request) + 1), len(lines)  # WEB_FEED_MAX bytes ran with the exchange
-    assert all(m["id"] == 1 and m["ok"] is True for m in lines)
+    first = emu.exchange(session, *[request] * 80)
+    assert first.status == 200
+    time.sleep(1.0)  # many passes of the main loop: the session runs until its output waits, then pauses
+    second = emu.exchange(session)
+    assert second.status == 200
+    assert 256 * 1024 <= len(second.body) < 256 * 1024 + 64 * 1024, len(second.body)  # paused at the mark
+    text = first.body + second.body
+    for _ in range(200):
+        if text.count(b"\n") == 80:
+            break
+        answer = emu.exchange(session)
+        assert answer.status == 200
+        text += answer.body
+    lines = text.split(b"\n")
+    assert lines[-1] == b"" and len(lines) == 81
+    rows = [json.loads(line) for line in lines[:-1]]
+    assert all(m["id"] == 1 and m["ok"] is True and m["node"] == 16 for m in rows)
+    assert all(m["objects"] == rows[0]["objects"] or len(m["objects"]) == len(rows[0]["objects"]) for m in rows)
+    assert "dropped" not in emu.log()
+
+
+def test_a_session_overflowing_its_buffer_with_events_is_dropped(emu):
+    """Events are not paused: a session subscribed to every frame whose browser does not ask for them is dropped
+    once more than WEB_OUTPUT_MAX bytes wait (logged); a new one works."""
+    session = emu.open_session()
+    subscribed = emu.exchange(session, '{"id":1,"cmd":"subscribe","events":["frame"],"frames":"0x000/0x000"}')
+    assert subscribed.lines()[0]["ok"] is True
+    for k in range(30000):  # ~110 bytes of JSON event each
+        emu.bus.send(0x7E0, k.to_bytes(4, "little"))
     emu.wait_log("web: web session 1 dropped: more than 1048576 bytes waited for its next exchange")
     gone = emu.exchange(session)
     assert (gone.status, gone.json()) == (404, NO_SESSION)
