@@ -182,9 +182,12 @@ void device_clear_running_state(device_t *dev, size_t env_offset, size_t env_siz
     memset(m + env_offset + env_size, 0, size - env_offset - env_size);
 }
 
+/* The longest line: a VISIBLE_STRING of 255 bytes shown with every byte escaped (print_value), with its address. */
+#define DEVICE_LINE_MAX 1100
+
 void device_printf(const device_t *dev, const char *fmt, ...)
 {
-    char line[512];
+    char line[DEVICE_LINE_MAX];
     va_list ap;
     va_start(ap, fmt);
     (void)vsnprintf(line, sizeof line, fmt, ap);
@@ -292,6 +295,31 @@ bool device_parse_address(const char *text, uint16_t *index, uint8_t *sub)
     return true;
 }
 
+/* A VISIBLE_STRING (up to its first NUL) as a C string: CiA 301 gives it the printable ASCII characters 0x20..0x7E,
+ * which are shown as they are, but any SDO client may write any byte: every other byte as \xNN, a backslash as \\
+ * and a quote as \", so that nothing reaches a terminal that it would act on (ESC[2J clears it) and every byte can
+ * be told from the line. out has room for 4 * len + 1 bytes. */
+static void escape_string(char *out, const uint8_t *text, size_t len)
+{
+    static const char hex[] = "0123456789abcdef";
+    size_t w = 0U;
+    for (size_t i = 0U; i < len && text[i] != 0U; i++) {
+        const uint8_t c = text[i];
+        if (c == '\\' || c == '"') {
+            out[w++] = '\\';
+            out[w++] = (char)c;
+        } else if (c >= 0x20U && c < 0x7FU) {
+            out[w++] = (char)c;
+        } else {
+            out[w++] = '\\';
+            out[w++] = 'x';
+            out[w++] = hex[c >> 4];
+            out[w++] = hex[c & 0x0FU];
+        }
+    }
+    out[w] = '\0';
+}
+
 static void print_value(device_t *dev, uint16_t index, uint8_t sub)
 {
     co_od_entry_t one;
@@ -308,10 +336,12 @@ static void print_value(device_t *dev, uint16_t index, uint8_t sub)
         u = (u << 8) | buf[i - 1U];
     }
     switch (e->type) {
-    case CO_T_VISIBLE_STRING:
-        buf[len] = 0U;
-        device_printf(dev, "0x%04X:%02X = \"%s\"", index, sub, (const char *)buf);
+    case CO_T_VISIBLE_STRING: {
+        char shown[4U * sizeof buf + 1U];
+        escape_string(shown, buf, len);
+        device_printf(dev, "0x%04X:%02X = \"%s\"", index, sub, shown);
         break;
+    }
     case CO_T_REAL32: {
         float f;
         const uint32_t u32 = (uint32_t)u;
@@ -476,6 +506,64 @@ static device_cmd_result_t cmd_set(device_t *dev, const char *addr, const char *
     return DEVICE_CMD_OK;
 }
 
+/* The common commands in the form of a class's commands_help: what device_command says when one of them comes with
+ * the wrong number of words. */
+static const char common_usage[] = "  show\n"
+                                   "  get INDEX[:SUB]\n"
+                                   "  set INDEX[:SUB] VALUE\n"
+                                   "  emcy CODE [REGISTER [B0..B4]]\n"
+                                   "  emcy-clear CODE [B0..B4]\n"
+                                   "  power-cycle\n";
+
+/* The first " / " in [p, end), or end. */
+static const char *next_alternative(const char *p, const char *end)
+{
+    for (; p + 3 <= end; p++) {
+        if (p[0] == ' ' && p[1] == '/' && p[2] == ' ') {
+            return p;
+        }
+    }
+    return end;
+}
+
+bool device_help_usage(const char *help, const char *word, const char **args, size_t *args_len)
+{
+    const size_t word_len = strlen(word);
+    if (help == NULL || word_len == 0U) {
+        return false;
+    }
+    const char *line = help;
+    while (*line != '\0') {
+        const char *end = strchr(line, '\n');
+        if (end == NULL) {
+            end = line + strlen(line);
+        }
+        if (end - line > 2 && line[0] == ' ' && line[1] == ' ' && line[2] != ' ') {
+            const char *usage = line + 2;
+            const char *stop = usage; /* the usage column ends at two blanks in a row */
+            while (stop < end && !(stop[0] == ' ' && stop + 1 < end && stop[1] == ' ')) {
+                stop++;
+            }
+            for (const char *alt = usage; alt < stop;) {
+                const char *alt_end = next_alternative(alt, stop);
+                if ((size_t)(alt_end - alt) >= word_len && strncmp(alt, word, word_len) == 0 &&
+                    (alt + word_len == alt_end || alt[word_len] == ' ')) {
+                    const char *a = alt + word_len;
+                    while (a < alt_end && *a == ' ') {
+                        a++;
+                    }
+                    *args = a;
+                    *args_len = (size_t)(alt_end - a);
+                    return true;
+                }
+                alt = alt_end == stop ? stop : alt_end + 3;
+            }
+        }
+        line = *end == '\n' ? end + 1 : end;
+    }
+    return false;
+}
+
 device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now)
 {
     dev->now = now;
@@ -548,6 +636,18 @@ device_cmd_result_t device_command(device_t *dev, int argc, const char *const *a
         }
         device_printf(dev, "power cycled");
         return DEVICE_CMD_OK;
+    }
+    /* A command of the device with too few or too many words: what it takes, not "unknown command". */
+    const char *args;
+    size_t args_len;
+    if (device_help_usage(common_usage, cmd, &args, &args_len) ||
+        device_help_usage(dev->cls->commands_help, cmd, &args, &args_len)) {
+        if (args_len == 0U) {
+            device_printf(dev, "error: %s takes no arguments", cmd);
+        } else {
+            device_printf(dev, "error: %s takes %.*s", cmd, (int)args_len, args);
+        }
+        return DEVICE_CMD_ERROR;
     }
     return DEVICE_CMD_UNKNOWN;
 }

@@ -187,8 +187,16 @@ static inline co_time_us_t device_process(device_t *dev, co_time_us_t now)
     return dev->core_due < dev->step_due ? dev->core_due : dev->step_due;
 }
 
-/** Runs a control command: the device's own first, then the common ones (see device.c). */
+/** Runs a control command: the device's own first, then the common ones (see device.c). A command of the device
+ *  (a common one, or one of cls->commands_help) that neither takes with these words is DEVICE_CMD_ERROR, with
+ *  "error: WORD takes ARGS" (or "takes no arguments") printed; DEVICE_CMD_UNKNOWN only for a word that is none. */
 device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
+
+/** The arguments of command word by a help text of "  USAGE  TEXT" lines (device_class_t.commands_help: USAGE is
+ *  the word and its arguments, alternatives joined by " / ", and ends at the first two blanks in a row): true when
+ *  word is one of its commands, with what follows the word in *args (args_len bytes, 0 for none; not
+ *  NUL-terminated). help may be NULL (no commands). */
+bool device_help_usage(const char *help, const char *word, const char **args, size_t *args_len);
 
 /**
  * For a class's power_on: zeroes the model block except the environment inputs, which are the bytes

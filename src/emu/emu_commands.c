@@ -41,26 +41,26 @@ static int split(char *line, char **argv)
     return argc;
 }
 
-static void help(void)
-{
-    reply("commands (NODE = node-ID, decimal or 0x-hex, or 'all'; NODE@IFACE on one bus of several):\n"
-          "  list                         the nodes\n"
-          "  show NODE                    NMT state, node-ID, active errors\n"
-          "  get NODE INDEX[:SUB]         an object's value (hex index/sub: 0x2002:06 or 2002:6)\n"
-          "  set NODE INDEX[:SUB] VALUE   write a value as the device itself would (inputs, measurements)\n"
-          "  power-cycle NODE             restart the node as switching its supply off and on would\n"
-          "  emcy NODE CODE [REG [B0..B4]]  raise a raw CiA error (EMCY, 0x1001, 0x1003)\n"
-          "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
-          "  fault NODE KIND [ARGS]       make the node misbehave on the bus (kinds: fault NODE)\n"
-          "  fault-clear NODE [KIND]      end its faults (all when no KIND is given)\n"
-          "  faults NODE                  the node's faults and their effect\n"
-          "  export-dcf NODE FILE         a node read from an EDS/DCF, its current values as a DCF\n"
-          "  help [NODE]                  this text, or the device commands of NODE\n"
-          "  subscribe KIND[,KIND...] [NODE...]  events of these kinds (or all) to this session\n"
-          "  subscribe frame COB-ID[x][/MASK] ...  11-bit frames matching one (at most 4) as events; x: 29-bit ones\n"
-          "  unsubscribe [KIND[,KIND...]]  stop them\n"
-          "  quit                         stop the emulator");
-}
+/* The command table: help's text, and the usage a command with too few words is answered with (device_help_usage
+ * reads its "  USAGE  TEXT" lines). */
+static const char help_text[] =
+    "commands (NODE = node-ID, decimal or 0x-hex, or 'all'; NODE@IFACE on one bus of several):\n"
+    "  list                         the nodes\n"
+    "  show NODE                    NMT state, node-ID, active errors\n"
+    "  get NODE INDEX[:SUB]         an object's value (hex index/sub: 0x2002:06 or 2002:6)\n"
+    "  set NODE INDEX[:SUB] VALUE   write a value as the device itself would (inputs, measurements)\n"
+    "  power-cycle NODE             restart the node as switching its supply off and on would\n"
+    "  emcy NODE CODE [REG [B0..B4]]  raise a raw CiA error (EMCY, 0x1001, 0x1003)\n"
+    "  emcy-clear NODE CODE [B0..B4]  clear it (error-reset EMCY)\n"
+    "  fault NODE KIND [ARGS]       make the node misbehave on the bus (kinds: fault NODE)\n"
+    "  fault-clear NODE [KIND]      end its faults (all when no KIND is given)\n"
+    "  faults NODE                  the node's faults and their effect\n"
+    "  export-dcf NODE FILE         a node read from an EDS/DCF, its current values as a DCF\n"
+    "  help [NODE]                  this text, or the device commands of NODE\n"
+    "  subscribe KIND[,KIND...] [NODE...]  events of these kinds (or all) to this session\n"
+    "  subscribe frame COB-ID[x][/MASK] ...  11-bit frames matching one (at most 4) as events; x: 29-bit ones\n"
+    "  unsubscribe [KIND[,KIND...]]  stop them\n"
+    "  quit                         stop the emulator";
 
 /* NODE of a command: ID, ID@IFACE, all or all@IFACE. */
 typedef struct node_selector {
@@ -198,7 +198,7 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         return COMMAND_OK;
     }
     if (strcmp(argv[0], "help") == 0 && argc == 1) {
-        help();
+        reply("%s", help_text);
         return COMMAND_OK;
     }
     if (strcmp(argv[0], "list") == 0) {
@@ -211,7 +211,13 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         return COMMAND_OK;
     }
     if (argc < 2) {
-        reply("error: '%s' needs a NODE (try help)", argv[0]);
+        const char *args;
+        size_t args_len;
+        if (device_help_usage(help_text, argv[0], &args, &args_len)) {
+            reply("error: %s takes %.*s", argv[0], (int)args_len, args);
+        } else {
+            reply("error: '%s' needs a NODE (try help)", argv[0]);
+        }
         return COMMAND_ERROR;
     }
     emu_node_t *nodes[MAX_NODES_ALL];

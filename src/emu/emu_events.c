@@ -11,6 +11,7 @@
 #include "emu_bus.h"
 #include "emu_json_request.h" /* hex_string: the events write bytes as the answers do */
 #include "emu_output.h"
+#include "emu_text.h"
 
 void events_add_session(emu_t *emu, emu_session_t *s)
 {
@@ -64,16 +65,17 @@ static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const em
                 }
                 if (n != NULL) {
                     (void)json_object_set_new(o, "node", json_integer(id));
-                    (void)json_object_set_new(o, "device", json_string(n->dev.cls->name));
+                    (void)json_object_set_new(o, "device", jstr(n->dev.cls->name)); /* an EDS file's name: any bytes */
                 }
                 if (fields != NULL) {
                     (void)json_object_update(o, fields);
                 }
                 if (text != NULL) {
-                    json_t *jt = json_string(text);
-                    (void)json_object_set_new(o, "text", jt != NULL ? jt : json_string("?"));
+                    (void)json_object_set_new(o, "text", jstr(text));
                 }
-                json_line = json_dumps(o, JSON_COMPACT);
+                /* ASCII only: jansson writes DEL and the C1 controls (U+0080..U+009F, a CSI to some terminals) as
+                 * they are otherwise, and a raw event stream may be read on a terminal. */
+                json_line = json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
                 json_decref(o);
                 if (json_line == NULL) {
                     continue;
@@ -84,15 +86,19 @@ static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const em
             s->write(s->ctx, json_line, json_len);
         } else {
             if (text_len == 0U) {
+                /* The device's name (an EDS file's) and the text (a model's message) are shown escaped, as the
+                 * log shows them (emu_text.h): one line, nothing a terminal acts on. */
+                char raw[sizeof text_line];
                 int w;
                 if (n != NULL) {
-                    w = snprintf(text_line, sizeof text_line - 1U, "event %s %.6f node %u@%s (%s): %s", event_kind_name(kind),
+                    w = snprintf(raw, sizeof raw, "event %s %.6f node %u@%s (%s): %s", event_kind_name(kind),
                                  (double)t / 1e6, id, bus->can.ifname, n->dev.cls->name, text != NULL ? text : "");
                 } else {
-                    w = snprintf(text_line, sizeof text_line - 1U, "event %s %.6f %s: %s", event_kind_name(kind),
+                    w = snprintf(raw, sizeof raw, "event %s %.6f %s: %s", event_kind_name(kind),
                                  (double)t / 1e6, bus != NULL ? bus->can.ifname : "-", text != NULL ? text : "");
                 }
-                text_len = w < 0 ? 0U : (size_t)w < sizeof text_line - 1U ? (size_t)w : sizeof text_line - 2U;
+                const size_t raw_len = w < 0 ? 0U : (size_t)w < sizeof raw ? (size_t)w : sizeof raw - 1U;
+                text_len = text_escape(text_line, sizeof text_line - 1U, raw, raw_len, TEXT_ONE_LINE);
                 text_line[text_len++] = '\n'; /* a line cut to size still ends with its newline */
             }
             s->write(s->ctx, text_line, text_len);

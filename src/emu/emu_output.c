@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "../linux/socketcan.h"
+#include "emu_text.h"
 
 /* Longest line (the log's time prefix and text, or a multi-line reply) with its newline: one write of at most
  * PIPE_BUF bytes takes it whole. */
@@ -171,14 +172,17 @@ static void append(int stream, const char *line, size_t n)
     ring_put(s, line, n);
 }
 
-/* Formats "prefix" + fmt + newline and appends it; a line cut to LINE_BYTES still ends with its newline. */
-static void append_formatted(int stream, const char *prefix, const char *fmt, va_list ap)
+/* Formats "prefix" + fmt (escaped: emu_text.h) + newline and appends it; a line cut to LINE_BYTES still ends with
+ * its newline. */
+static void append_formatted(int stream, const char *prefix, text_lines_t lines, const char *fmt, va_list ap)
 {
+    char text[LINE_BYTES];
+    const int n = vsnprintf(text, sizeof text, fmt, ap);
+    const size_t text_len = n < 0 ? 0U : (size_t)n < sizeof text ? (size_t)n : sizeof text - 1U;
     char line[LINE_BYTES];
     const size_t p = strlen(prefix);
     memcpy(line, prefix, p);
-    const int n = vsnprintf(line + p, sizeof line - p - 1U, fmt, ap);
-    size_t len = p + (n < 0 ? 0U : (size_t)n < sizeof line - p - 1U ? (size_t)n : sizeof line - p - 2U);
+    size_t len = p + text_escape(line + p, sizeof line - p - 1U, text, text_len, lines);
     line[len++] = '\n';
     if (!output_ready) { /* not set up yet: the program has not started its nodes */
         (void)fwrite(line, 1U, len, stream == STREAM_LOG ? stderr : stdout);
@@ -197,7 +201,7 @@ void logline(int level, const char *fmt, ...)
     (void)snprintf(prefix, sizeof prefix, "[%8.3f] ", (double)t / 1e6);
     va_list ap;
     va_start(ap, fmt);
-    append_formatted(STREAM_LOG, prefix, fmt, ap);
+    append_formatted(STREAM_LOG, prefix, TEXT_ONE_LINE, fmt, ap);
     va_end(ap);
 }
 
@@ -205,7 +209,7 @@ void output_error(const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    append_formatted(STREAM_LOG, "canopen-emu: ", fmt, ap);
+    append_formatted(STREAM_LOG, "canopen-emu: ", TEXT_ONE_LINE, fmt, ap);
     va_end(ap);
 }
 
@@ -234,9 +238,13 @@ void reply(const char *fmt, ...)
     if (reply_sink != NULL) {
         char text[LINE_BYTES];
         const int n = vsnprintf(text, sizeof text, fmt, ap);
-        reply_sink(reply_sink_ctx, text, n < 0 ? 0U : (size_t)n < sizeof text ? (size_t)n : sizeof text - 1U);
+        char shown[LINE_BYTES];
+        const size_t text_len = n < 0 ? 0U : (size_t)n < sizeof text ? (size_t)n : sizeof text - 1U;
+        const size_t len = text_escape(shown, sizeof shown - 1U, text, text_len, TEXT_LINES);
+        shown[len] = '\0'; /* a sink may read it as a string */
+        reply_sink(reply_sink_ctx, shown, len);
     } else {
-        append_formatted(STREAM_REPLY, "", fmt, ap);
+        append_formatted(STREAM_REPLY, "", TEXT_LINES, fmt, ap);
     }
     va_end(ap);
 }
