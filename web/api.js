@@ -36,6 +36,7 @@ export class Session {
   #nextId = 1; // request ids go on across sessions, so that a late answer never matches a newer request
   #queue = []; // {id, line} of the requests not yet posted
   #waiting = new Map(); // request id -> {resolve, reject} until its answer comes
+  #partial = ""; // the start of a line a later exchange completes (a long answer comes in pieces: `objects`)
 
   /**
    * post: (path, body) => Promise<{status, text}> (poster()). onOpen(session): after each new session, before its
@@ -86,6 +87,7 @@ export class Session {
     }
     if (answer.status === 404) {
       this.#id = null;
+      this.#partial = "";
       this.#endPosted(new Error("the session ended before it answered"));
       throw new Error("the session expired; opening a new one");
     }
@@ -93,7 +95,9 @@ export class Session {
       this.#endPosted(failure(answer));
       throw failure(answer);
     }
-    for (const line of answer.text.split("\n")) {
+    const lines = (this.#partial + answer.text).split("\n");
+    this.#partial = lines.pop(); // "" when the text ended with a whole line
+    for (const line of lines) {
       if (line !== "") {
         this.#take(line);
       }

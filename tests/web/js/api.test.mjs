@@ -69,6 +69,28 @@ test("an answer that comes with a later exchange still finds its request; errors
   assert.deepEqual(api.posts.map((p) => p.body), ["", '{"id":1,"cmd":"show","node":99}\n{"id":2,"cmd":"hello"}', "", ""]);
 });
 
+test("a long answer that comes in pieces over several exchanges is taken whole, once complete", async () => {
+  const whole = JSON.stringify({id: 1, ok: true, node: 5, objects: Array.from({length: 50}, (_, k) => ({k}))});
+  const api = fakeApi([opened("s1"), {status: 200, text: whole.slice(0, 100)}, {status: 200, text: whole.slice(100, 300)},
+    {status: 200, text: whole.slice(300) + "\n" + JSON.stringify({event: "nmt", node: 5}) + "\n{\"id\":2,"},
+    {status: 200, text: "\"ok\":true}\n"}]);
+  const events = [];
+  const session = new Session(api.post, {onEvent: (e) => events.push(e)});
+  let done = null;
+  session.request("objects", {node: 5}).then((answer) => { done = answer; });
+  const second = session.request("hello");
+  await session.exchange();
+  await session.exchange();
+  await new Promise((resolve) => setImmediate(resolve));
+  assert.equal(done, null); // not yet complete: nothing taken, no stray line
+  await session.exchange();
+  await new Promise((resolve) => setImmediate(resolve));
+  assert.equal(done.objects.length, 50);
+  assert.deepEqual(events, [{event: "nmt", node: 5}]);
+  await session.exchange();
+  assert.deepEqual(await second, {id: 2, ok: true});
+});
+
 test("404: the requests posted fail, a new session is opened and onOpen subscribes again", async () => {
   const subscribed = [];
   const api = fakeApi([opened("s1"), lines(), {status: 404, text: '{"error":"no such session"}'},
