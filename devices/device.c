@@ -182,12 +182,9 @@ void device_clear_running_state(device_t *dev, size_t env_offset, size_t env_siz
     memset(m + env_offset + env_size, 0, size - env_offset - env_size);
 }
 
-/* The longest line: a VISIBLE_STRING of 255 bytes shown with every byte escaped (print_value), with its address. */
-#define DEVICE_LINE_MAX 1100
-
 void device_printf(const device_t *dev, const char *fmt, ...)
 {
-    char line[DEVICE_LINE_MAX];
+    char line[512];
     va_list ap;
     va_start(ap, fmt);
     (void)vsnprintf(line, sizeof line, fmt, ap);
@@ -295,20 +292,25 @@ bool device_parse_address(const char *text, uint16_t *index, uint8_t *sub)
     return true;
 }
 
-/* A VISIBLE_STRING (up to its first NUL) as a C string: CiA 301 gives it the printable ASCII characters 0x20..0x7E,
- * which are shown as they are, but any SDO client may write any byte: every other byte as \xNN, a backslash as \\
- * and a quote as \", so that nothing reaches a terminal that it would act on (ESC[2J clears it) and every byte can
- * be told from the line. out has room for 4 * len + 1 bytes. */
-static void escape_string(char *out, const uint8_t *text, size_t len)
+/* A VISIBLE_STRING as a C string: CiA 301 gives it the printable ASCII characters 0x20..0x7E, which are shown as
+ * they are, but any SDO client may write any byte: every other byte as \xNN, a backslash as \\ and a quote as \",
+ * so that nothing reaches a terminal that it would act on (ESC[2J clears it) and every byte can be told from the
+ * line. Into out (cap bytes with its NUL) as many whole bytes of text[0..len) as fit: returns how many. */
+static size_t escape_string(char *out, size_t cap, const uint8_t *text, size_t len)
 {
     static const char hex[] = "0123456789abcdef";
     size_t w = 0U;
-    for (size_t i = 0U; i < len && text[i] != 0U; i++) {
+    size_t i = 0U;
+    for (; i < len; i++) {
         const uint8_t c = text[i];
-        if (c == '\\' || c == '"') {
+        const size_t need = (c == '\\' || c == '"') ? 2U : (c >= 0x20U && c < 0x7FU) ? 1U : 4U;
+        if (need >= cap - w) {
+            break;
+        }
+        if (need == 2U) {
             out[w++] = '\\';
             out[w++] = (char)c;
-        } else if (c >= 0x20U && c < 0x7FU) {
+        } else if (need == 1U) {
             out[w++] = (char)c;
         } else {
             out[w++] = '\\';
@@ -318,6 +320,7 @@ static void escape_string(char *out, const uint8_t *text, size_t len)
         }
     }
     out[w] = '\0';
+    return i;
 }
 
 static void print_value(device_t *dev, uint16_t index, uint8_t sub)
@@ -337,9 +340,19 @@ static void print_value(device_t *dev, uint16_t index, uint8_t sub)
     }
     switch (e->type) {
     case CO_T_VISIBLE_STRING: {
-        char shown[4U * sizeof buf + 1U];
-        escape_string(shown, buf, len);
-        device_printf(dev, "0x%04X:%02X = \"%s\"", index, sub, shown);
+        /* Up to its first NUL, as the JSON get. A device line is shorter than 512 bytes (device_print_fn): a string
+         * whose escapes do not fit is cut, and the line says so (JSON get has it whole). With canopen-emu's
+         * CO_SDO_BUF_SIZE of 64, the longest string an SDO client can write, every byte escaped, fits. */
+        char shown[400];
+        const uint8_t *nul = memchr(buf, 0, len);
+        const size_t text_len = nul != NULL ? (size_t)(nul - buf) : len;
+        const size_t taken = escape_string(shown, sizeof shown, buf, text_len);
+        if (taken == text_len) {
+            device_printf(dev, "0x%04X:%02X = \"%s\"", index, sub, shown);
+        } else {
+            device_printf(dev, "0x%04X:%02X = \"%s\"... (cut: %u of %u bytes shown)", index, sub, shown, (unsigned)taken,
+                          (unsigned)text_len);
+        }
         break;
     }
     case CO_T_REAL32: {

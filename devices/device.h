@@ -31,7 +31,8 @@ extern "C" {
 
 typedef struct device device_t;
 
-/** Where a device writes command replies and log lines (one line per call, no newline). */
+/** Where a device writes command replies and log lines (one line per call, no newline, shorter than 512 bytes:
+ *  device_printf's buffer). */
 typedef void (*device_print_fn)(void *ctx, const device_t *dev, const char *line);
 
 /** Result of device_command(). */
