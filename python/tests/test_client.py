@@ -236,6 +236,22 @@ def test_tcp_connection(canopen_emu_factory):
     assert c.closed
 
 
+def test_tcp_connection_with_a_token(canopen_emu_factory, tmp_path):
+    token = tmp_path / "token"
+    token.write_text("the-token-of-this-test-42\n")
+    token.chmod(0o600)
+    emu = canopen_emu_factory("sds:16", extra_args=["--control-tcp", "127.0.0.1:0",
+                                                    "--control-token-file", str(token)])
+    address = emu.tcp_address()
+    assert address.endswith("(clients give the token first)") is False
+    with connect(address, token="the-token-of-this-test-42") as c:
+        assert c.get(16, "0x1017") == 5000
+    with pytest.raises(ControlError, match="needs the token first"):
+        connect(address)
+    with pytest.raises(ControlError, match="needs the token first"):
+        connect(address, token="not-the-token-0123456789")
+
+
 def test_a_late_answer_is_dropped_and_the_next_request_gets_its_own(canopen_emu):
     c = canopen_emu.client
     os.kill(canopen_emu.pid, signal.SIGSTOP)  # the emulator cannot answer

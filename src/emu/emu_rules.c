@@ -9,6 +9,13 @@
 #include <yaml.h>
 
 #include "emu_cia402.h"
+#include "emu_rules_yaml.h"
+
+/* Every rule is a write to the dictionary each tick, every alarm a read: these bound the work of a node's tick. */
+#define RULES_MAX_OBJECTS 1024U
+#define RULES_MAX_ALARMS 256U
+/* Error lines of one file shown at most (a file of thousands of wrong keys would fill the terminal). */
+#define RULES_MAX_ERRORS 20U
 
 typedef enum behaviour {
     B_CONSTANT = 0, B_RAMP, B_SINE, B_WALK, B_STEPS, B_COUNTER, B_FOLLOW
@@ -26,7 +33,7 @@ typedef struct rule {
     uint64_t every_us;             /* up to a day: more than 32 bits of µs */
     bool repeat;
     double *values;                /* steps */
-    uint64_t *durations_us;
+    uint64_t *ends_us;             /* each step's end from the cycle's start: found by bisection in a tick */
     uint32_t n_steps;
 } rule_t;
 
@@ -138,14 +145,28 @@ typedef struct parse {
     const co_od_t *od;
     FILE *log;
     bool failed;
+    unsigned errors;
 } parse_t;
 
+/* "FILE:LINE:COLUMN: error: " (or "FILE: error: " without a place) and fmt with a and b; the first
+ * RULES_MAX_ERRORS errors, then a line that says more were found. */
 static void fail(parse_t *p, const yaml_node_t *at, const char *fmt, const char *a, const char *b)
 {
-    fprintf(p->log, "%s:%lu: error: ", p->path, at != NULL ? (unsigned long)at->start_mark.line + 1UL : 0UL);
+    p->failed = true;
+    if (++p->errors > RULES_MAX_ERRORS) {
+        if (p->errors == RULES_MAX_ERRORS + 1U) {
+            fprintf(p->log, "%s: error: more errors follow; the first %u are shown\n", p->path, RULES_MAX_ERRORS);
+        }
+        return;
+    }
+    if (at != NULL) {
+        fprintf(p->log, "%s:%lu:%lu: error: ", p->path, (unsigned long)at->start_mark.line + 1UL,
+                (unsigned long)at->start_mark.column + 1UL);
+    } else {
+        fprintf(p->log, "%s: error: ", p->path);
+    }
     fprintf(p->log, fmt, a != NULL ? a : "", b != NULL ? b : "");
     fputc('\n', p->log);
-    p->failed = true;
 }
 
 static const char *scalar(const yaml_node_t *n)
@@ -190,9 +211,9 @@ static void only_keys(parse_t *p, const yaml_node_t *map, const char *const *all
                 strncat(list, i > 0U ? ", " : "", sizeof list - strlen(list) - 1U);
                 strncat(list, allowed[i], sizeof list - strlen(list) - 1U);
             }
-            fprintf(p->log, "%s:%lu: error: %s: unknown key '%s' (known: %s)\n", p->path,
-                    (unsigned long)kn->start_mark.line + 1UL, what, k != NULL ? k : "?", list);
-            p->failed = true;
+            char known[300];
+            snprintf(known, sizeof known, "%s: unknown key '%%s' (known: %s)", what, list);
+            fail(p, kn, known, k != NULL ? k : "?", NULL);
         }
     }
 }
@@ -361,8 +382,8 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         }
         const size_t n = (size_t)(v->data.sequence.items.top - v->data.sequence.items.start);
         r->values = calloc(n, sizeof *r->values);
-        r->durations_us = calloc(n, sizeof *r->durations_us);
-        if (r->values == NULL || r->durations_us == NULL) {
+        r->ends_us = calloc(n, sizeof *r->ends_us);
+        if (r->values == NULL || r->ends_us == NULL) {
             fail(p, v, "out of memory%s%s", NULL, NULL);
             break;
         }
@@ -378,7 +399,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
                 fail(p, item, "steps: a step lasts 1 ms .. 1 day%s%s", NULL, NULL);
                 break;
             }
-            r->durations_us[i] = (uint64_t)(ms * 1000.0);
+            r->ends_us[i] = (i > 0U ? r->ends_us[i - 1U] : 0U) + (uint64_t)(ms * 1000.0); /* < 2^16 days: < 2^53 us */
             r->n_steps++;
         }
         break;
@@ -408,6 +429,28 @@ static void parse_alarm(parse_t *p, alarm_t *a, const yaml_node_t *n)
     a->reg = (uint8_t)((unsigned)reg | 0x01U); /* CiA 301: bit 0 (generic error) with every error */
 }
 
+/* Two keys of objects that name one object ("0x2000" and "0x2000:00"): the duplicate keys the YAML reader cannot
+ * see. Two rules would write the object in turn every tick. At most RULES_MAX_OBJECTS rules: compared pairwise. */
+static void refuse_same_object_twice(parse_t *p, const rules_t *r, const yaml_node_t *objects)
+{
+    for (uint32_t i = 1U; i < r->n_rules; i++) {
+        const co_od_entry_t *row = &r->rules[i].row;
+        for (uint32_t j = 0U; j < i; j++) {
+            if (r->rules[j].row.size != 0U && row->size != 0U && r->rules[j].row.index == row->index &&
+                r->rules[j].row.sub == row->sub) {
+                const yaml_node_t *first = node_at(p, objects->data.mapping.pairs.start[j].key);
+                char place[64];
+                snprintf(place, sizeof place, "line %lu, column %lu", (unsigned long)first->start_mark.line + 1UL,
+                         (unsigned long)first->start_mark.column + 1UL);
+                fail(p, node_at(p, objects->data.mapping.pairs.start[i].key),
+                     "objects: '%s' names an object that has a rule already (at %s)",
+                     scalar(node_at(p, objects->data.mapping.pairs.start[i].key)), place);
+                break;
+            }
+        }
+    }
+}
+
 static void parse_document(parse_t *p, rules_t *r)
 {
     const yaml_node_t *root = yaml_document_get_root_node(&p->doc);
@@ -431,11 +474,18 @@ static void parse_document(parse_t *p, rules_t *r)
             return;
         }
         const size_t n = (size_t)(objects->data.mapping.pairs.top - objects->data.mapping.pairs.start);
+        if (n > RULES_MAX_OBJECTS) {
+            char most[48];
+            snprintf(most, sizeof most, "%u", RULES_MAX_OBJECTS);
+            fail(p, objects, "objects: more than %s objects (each one is written every tick)%s", most, NULL);
+            return;
+        }
         r->rules = calloc(n + 1U, sizeof *r->rules);
         for (size_t i = 0U; r->rules != NULL && i < n; i++) {
             const yaml_node_pair_t *pair = &objects->data.mapping.pairs.start[i];
             parse_rule(p, &r->rules[r->n_rules++], node_at(p, pair->key), node_at(p, pair->value));
         }
+        refuse_same_object_twice(p, r, objects);
     }
     const yaml_node_t *alarms = lookup(p, root, "alarms");
     if (alarms != NULL) {
@@ -444,6 +494,12 @@ static void parse_document(parse_t *p, rules_t *r)
             return;
         }
         const size_t n = (size_t)(alarms->data.sequence.items.top - alarms->data.sequence.items.start);
+        if (n > RULES_MAX_ALARMS) {
+            char most[48];
+            snprintf(most, sizeof most, "%u", RULES_MAX_ALARMS);
+            fail(p, alarms, "alarms: more than %s alarms (each one reads its object every tick)%s", most, NULL);
+            return;
+        }
         r->alarms = calloc(n + 1U, sizeof *r->alarms);
         for (size_t i = 0U; r->alarms != NULL && i < n; i++) {
             parse_alarm(p, &r->alarms[r->n_alarms++], node_at(p, alarms->data.sequence.items.start[i]));
@@ -466,32 +522,22 @@ static void parse_document(parse_t *p, rules_t *r)
 rules_t *rules_load(const char *path, const co_od_t *od, FILE *log, const char **device)
 {
     *device = NULL;
-    FILE *in = fopen(path, "rb");
-    if (in == NULL) {
-        fprintf(log, "%s: error: cannot open: %s\n", path, strerror(errno));
-        return NULL;
-    }
     parse_t p;
     memset(&p, 0, sizeof p);
     p.path = path;
     p.od = od;
     p.log = log;
-    yaml_parser_t parser;
-    yaml_parser_initialize(&parser);
-    yaml_parser_set_input_file(&parser, in);
+    if (!rules_yaml_read(path, log, &p.doc)) {
+        return NULL;
+    }
     rules_t *r = calloc(1U, sizeof *r);
-    if (r == NULL || !yaml_parser_load(&parser, &p.doc)) {
-        fprintf(log, "%s:%lu: error: not YAML: %s\n", path, (unsigned long)parser.problem_mark.line + 1UL,
-                parser.problem != NULL ? parser.problem : "out of memory");
-        yaml_parser_delete(&parser);
-        fclose(in);
-        free(r);
+    if (r == NULL) {
+        fprintf(log, "%s: error: out of memory\n", path);
+        yaml_document_delete(&p.doc);
         return NULL;
     }
     parse_document(&p, r);
     yaml_document_delete(&p.doc);
-    yaml_parser_delete(&parser);
-    fclose(in);
     if (p.failed) {
         rules_free(r);
         return NULL;
@@ -507,7 +553,7 @@ void rules_free(rules_t *r)
     }
     for (uint32_t i = 0U; r->rules != NULL && i < r->n_rules; i++) {
         free(r->rules[i].values);
-        free(r->rules[i].durations_us);
+        free(r->rules[i].ends_us);
     }
     free(r->rules);
     free(r->alarms);
@@ -592,18 +638,20 @@ static double rule_value(const rule_t *r, rule_state_t *s, device_t *dev, double
         }
         return s->value;
     case B_STEPS: {
-        uint64_t total = 0U;
-        for (uint32_t i = 0U; i < r->n_steps; i++) {
-            total += r->durations_us[i];
+        if (r->n_steps == 0U) {
+            return 0.0;
         }
-        uint64_t at = total > 0U ? (uint64_t)(t * 1e6) % total : 0U;
-        for (uint32_t i = 0U; i < r->n_steps; i++) {
-            if (at < r->durations_us[i]) {
-                return r->values[i];
+        const uint64_t at = (uint64_t)(t * 1e6) % r->ends_us[r->n_steps - 1U];
+        uint32_t lo = 0U, hi = r->n_steps - 1U; /* the first step that ends after at */
+        while (lo < hi) {
+            const uint32_t mid = lo + (hi - lo) / 2U;
+            if (r->ends_us[mid] > at) {
+                hi = mid;
+            } else {
+                lo = mid + 1U;
             }
-            at -= r->durations_us[i];
         }
-        return r->n_steps > 0U ? r->values[0] : 0.0;
+        return r->values[lo];
     }
     case B_FOLLOW: {
         const double x = rules_get(&dev->node, &r->source) * r->b + r->c;

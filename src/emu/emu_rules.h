@@ -1,8 +1,9 @@
 /*
  * Behaviour rules of a device read from its EDS (docs/eds.md "Rules"): a YAML file says how values move
  * (constant, ramp, sine, random walk, steps, counter, follow with a first-order lag), which limits raise an EMCY
- * and 0x1001 bits, and whether the CiA 402 drive profile runs (emu_cia402.h). Parsed once per file (libyaml),
- * resolved against the device's object dictionary; each node keeps its own state in its model block.
+ * and 0x1001 bits, and whether the CiA 402 drive profile runs (emu_cia402.h). Parsed once per file (libyaml, with
+ * the bounds of emu_rules_yaml.h), resolved against the device's object dictionary; each node keeps its own state in
+ * its model block.
  */
 #ifndef EMU_RULES_H
 #define EMU_RULES_H
@@ -17,7 +18,7 @@ typedef struct rules rules_t;
 
 /**
  * Reads a rules file for a device of od (names: the EDS names, for messages). NULL after printing
- * "FILE:LINE: error: ..." lines to log. *device receives the file's `device:` key (NULL when it has none; owned by
+ * "FILE:LINE:COLUMN: error: ..." lines to log (at most 20 and one that says more were found). *device receives the file's `device:` key (NULL when it has none; owned by
  * the rules).
  */
 rules_t *rules_load(const char *path, const co_od_t *od, FILE *log, const char **device);

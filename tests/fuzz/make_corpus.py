@@ -970,6 +970,21 @@ def rules_seeds():
                               b'hysteresis: 1, emcy: 0x2310}\n\0' + write(0, 0x410000) + wait(400),
         "bad-yaml": b"objects: [\n",
         "bad-keys": b'profile: cia402\nobjects:\n  "0x6064": {sine: {amplitude: x}}\n',
+        # what the YAML reader refuses as it reads (src/emu/emu_rules_yaml.c): anchors and aliases, nesting past 16
+        # levels (flow and block), a key twice, a second document, a NUL in a value; and one object spelled twice
+        "anchor-alias": b'objects:\n  "0x2000": &w {sine: {amplitude: 5, period_ms: 100}}\n  "0x2003": *w\n\0'
+                        + wait(100),
+        "alias-alone": b'objects:\n  "0x2004": {steps: [*s, [1, 5]]}\n',
+        "deep-flow": b'objects:\n  "0x2004": {steps: ' + b"[" * 40 + b"]" * 40 + b"}\n",
+        "deep-block": b"".join(b" " * i + b"a:\n" for i in range(20)) + b" " * 20 + b"1\n",
+        "duplicate-key": b'tick_ms: 5\nobjects:\n  "0x2001": {counter: {step: 1, step: 2}}\ntick_ms: 7\n',
+        "second-document": b'objects:\n  "0x2001": {constant: 1}\n---\nobjects:\n  "0x2002": {constant: 2}\n',
+        "nul-in-value": b'objects:\n  "0x2001\\0x": {constant: 1}\n',
+        "same-object-twice": b'objects:\n  "0x2001": {constant: 1}\n  "0x2001:0": {constant: 2}\n',
+        # a long steps list on a 1 ms tick (a step's value is found by bisection): near the 4 kB of a fuzz input
+        "many-steps": b'tick_ms: 1\nobjects:\n  "0x2004": {steps: ['
+                      + b", ".join(b"[%d, %d]" % (i % 9, 1 + i % 3) for i in range(360)) + b"]}\n\0"
+                      + wait(300) + bytes([0xC0, 0, 0, 0, 0]) + wait(50),
     }
 
 

@@ -12,7 +12,10 @@
  *   0xC0-0xDF an NMT reset application (the rules start again);
  *   0xE0-0xFF a jump of the clock by (u16) x 10 s (catching up, never spinning).
  * Invariants (a violation prints "==fuzz== INVARIANT VIOLATION [rules]" and aborts):
- *  - a rules file is either loaded or refused with at least one "FILE:LINE: error:" line, never both or neither;
+ *  - a rules file is either loaded or refused with at least one "FILE:LINE:COLUMN: error:" line, never both or
+ *    neither, and with at most 21 lines (20 errors and one that says more were found);
+ *  - what the YAML reader refuses (emu_rules_yaml.h: anchors, aliases, nesting past 16 levels, more than 65,536
+ *    values, duplicate keys, a second document) is refused as it comes: libFuzzer's timeout and RSS limit hold it;
  *  - a step returns a deadline after now (or CO_NEVER), never one in the past (a loop would spin);
  *  - the same input runs the same way twice: every object of the device holds the same value after both runs
  *    (the rules are deterministic in simulated time: a random walk by its seed);
@@ -153,6 +156,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     const bool said_error = log != NULL && strstr(log, ": error: ") != NULL;
     if ((rules == NULL) != said_error) {
         violation("rules %s but the log says: %s", rules == NULL ? "refused" : "loaded", log != NULL ? log : "");
+    }
+    size_t lines = 0U;
+    for (const char *c = log; c != NULL && *c != '\0'; c++) {
+        lines += *c == '\n' ? 1U : 0U;
+    }
+    if (lines > 21U) {
+        violation("%zu lines of errors (at most 20 and one more): %.2000s", lines, log);
     }
     free(log);
     if (rules != NULL) {

@@ -274,10 +274,12 @@ def parse_address(address: Address) -> Tuple[int, Any]:
 
 
 def connect(address: Address, *, timeout: float = 5.0, check_protocol: bool = True,
-            history: int = 200) -> "Client":
+            history: int = 200, token: Optional[str] = None) -> "Client":
     """A client connected to the control socket at ``address`` (``--control-socket PATH`` or ``--control-tcp
     HOST:PORT`` of canopen-emu). With check_protocol it asks ``hello`` at once and raises ProtocolError unless the
-    emulator speaks protocol version 1; its answer is then ``client.server``."""
+    emulator speaks protocol version 1; its answer is then ``client.server``. ``token``: the token of the
+    emulator's ``--control-token-file``, given with that first hello (a socket that needs one closes a connection
+    whose first request lacks it: ControlError)."""
     family, sockaddr = parse_address(address)
     if family == socket.AF_UNIX and len(os.fsencode(sockaddr)) > _UNIX_PATH_MAX:
         raise ValueError(f"a Unix socket path holds at most {_UNIX_PATH_MAX} bytes: {sockaddr!r}")
@@ -289,9 +291,12 @@ def connect(address: Address, *, timeout: float = 5.0, check_protocol: bool = Tr
         sock.close()
         raise
     client = Client(sock, timeout=timeout, history=history, address=address)
-    if check_protocol:
+    if check_protocol or token is not None:
         try:
-            client.check_protocol()
+            if check_protocol:
+                client.check_protocol(token=token)
+            else:
+                client.hello(token=token)
         except BaseException:
             client.close()
             raise
@@ -371,9 +376,10 @@ class Client:
                     raise ControlError(str(msg.get("error", "")), req, msg.get("lines", ()), msg)
                 return msg
 
-    def hello(self) -> ServerInfo:
-        """The emulator's program name, version, protocol version, event kinds and buses."""
-        answer = self.request("hello")
+    def hello(self, token: Optional[str] = None) -> ServerInfo:
+        """The emulator's program name, version, protocol version, event kinds and buses. ``token``: for the first
+        request of a connection to a socket with ``--control-token-file`` (connect() gives it)."""
+        answer = self.request("hello", token=token) if token is not None else self.request("hello")
         info = ServerInfo(program=answer["program"], version=answer["version"], protocol=answer["protocol"],
                           events=tuple(answer["events"]), buses=tuple(answer["buses"]), raw=answer,
                           clock_time_us=answer.get("clock", {}).get("time_us"),
@@ -381,10 +387,10 @@ class Client:
         self.server = info
         return info
 
-    def check_protocol(self) -> ServerInfo:
+    def check_protocol(self, token: Optional[str] = None) -> ServerInfo:
         """hello(), and ProtocolError unless it is canopen-emu speaking protocol version 1."""
         try:
-            info = self.hello()
+            info = self.hello(token=token)
         except (KeyError, TypeError) as e:
             raise ProtocolError(f"the answer to hello lacks {e}: not canopen-emu's control protocol") from e
         if info.program != "canopen-emu" or info.protocol != PROTOCOL_VERSION:

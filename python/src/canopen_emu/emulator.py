@@ -232,7 +232,7 @@ class Emulator:
         if "--control-tcp" not in self.args:
             raise ValueError("this emulator was started without --control-tcp HOST:PORT")
         line = self.wait_log("control: listening on tcp ", timeout)
-        return line.split("control: listening on tcp ", 1)[1].strip()
+        return line.split("control: listening on tcp ", 1)[1].split()[0]  # "(clients give the token first)" after
 
     def web_url(self, timeout: float = 5.0) -> str:
         """The address of the live view (``http://127.0.0.1:8080/``) as the log says it (``--web``, from ``web=``
