@@ -229,10 +229,10 @@ def command_synopses(help_text):
 
 
 def emulator_help_commands(source_dir):
-    """The common commands as the running emulator's 'help' prints them (help() of emu_commands.c)."""
+    """The common commands as the running emulator's 'help' prints them (help_text of emu_commands.c)."""
     source = (source_dir / "src/emu/emu_commands.c").read_text(encoding="utf-8")
-    m = re.search(r"^static void help\(void\)\n\{\n(.*?)^\}", source, re.S | re.M)
-    assert m, "src/emu/emu_commands.c has no 'static void help(void)' function any more: update this test"
+    m = re.search(r"^static const char help_text\[\] =\n(.*?);$", source, re.S | re.M)
+    assert m, "src/emu/emu_commands.c has no 'static const char help_text[]' any more: update this test"
     text = c_string_literals(m.group(1))
     body = text.split("\n", 1)[1]  # the first line is the heading "commands (NODE = ...):"
     synopses = command_synopses(body)
