@@ -36,7 +36,7 @@ json_t *jstr(const char *text)
 
 void send_response(emu_session_t *s, json_t *obj)
 {
-    char *text = json_dumps(obj, JSON_COMPACT);
+    char *text = json_dumps(obj, JSON_COMPACT | JSON_ENSURE_ASCII); /* no raw C1 control reaches a terminal */
     json_decref(obj);
     if (text == NULL) {
         static const char oom[] = "{\"id\":null,\"ok\":false,\"error\":\"out of memory\"}\n";

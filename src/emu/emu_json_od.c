@@ -369,7 +369,7 @@ static bool objects_rows(emu_t *emu, session_stream_t *st, unsigned max, void (*
         co_od_entry_t one;
         json_t *o = object_row(n, co_od_entry_at(row, st->sub, &one), st->values);
         st->sub++;
-        char *text = o != NULL ? json_dumps(o, JSON_COMPACT) : NULL;
+        char *text = o != NULL ? json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII) : NULL;
         json_decref(o);
         if (text != NULL) {
             if (st->count++ > 0U) {
@@ -419,7 +419,7 @@ void cmd_objects(const request_t *q)
     }
     json_t *r = response(q->id, true);
     (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
-    char *head = json_dumps(r, JSON_COMPACT); /* {"id":..,"ok":true,"node":N}: the rows go before its '}' */
+    char *head = json_dumps(r, JSON_COMPACT | JSON_ENSURE_ASCII); /* {"id":..,"ok":true,"node":N}: the rows go before its '}' */
     json_decref(r);
     if (head == NULL) {
         fail(q->s, q->id, "out of memory");

@@ -96,8 +96,14 @@ def test_get_shows_a_string_written_over_sdo_escaped(tmp_path):
     time.sleep(0.3)  # the answers above come before the next value is written
     sdo_download(emu.bus, 18, 0x2002, 3, b'a\\b"c\nd\x7f\xc2\x9b\xff')
     emu.command("get 18 0x2002:03")
+    time.sleep(0.3)
+    sdo_download(emu.bus, 18, 0x2002, 3, b"x\xc2\x9b2Jy")  # valid UTF-8 holding a C1 CSI (U+009B)
+    emu.command('{"id":3,"cmd":"get","node":18,"object":"0x2002:03"}')
     out, _ = emu.quit()
     lines = out.split(b"\n")
+    c1 = next(line for line in lines if line.startswith(b'{"id":3'))
+    assert b'"value":"x\\u009B2Jy"' in c1, c1  # JSON answers are ASCII: no raw C1 control either
+    assert json.loads(c1)["value"] == "x\u009b2Jy"
     assert b'node 18: 0x2002:03 = "\\x1b[2J"' in lines, out
     assert b'node 18: 0x2002:03 = "a\\\\b\\"c\\x0ad\\x7f\\xc2\\x9b\\xff"' in lines, out
     answer = next(json.loads(line) for line in lines if line.startswith(b'{"id":1'))
