@@ -164,15 +164,15 @@ def test_cia402_velocity_mode_through_rpdo(emulator, network, capture):
 
 
 BAD_RULES = {
-    "not-yaml": ("objects: [\n", "drive-bad.yaml:2: error: not YAML"),
-    "unknown-key": ("objectz: {}\n", "drive-bad.yaml:1: error: rules: unknown key 'objectz'"),
-    "no-object": ('objects:\n  "0x2100": {constant: 1}\n', "drive-bad.yaml:2: error: objects: the device has no object 0x2100"),
+    "not-yaml": ("objects: [\n", "drive-bad.yaml:2:1: error: not YAML"),
+    "unknown-key": ("objectz: {}\n", "drive-bad.yaml:1:1: error: rules: unknown key 'objectz'"),
+    "no-object": ('objects:\n  "0x2100": {constant: 1}\n', "drive-bad.yaml:2:3: error: objects: the device has no object 0x2100"),
     "not-a-number-object": ('objects:\n  "0x1008": {constant: 1}\n', "error: objects: the device has no object 0x1008"),
-    "unknown-behaviour": ('objects:\n  "0x2000": {wobble: 1}\n', "drive-bad.yaml:2: error: 0x2000: unknown behaviour 'wobble'"),
+    "unknown-behaviour": ('objects:\n  "0x2000": {wobble: 1}\n', "drive-bad.yaml:2:14: error: 0x2000: unknown behaviour 'wobble'"),
     "bad-number": ('objects:\n  "0x2000": {sine: {amplitude: loud, period_ms: 100}}\n', "error: sine: 'loud' is not a number"),
     "missing-key": ('objects:\n  "0x2003": {ramp: {from: 0, per_s: 1}}\n', "error: ramp needs 'to'"),
     "bad-alarm": ("alarms:\n  - {object: \"0x2000\", above: 5, emcy: 7}\n", "error: alarms: emcy is an error code"),
-    "bad-profile": ("profile: cia401\n", "drive-bad.yaml:1: error: profile: 'cia401' is not a profile (cia402)"),
+    "bad-profile": ("profile: cia401\n", "drive-bad.yaml:1:10: error: profile: 'cia401' is not a profile (cia402)"),
     "wrong-device": ("device: other.eds\n", "error: device: other.eds is not an EDS/DCF on the command line"),
 }
 
