@@ -917,6 +917,13 @@ def control_seeds():
         ("restricted-commands", "\x01set 16 0x1017 500\nfault 17 heartbeat-stop\npower-cycle 18\nhelp 16\n"
                                 '{"id":1,"cmd":"subscribe","events":"all"}\n{"id":2,"cmd":"objects","node":17}\n'
                                 "quit " + " ".join(["a"] * 16) + "\nquit"),
+        # a line server's session (a control socket's client): the first byte 0x02 (target_control.c); a first line
+        # that is an HTTP request line ends it with nothing run, a browser's cross-origin POST of control lines
+        ("http-post", "\x02POST /x HTTP/1.1\r\nHost: 127.0.0.1:5020\r\nContent-Type: text/plain\r\n"
+                      "Content-Length: 40\r\n\r\nset 16 0x1017 1234\n{\"cmd\":\"quit\"}\nquit\n"),
+        ("http-get-no-cr", "\x02GET / HTTP/1.0\nlist\nquit\n"),
+        ("http-like-lines", "\x02list HTTP/1.1\nGET / HTTP/1.1\n{\"id\":\"GET / HTTP/1.1\",\"cmd\":\"hello\"}\nquit\n"),
+        ("http-long-first-line", "\x02GET /" + "a" * 2100 + " HTTP/1.1\r\nquit\n"),
     ])
 
 
@@ -946,6 +953,20 @@ def eds_seeds():
         "[2001]\nParameterName=u\nDataType=0x0B\nAccessType=rw\nDefaultValue=\xc3\xa4\xf0\x9f\x98\x80 ;x\n"
         "[2002]\nParameterName=i\nDataType=0x12\nAccessType=rw\nDefaultValue=-010 ; c\nLowLimit=-0x8000000000\n"
         "[DeviceComissioning]\nNodeID=0x7F\nBaudrate=1000\n").encode()
+    # A DCF whose string value held line breaks when written raw: [2006] defined twice, a key repeated.
+    seeds["duplicate-section"] = (device + "[ManufacturerObjects]\nSupportedObjects=2\n1=0x2005\n2=0x2006\n"
+        "[2005]\nParameterName=s\nDataType=9\nAccessType=rw\nDefaultValue=a\nParameterValue=x\n[2006]\n"
+        "ParameterValue=7\n[2006]\nParameterName=n\nDataType=5\nAccessType=rw\nDefaultValue=3\nParameterValue=3\n"
+        "[DeviceComissioning]\nNodeID=255\n").encode()
+    # Size cases (target_eds.c: 0x01, K, HEAD, 0x02, UNIT, 0x02, TAIL; UNIT 2^K times, '@' the copy's number):
+    # 65536 named sections; 65536 objects (the 2048 PDO ones left out, their types wrong); a CompactSubObj=254
+    # object with a default of 4 MiB. Each took seconds to hours, or gigabytes, before the reader was linear.
+    size = lambda k, head, unit, tail="": bytes([1, k]) + head.encode() + b"\x02" + unit + b"\x02" + tail.encode()  # noqa: E731
+    seeds["size-named-sections"] = size(16, device, b"[N@]\nK=1\n")
+    seeds["size-objects"] = size(16, device, b"[@]\nParameterName=o\nDataType=7\nAccessType=rw\nDefaultValue=0x@\n")
+    seeds["size-compact-default"] = size(16, device + "[ManufacturerObjects]\nSupportedObjects=1\n1=0x2000\n[2000]\n"
+                                         "ParameterName=c\nObjectType=8\nCompactSubObj=254\nDataType=9\n"
+                                         "AccessType=rw\nDefaultValue=", b"x" * 64, "\n")
     return seeds
 
 

@@ -33,6 +33,10 @@
  *    nothing stops the emulator, a line whose first word is quit, exit or export-dcf (and a JSON quit) is answered
  *    with the web session's refusal, export-dcf's writer is never called; a session that is not restricted never
  *    answers with that refusal;
+ *  - an input whose first byte is 0x02 runs (without that byte) in a session of a line server (emu_session_t.
+ *    refuse_http, as a control socket's client): when its first line (what the line reader keeps of it) is an HTTP
+ *    request line (RFC 9112: METHOD SP TARGET SP HTTP/..., a CR at the end allowed), nothing of the input runs or is
+ *    answered and nothing stops the emulator; otherwise the rules above hold;
  *  - replies and device lines are NUL-terminated, device lines shorter than 512 bytes; every node's NMT state is
  *    a legal one; no crash, leak or undefined behaviour.
  */
@@ -102,6 +106,10 @@ static bool g_refusal_seen;  /* the line being run was answered with a web sessi
 /* An input whose first byte is this runs in a restricted session (emu_session_t.restricted, as a web session),
  * the byte itself not fed. */
 #define RESTRICTED_MARK '\x01'
+/* An input whose first byte is this runs in a line server's session (refuse_http: a control socket's client). */
+#define LINE_SERVER_MARK '\x02'
+static bool g_line_server;   /* the input began with LINE_SERVER_MARK */
+static bool g_http_first;    /* ... and its first line is an HTTP request line: nothing may run */
 
 /* The refusals of a restricted session (emu_commands.c command_restriction), as the command language replies them
  * and as a JSON answer's "error" gives them (without "error: "). */
@@ -225,6 +233,38 @@ static bool is_json(const char *l, size_t len)
     return p < len && l[p] == '{';
 }
 
+/* RFC 9112 section 3: request-line = method SP request-target SP HTTP-version; method a token (tchar), the target
+ * without blanks, the version "HTTP/" and what follows without blanks (a CR of a CRLF line may end it). */
+static bool http_request_line(const char *l, size_t len)
+{
+    static const char tchar[] = "!#$%&'*+-.^_`|~";
+    size_t i = 0U;
+    while (i < len && ((l[i] >= '0' && l[i] <= '9') || (l[i] >= 'A' && l[i] <= 'Z') || (l[i] >= 'a' && l[i] <= 'z') ||
+                       (l[i] != '\0' && strchr(tchar, l[i]) != NULL))) {
+        i++;
+    }
+    if (i == 0U || i == len || l[i] != ' ') {
+        return false;
+    }
+    const size_t target = ++i;
+    while (i < len && l[i] != ' ' && l[i] != '\t' && l[i] != '\r') {
+        i++;
+    }
+    if (i == target || i == len || l[i] != ' ') {
+        return false;
+    }
+    i++;
+    if (len - i < 5U || memcmp(l + i, "HTTP/", 5U) != 0) {
+        return false;
+    }
+    for (i += 5U; i < len; i++) {
+        if (l[i] == ' ' || l[i] == '\t') {
+            return false;
+        }
+    }
+    return true;
+}
+
 static void reference(const char *d, size_t n)
 {
     size_t start = 0U;
@@ -251,6 +291,12 @@ static void reference(const char *d, size_t n)
         if (g_restricted) {
             r->quits = false; /* refused: nothing stops the emulator */
         }
+        if (g_ref_n == 0U && g_line_server) {
+            g_http_first = http_request_line(r->text, kept);
+        }
+        if (g_http_first) {
+            r->quits = false; /* the session ends at its first line: nothing of it runs */
+        }
         if (r->quits && g_quit_at == SIZE_MAX) {
             g_quit_at = g_ref_n;
         }
@@ -275,6 +321,9 @@ static void control_path_line(const char *text)
 {
     if (strncmp(text, "event ", 6U) == 0 || strncmp(text, "{\"event\":", 9U) == 0) {
         return; /* an event of a subscription, at any time */
+    }
+    if (g_http_first) {
+        fail("reply '%s' in a session whose first line is an HTTP request line", text);
     }
     if (g_next >= g_ref_n || g_next > g_quit_at) {
         fail("reply '%s' with no line left to refuse (or after quit)", text);
@@ -379,6 +428,9 @@ void __wrap_session_run_line(emu_t *emu, emu_session_t *s, char *line);
 
 void __wrap_session_run_line(emu_t *emu, emu_session_t *s, char *line)
 {
+    if (g_http_first) {
+        fail("line '%.60s' run in a session whose first line is an HTTP request line", line);
+    }
     if (g_next >= g_ref_n || g_next > g_quit_at) {
         fail("line '%.60s' run with no line left (or after quit)", line);
     }
@@ -555,7 +607,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     g_restricted = size > 0U && data[0] == (uint8_t)RESTRICTED_MARK;
-    if (g_restricted) {
+    g_line_server = size > 0U && data[0] == (uint8_t)LINE_SERVER_MARK;
+    g_http_first = false;
+    if (g_restricted || g_line_server) {
         data++;
         size--;
     }
@@ -578,6 +632,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     g_emu.n_sessions = 0U;
     control_start(&g_emu); /* finds O_NONBLOCK set: leaves the flag alone */
     g_emu.control.session.restricted = g_restricted;
+    g_emu.control.session.refuse_http = g_line_server;
     nodes_process();
 
     uint32_t h = 2166136261U;
@@ -615,7 +670,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         fail("emu.quit is %d; %s", (int)g_emu.quit,
              want_quit ? "a line says quit" : "no whole line says quit or exit");
     }
-    const size_t handled = want_quit ? g_quit_at + 1U : g_ref_n;
+    const size_t handled = g_http_first ? 0U : want_quit ? g_quit_at + 1U : g_ref_n;
     if (g_next != handled) {
         fail("%zu lines were run or refused, expected %zu", g_next, handled);
     }
