@@ -292,3 +292,18 @@ def test_a_protocol_fault_raised_from_the_page_stops_the_heartbeats_until_cleare
              v["summary"]["faults"] == "", 5.0)
     gaps = heartbeat_gaps(emu.bus, 18, 3, 5.0)
     assert all(0.4 <= g <= 0.65 for g in gaps), gaps
+
+
+def test_a_device_of_12000_entries_is_shown_whole(page, start_emulator, tmp_path):
+    """Its `objects` answer is some 2.5 MB: more than a web session may hold (1 MiB), so before issue 32 the session
+    was dropped and the page never showed the dictionary. The answer now comes over several exchanges, and the page
+    takes its line once it is whole."""
+    from test_control_native import big_eds
+    eds = tmp_path / "big.eds"
+    big_eds(eds, 12000)
+    emu = start_emulator(f"{eds}:5")
+    driver = open_node(page, emu, 5)
+    shown = wait_for(driver, "the last object of node 5's dictionary", lambda v: "0x4EDF:00" in v["rows"]
+                     or "0x4EDF" in v["groups"], 60.0)
+    assert "0x2000:00" in shown["rows"] or "0x2000" in shown["groups"]
+    assert "dropped" not in emu.log()
