@@ -229,8 +229,20 @@ int main(int argc, char **argv)
                 o.dcf = dcf;
                 o.node_id = (uint8_t)node_id;
                 o.file_name = strcmp(path, "-") == 0 ? NULL : (base != NULL ? base + 1 : path);
-                if (eds_write(out, f, &o) != 0 || (out != stdout && fclose(out) != 0)) {
-                    perror(path);
+                char why[512] = "";
+                o.error = why;
+                o.error_cap = sizeof why;
+                const int written = eds_write(out, f, &o);
+                const bool closed = out == stdout || fclose(out) == 0;
+                if (written != 0 || !closed) {
+                    if (why[0] != '\0') {
+                        fprintf(stderr, "canopen-eds: %s: %s\n", path, why);
+                    } else {
+                        perror(path);
+                    }
+                    if (out != stdout) {
+                        (void)remove(path); /* no partial file */
+                    }
                     rc = 2;
                 }
             }

@@ -22,8 +22,7 @@ static eds_file_t *new_file(const char *name)
     return f;
 }
 
-/* Length of the UTF-8 sequence at s (at most n bytes), or 0 if it is not valid UTF-8. */
-static size_t utf8_len(const unsigned char *s, size_t n)
+size_t eds_utf8_len(const unsigned char *s, size_t n)
 {
     unsigned char c = s[0];
     size_t len;
@@ -84,7 +83,7 @@ static char *decode(eds_file_t *f, const char *data, size_t len, size_t *out_len
     }
     size_t bad = len;
     for (size_t i = 0U; i < len;) {
-        size_t l = utf8_len((const unsigned char *)data + i, len - i);
+        size_t l = eds_utf8_len((const unsigned char *)data + i, len - i);
         if (l == 0U) {
             bad = i;
             break;

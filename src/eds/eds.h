@@ -83,7 +83,8 @@ typedef struct eds_object {
 /** [DeviceComissioning] of a DCF. */
 typedef struct eds_commissioning {
     bool present;
-    uint8_t node_id;        /**< 0 when not given. */
+    uint8_t node_id;        /**< 0 when not given or not 1..127. */
+    bool node_id_given;     /**< The section has a NodeID key (node_id is 0 when its value is not 1..127). */
     uint16_t baudrate_kbit; /**< 0 when not given. */
     const char *node_name;
     uint32_t net_number;
@@ -165,9 +166,18 @@ typedef struct eds_write_options {
      */
     long (*current)(void *ctx, const eds_entry_t *entry, uint8_t *buf, size_t cap);
     void *ctx;
+    /** Where eds_write() says why it refused to write (error_cap bytes), or NULL. */
+    char *error;
+    size_t error_cap;
 } eds_write_options_t;
 
-/** Writes the model as an EDS (or DCF): every object with explicit sub-index sections. 0, or -1 on a write error. */
+/**
+ * Writes the model as an EDS (or DCF): every object with explicit sub-index sections. 0, or -1 on a write error
+ * or a refusal. A refusal writes nothing (errno EINVAL, options->error says why): a DCF value a line of a CiA 306
+ * file cannot hold so that it reads back as the same bytes, that is a string with a line break (CR, LF), a NUL,
+ * bytes that are not UTF-8, or a UNICODE_STRING that is not well-formed UTF-16 (an SDO master can write any bytes);
+ * also a file_name with a line break.
+ */
 int eds_write(FILE *out, const eds_file_t *file, const eds_write_options_t *options);
 
 /** The type's smallest (high false) or largest value. */

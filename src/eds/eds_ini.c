@@ -435,6 +435,27 @@ bool ini_parse(eds_file_t *f, ini_t *ini, char *text, size_t len)
     return ok;
 }
 
+/* The first section not ordered before probe (sections are sorted by section_cmp): O(log n). */
+static size_t lower_bound(const ini_t *ini, const ini_section_t *probe)
+{
+    size_t lo = 0U, hi = ini->n_sections;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2U;
+        if (section_cmp(&ini->sections[mid], probe) < 0) {
+            lo = mid + 1U;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+static const ini_section_t *find(const ini_t *ini, const ini_section_t *probe)
+{
+    size_t at = lower_bound(ini, probe);
+    return at < ini->n_sections && section_cmp(&ini->sections[at], probe) == 0 ? &ini->sections[at] : NULL;
+}
+
 const ini_section_t *ini_find(const ini_t *ini, ini_kind_t kind, uint16_t index, uint8_t sub)
 {
     ini_section_t probe;
@@ -442,30 +463,32 @@ const ini_section_t *ini_find(const ini_t *ini, ini_kind_t kind, uint16_t index,
     probe.kind = kind;
     probe.index = index;
     probe.sub = sub;
-    size_t lo = 0U, hi = ini->n_sections;
-    while (lo < hi) {
-        size_t mid = (lo + hi) / 2U;
-        int d = section_cmp(&ini->sections[mid], &probe);
-        if (d == 0) {
-            return &ini->sections[mid];
-        }
-        if (d < 0) {
-            lo = mid + 1U;
-        } else {
-            hi = mid;
-        }
-    }
-    return NULL;
+    return find(ini, &probe);
 }
 
+/* A binary search too: named sections sort first, by name (a scan per look-up made a file of many named
+ * sections take quadratic time). */
 const ini_section_t *ini_find_named(const ini_t *ini, const char *name)
 {
-    for (uint32_t i = 0U; i < ini->n_sections && ini->sections[i].kind == INI_OTHER; i++) {
-        if (eds_casecmp(ini->sections[i].name, name) == 0) {
-            return &ini->sections[i];
-        }
+    ini_section_t probe;
+    memset(&probe, 0, sizeof probe);
+    probe.kind = INI_OTHER;
+    probe.name = name;
+    return find(ini, &probe);
+}
+
+const ini_section_t *ini_find_subs(const ini_t *ini, uint16_t index, uint32_t *count)
+{
+    ini_section_t probe;
+    memset(&probe, 0, sizeof probe);
+    probe.kind = INI_SUB;
+    probe.index = index;
+    size_t first = lower_bound(ini, &probe), end = first;
+    while (end < ini->n_sections && ini->sections[end].kind == INI_SUB && ini->sections[end].index == index) {
+        end++;
     }
-    return NULL;
+    *count = (uint32_t)(end - first);
+    return &ini->sections[first];
 }
 
 const ini_key_t *ini_get(const ini_t *ini, const ini_section_t *s, const char *key)

@@ -60,6 +60,8 @@ typedef struct ini {
 bool ini_parse(eds_file_t *f, ini_t *ini, char *text, size_t len);
 const ini_section_t *ini_find(const ini_t *ini, ini_kind_t kind, uint16_t index, uint8_t sub);
 const ini_section_t *ini_find_named(const ini_t *ini, const char *name);
+/* The sub-index sections [xxxxsubN] of an index, by sub-index: *count of them from the one returned. */
+const ini_section_t *ini_find_subs(const ini_t *ini, uint16_t index, uint32_t *count);
 /* ASCII case-insensitive strcmp (section and key names). */
 int eds_casecmp(const char *a, const char *b);
 const ini_key_t *ini_get(const ini_t *ini, const ini_section_t *s, const char *key);
@@ -83,6 +85,9 @@ eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_v
 double eds_real_from_bits(uint64_t bits, size_t size);
 /* Reads a whole unsigned number (object lists, SubNumber, DeviceInfo): CiA 306 forms, no $NODEID. */
 bool eds_parse_unsigned(const char *text, uint64_t max, uint64_t *out);
+
+/* Length of the UTF-8 sequence at s (at most n bytes, n > 0), or 0 if it is not valid UTF-8. */
+size_t eds_utf8_len(const unsigned char *s, size_t n);
 
 /* ---- Steps of eds_read -------------------------------------------------------------------------------------- */
 void eds_read_model(eds_file_t *f, const ini_t *ini);

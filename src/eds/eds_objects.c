@@ -137,12 +137,16 @@ static void read_device_info(builder_t *b)
     if (c != NULL) {
         f->is_dcf = true;
         f->comm.present = true;
-        uint64_t id = number_of(b, c, "NodeID", 255U, 0U);
-        if (id > 127U && id != 255U) {
-            eds_warn(f, c->line, "[DeviceComissioning] NodeID %llu is not 1..127; ignored", (unsigned long long)id);
+        const ini_key_t *node_id = ini_get(b->ini, c, "NodeID");
+        const char *id_text = node_id != NULL ? ini_number_text(f, node_id) : "";
+        f->comm.node_id_given = *id_text != '\0';
+        uint64_t id = 0U;
+        if (f->comm.node_id_given && (!eds_parse_unsigned(id_text, UINT64_MAX, &id) || id < 1U || id > 127U)) {
+            /* 0 and 255 too (255: how some tools write "not configured"): the node-ID must come from elsewhere */
+            eds_warn(f, node_id->line, "[DeviceComissioning] NodeID=%s is not a node-ID (1..127); ignored", id_text);
             id = 0U;
         }
-        f->comm.node_id = (uint8_t)(id == 255U ? 0U : id);
+        f->comm.node_id = (uint8_t)id;
         f->comm.baudrate_kbit = (uint16_t)number_of(b, c, "Baudrate", 1000U, 0U);
         f->comm.node_name = text_of(b, c, "NodeName");
         f->comm.net_number = (uint32_t)number_of(b, c, "NetNumber", UINT32_MAX, 0U);
@@ -150,23 +154,21 @@ static void read_device_info(builder_t *b)
         f->comm.canopen_manager = number_of(b, c, "CANopenManager", 1U, 0U) != 0U;
         f->comm.lss_serial_number = (uint32_t)number_of(b, c, "LSS_SerialNumber", UINT32_MAX, 0U);
     }
-    /* [FileInfo], [DeviceInfo] and [Comments] as written, for the writer. */
+    /* [FileInfo], [DeviceInfo] and [Comments] as written, for the writer (each section looked up once: a look-up
+     * per key made a file of many sections take quadratic time). */
     static const char *const kept[] = {"FileInfo", "DeviceInfo", "Comments"};
+    const ini_section_t *kept_section[3];
     size_t n = 0U;
-    for (uint32_t i = 0; i < b->ini->n_keys; i++) {
-        const ini_section_t *sec = &b->ini->sections[b->ini->file_order[i].section];
-        for (size_t k = 0; k < 3U; k++) {
-            if (sec->kind == INI_OTHER && sec == ini_find_named(b->ini, kept[k])) {
-                n++;
-            }
-        }
+    for (size_t j = 0; j < 3U; j++) {
+        kept_section[j] = ini_find_named(b->ini, kept[j]);
+        n += kept_section[j] != NULL ? kept_section[j]->count : 0U;
     }
     f->info = eds_alloc(f, (n + 1U) * sizeof *f->info);
     for (uint32_t i = 0; f->info != NULL && i < b->ini->n_keys; i++) {
         const ini_key_t *k = &b->ini->file_order[i];
         const ini_section_t *sec = &b->ini->sections[k->section];
         for (size_t j = 0; j < 3U; j++) {
-            if (sec->kind == INI_OTHER && sec == ini_find_named(b->ini, kept[j])) {
+            if (sec == kept_section[j]) {
                 f->info[f->n_info].section = kept[j];
                 f->info[f->n_info].key = k->key;
                 f->info[f->n_info].value = k->value;
@@ -382,13 +384,24 @@ static void into_limits(eds_file_t *f, const ini_section_t *s, const eds_entry_t
     }
 }
 
+/* The DCF value of an entry: value_key (the [xxxxValue] key of a compact sub-object), else its ParameterValue. */
+static void read_param(builder_t *b, const ini_section_t *s, const ini_key_t *value_key, eds_entry_t *e)
+{
+    const ini_key_t *k = value_key != NULL ? value_key : ini_get(b->ini, s, "ParameterValue");
+    if (k != NULL) {
+        b->f->is_dcf = true;
+        read_value(b, s, k, value_text(b, k, e->type), e->type, &e->param, true);
+        into_limits(b->f, s, e, &e->param, k->key, k->line, false);
+    }
+}
+
 /*
- * Reads an entry from section s (for CompactSubObj objects, the object's own section). name overrides
- * ParameterName (compact sub-objects). value_key, if not NULL, is the [xxxxValue] key of a compact sub-object.
- * Returns false when the entry cannot be emulated (unknown data type): the caller leaves it out.
+ * Reads an entry but for its DCF value from section s (for CompactSubObj objects, the object's own section). name
+ * overrides ParameterName (compact sub-objects). Returns false when the entry cannot be emulated (unknown data
+ * type): the caller leaves it out.
  */
-static bool read_entry(builder_t *b, const ini_section_t *s, uint16_t index, uint8_t sub, const char *name,
-                       const ini_key_t *value_key, uint8_t default_type, eds_entry_t *e)
+static bool read_fields(builder_t *b, const ini_section_t *s, uint16_t index, uint8_t sub, const char *name,
+                        uint8_t default_type, eds_entry_t *e)
 {
     eds_file_t *f = b->f;
     memset(e, 0, sizeof *e);
@@ -456,12 +469,16 @@ static bool read_entry(builder_t *b, const ini_section_t *s, uint16_t index, uin
     }
     bool empty = k == NULL || k->value[0] == '\0';
     into_limits(f, s, e, &e->def, "DefaultValue", k != NULL ? k->line : s->line, empty);
-    k = value_key != NULL ? value_key : ini_get(b->ini, s, "ParameterValue");
-    if (k != NULL) {
-        f->is_dcf = true;
-        read_value(b, s, k, value_text(b, k, e->type), e->type, &e->param, true);
-        into_limits(f, s, e, &e->param, k->key, k->line, false);
+    return true;
+}
+
+static bool read_entry(builder_t *b, const ini_section_t *s, uint16_t index, uint8_t sub, const char *name,
+                       uint8_t default_type, eds_entry_t *e)
+{
+    if (!read_fields(b, s, index, sub, name, default_type, e)) {
+        return false;
     }
+    read_param(b, s, NULL, e);
     return true;
 }
 
@@ -487,8 +504,17 @@ static void read_compact(builder_t *b, const ini_section_t *s, eds_object_t *o, 
     e->access = EDS_RO;
     e->def.kind = EDS_V_UINT;
     e->def.u = n;
+    /* The sub-indices share the object's type, access, limits and default: read once (reading them for each
+     * sub-index copied a long string default up to 254 times: a file of 16 MiB took gigabytes). */
+    eds_entry_t shared;
+    if (!read_fields(b, s, o->index, 1U, "", 0U, &shared)) {
+        f->n_entries = first; /* the object goes: sub-index 0 too */
+        return;
+    }
     const ini_section_t *names = ini_find(b->ini, INI_NAME, o->index, 0U);
     const ini_section_t *values = ini_find(b->ini, INI_VALUE, o->index, 0U);
+    bool own_param_read = false; /* the object's ParameterValue: the value of each sub-index [xxxxValue] lacks */
+    eds_value_t own_param;
     for (unsigned sub = 1U; sub <= n; sub++) {
         char key[8];
         snprintf(key, sizeof key, "%u", sub);
@@ -503,16 +529,23 @@ static void read_compact(builder_t *b, const ini_section_t *s, eds_object_t *o, 
             snprintf(formed, cap, "%s%u", o->name, sub);
             name = formed;
         }
-        eds_entry_t tmp;
-        if (!read_entry(b, s, o->index, (uint8_t)sub, name, ini_get(b->ini, values, key), 0U, &tmp)) {
-            f->n_entries = first; /* the object goes: sub-index 0 too */
-            return;
-        }
         e = push_entry(b);
         if (e == NULL) {
             return;
         }
-        *e = tmp;
+        *e = shared;
+        e->sub = (uint8_t)sub;
+        e->name = name;
+        const ini_key_t *value_key = ini_get(b->ini, values, key);
+        if (value_key != NULL) {
+            read_param(b, s, value_key, e);
+        } else if (own_param_read) {
+            e->param = own_param;
+        } else {
+            read_param(b, s, NULL, e);
+            own_param = e->param;
+            own_param_read = true;
+        }
     }
 }
 
@@ -571,7 +604,7 @@ static void read_object(builder_t *b, uint16_t index)
         }
         eds_entry_t tmp;
         /* a DOMAIN object may omit its data type */
-        if (read_entry(b, s, index, 0U, o->name, NULL, otype == 0x2U ? 0x0FU : 0U, &tmp)) {
+        if (read_entry(b, s, index, 0U, o->name, otype == 0x2U ? 0x0FU : 0U, &tmp)) {
             eds_entry_t *e = push_entry(b);
             if (e != NULL) {
                 *e = tmp;
@@ -581,19 +614,19 @@ static void read_object(builder_t *b, uint16_t index)
         read_compact(b, s, o, compact);
     } else {
         uint8_t highest = 0U;
-        for (unsigned sub = 0U; sub <= 0xFFU; sub++) {
-            const ini_section_t *ss = ini_find(b->ini, INI_SUB, index, (uint8_t)sub);
-            if (ss == NULL) {
-                continue;
-            }
+        uint32_t n_subs;
+        const ini_section_t *subs = ini_find_subs(b->ini, index, &n_subs);
+        for (uint32_t i = 0; i < n_subs; i++) {
+            const ini_section_t *ss = &subs[i];
+            const uint8_t sub = ss->sub;
             eds_entry_t tmp;
-            if (read_entry(b, ss, index, (uint8_t)sub, NULL, NULL, 0U, &tmp)) {
+            if (read_entry(b, ss, index, sub, NULL, 0U, &tmp)) {
                 eds_entry_t *e = push_entry(b);
                 if (e == NULL) {
                     return;
                 }
                 *e = tmp;
-                highest = (uint8_t)sub;
+                highest = sub;
             }
         }
         uint32_t got = f->n_entries - before;

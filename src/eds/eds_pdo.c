@@ -15,8 +15,26 @@ static eds_value_t *effective(eds_entry_t *e)
     return e->param.kind != EDS_V_NONE ? &e->param : &e->def;
 }
 
+/* Objects left out by the PDO checks: marked while checking and removed together at the end (removing each at
+ * once moved every entry after it: 2048 PDO objects in a file of many entries took seconds). */
+typedef struct dropped {
+    uint8_t index[65536U / 8U];
+    bool any;
+} dropped_t;
+
+static bool is_dropped(const dropped_t *d, uint16_t index)
+{
+    return ((unsigned)d->index[index / 8U] >> (index % 8U) & 1U) != 0U;
+}
+
+static void drop_object(dropped_t *d, uint16_t index)
+{
+    d->index[index / 8U] = (uint8_t)(d->index[index / 8U] | 1U << (index % 8U));
+    d->any = true;
+}
+
 /* Checks one mapping entry value; returns its bits, or -1 with a reason. */
-static long entry_bits(const eds_file_t *f, uint64_t v, bool receive, char *why, size_t cap)
+static long entry_bits(const eds_file_t *f, const dropped_t *dropped, uint64_t v, bool receive, char *why, size_t cap)
 {
     uint16_t index = (uint16_t)(v >> 16);
     uint8_t sub = (uint8_t)(v >> 8), bits = (uint8_t)v;
@@ -36,7 +54,7 @@ static long entry_bits(const eds_file_t *f, uint64_t v, bool receive, char *why,
         }
         return bits;
     }
-    const eds_entry_t *t = eds_find(f, index, sub);
+    const eds_entry_t *t = is_dropped(dropped, index) ? NULL : eds_find(f, index, sub);
     if (t == NULL) {
         snprintf(why, cap, "maps 0x%04X:%02X, which does not exist", (unsigned)index, (unsigned)sub);
         return -1;
@@ -81,7 +99,7 @@ static void disable(eds_file_t *f, uint16_t comm, uint16_t map)
     }
 }
 
-static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool receive)
+static void check_mapping(eds_file_t *f, const dropped_t *dropped, uint16_t comm, uint16_t map, bool receive)
 {
     eds_entry_t *count = eds_find_mut(f, map, 0U);
     if (count == NULL || count->type != 0x05U) {
@@ -126,7 +144,7 @@ static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool recei
                 disable(f, comm, map);
                 return;
             }
-            long b = entry_bits(f, v->u, receive, why, sizeof why);
+            long b = entry_bits(f, dropped, v->u, receive, why, sizeof why);
             if (b < 0) {
                 eds_warn(f, e->line, "[%04Xsub%X] %s 0x%08llX %s; the PDO is disabled", (unsigned)map, sub, key,
                          (unsigned long long)v->u, why);
@@ -144,22 +162,22 @@ static void check_mapping(eds_file_t *f, uint16_t comm, uint16_t map, bool recei
     }
 }
 
-/* Leaves an object out of the model (entries and object). */
-static void drop_object(eds_file_t *f, uint16_t index)
+/* Leaves the dropped objects out of the model (entries and objects), in one pass. */
+static void remove_dropped(eds_file_t *f, const dropped_t *dropped)
 {
-    const eds_object_t *o = eds_find_object(f, index);
-    if (o == NULL) {
-        return;
+    uint32_t objects = 0U, entries = 0U;
+    for (uint32_t i = 0; i < f->n_objects; i++) {
+        eds_object_t o = f->objects[i];
+        if (is_dropped(dropped, o.index)) {
+            continue;
+        }
+        memmove(&f->entries[entries], &f->entries[o.first], o.count * sizeof *f->entries);
+        o.first = entries;
+        entries += o.count;
+        f->objects[objects++] = o;
     }
-    uint32_t first = o->first, count = o->count;
-    memmove(&f->entries[first], &f->entries[first + count], (f->n_entries - first - count) * sizeof *f->entries);
-    f->n_entries -= count;
-    size_t pos = (size_t)(o - f->objects);
-    memmove(&f->objects[pos], &f->objects[pos + 1U], (f->n_objects - pos - 1U) * sizeof *f->objects);
-    f->n_objects--;
-    for (uint32_t i = (uint32_t)pos; i < f->n_objects; i++) {
-        f->objects[i].first -= count;
-    }
+    f->n_objects = objects;
+    f->n_entries = entries;
 }
 
 /* The types CiA 301 gives the sub-indices of PDO communication and mapping objects (the core relies on them). */
@@ -193,6 +211,9 @@ void eds_check_pdos(eds_file_t *f)
         bool receive;
         const char *key;
     } dirs[] = {{0x1400, 0x1600, true, "NrOfRXPDO"}, {0x1800, 0x1A00, false, "NrOfTXPDO"}};
+    dropped_t marks;
+    dropped_t *const dropped = &marks;
+    memset(dropped, 0, sizeof *dropped);
     for (size_t d = 0; d < 2U; d++) {
         unsigned pdos = 0U;
         for (unsigned n = 0U; n < 0x200U; n++) {
@@ -205,19 +226,19 @@ void eds_check_pdos(eds_file_t *f)
                 const eds_object_t *lone = c != NULL ? c : m;
                 eds_warn(f, lone->line, "[%04X] has no %s object 0x%04X; left out", (unsigned)lone->index,
                          c != NULL ? "mapping" : "communication", (unsigned)(c != NULL ? map : comm));
-                drop_object(f, lone->index);
+                drop_object(dropped, lone->index);
                 continue;
             }
             char why[96];
             if (!pdo_types_ok(f, c, m, why, sizeof why)) {
                 eds_warn(f, c->line, "[%04X] %s; the PDO (0x%04X and 0x%04X) is left out", (unsigned)comm, why,
                          (unsigned)comm, (unsigned)map);
-                drop_object(f, comm);
-                drop_object(f, map);
+                drop_object(dropped, comm);
+                drop_object(dropped, map);
                 continue;
             }
             pdos++;
-            check_mapping(f, comm, map, dirs[d].receive);
+            check_mapping(f, dropped, comm, map, dirs[d].receive);
         }
         uint16_t *said = dirs[d].receive ? &f->nr_of_rxpdo : &f->nr_of_txpdo;
         if (*said != 0xFFFFU && *said != pdos) {
@@ -225,5 +246,8 @@ void eds_check_pdos(eds_file_t *f)
                      pdos, pdos);
         }
         *said = (uint16_t)pdos;
+    }
+    if (dropped->any) {
+        remove_dropped(f, dropped);
     }
 }

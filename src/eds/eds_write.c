@@ -5,6 +5,8 @@
  */
 #include "eds_internal.h"
 
+#include <errno.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -17,6 +19,13 @@ static bool decode_raw(eds_file_t *scratch, uint8_t type, const uint8_t *raw, si
             const void *nul = memchr(raw, 0, len);
             if (nul != NULL) {
                 len = (size_t)((const uint8_t *)nul - raw);
+            }
+        } else if (type == 0x0BU) { /* at its first U+0000 */
+            for (size_t i = 0U; i + 1U < len; i += 2U) {
+                if (raw[i] == 0U && raw[i + 1U] == 0U) {
+                    len = i;
+                    break;
+                }
             }
         }
         out->kind = EDS_V_BYTES;
@@ -52,15 +61,130 @@ static bool decode_raw(eds_file_t *scratch, uint8_t type, const uint8_t *raw, si
     return true;
 }
 
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static void refuse(const eds_write_options_t *o, const char *fmt, ...)
+{
+    if (o->error != NULL && o->error_cap > 0U) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(o->error, o->error_cap, fmt, ap);
+        va_end(ap);
+    }
+}
+
+/* What in a string value a line of the file cannot hold so that it reads back as the same bytes (NULL: nothing),
+ * and its byte offset. CiA 306 has no escapes: a line break would end the line, and what follows it would be read
+ * as keys and sections of their own; bytes that are not UTF-8 would make the reader take the whole file as Latin-1. */
+static const char *unwritable(uint8_t type, const eds_value_t *v, size_t *at)
+{
+    if (v->kind != EDS_V_BYTES || (type != 0x09U && type != 0x0BU)) {
+        return NULL; /* numbers, and OCTET_STRING and DOMAIN as hexadecimal digits */
+    }
+    for (size_t i = 0U; i < v->len;) {
+        *at = i;
+        if (type == 0x09U) {
+            const uint8_t c = v->bytes[i];
+            if (c == '\n' || c == '\r') {
+                return "a line break";
+            }
+            if (c == '\0') {
+                return "a NUL byte";
+            }
+            const size_t l = eds_utf8_len(v->bytes + i, v->len - i);
+            if (l == 0U) {
+                return "bytes that are not UTF-8";
+            }
+            i += l;
+            continue;
+        }
+        if (i + 1U >= v->len) {
+            return "an odd number of bytes (UTF-16 has two per character)";
+        }
+        const unsigned unit = (unsigned)v->bytes[i] | (unsigned)v->bytes[i + 1U] << 8;
+        if (unit == 0x0AU || unit == 0x0DU) {
+            return "a line break";
+        }
+        if (unit == 0U) {
+            return "a NUL character";
+        }
+        if (unit >= 0xD800U && unit < 0xE000U) {
+            const unsigned low = i + 3U < v->len ? ((unsigned)v->bytes[i + 2U] | (unsigned)v->bytes[i + 3U] << 8) : 0U;
+            if (unit >= 0xDC00U || low < 0xDC00U || low >= 0xE000U) {
+                return "an unpaired UTF-16 surrogate";
+            }
+            i += 2U;
+        }
+        i += 2U;
+    }
+    return NULL;
+}
+
+/*
+ * The ParameterValue of every entry, in the order of f->entries: the current one where the caller gives it, else
+ * the file's value or default. Every one is checked before anything is written: NULL when one cannot be written
+ * (o->error names it and says why).
+ */
+static const eds_value_t *dcf_values(eds_file_t *scratch, const eds_file_t *f, const eds_write_options_t *o)
+{
+    eds_value_t *values = eds_alloc(scratch, ((size_t)f->n_entries + 1U) * sizeof *values);
+    if (values == NULL) {
+        refuse(o, "out of memory");
+        errno = ENOMEM;
+        return NULL;
+    }
+    for (uint32_t i = 0; i < f->n_entries; i++) {
+        const eds_entry_t *e = &f->entries[i];
+        values[i] = e->param.kind != EDS_V_NONE ? e->param : e->def;
+        if (o->current != NULL) {
+            uint8_t raw[1024];
+            eds_value_t current;
+            const long n = o->current(o->ctx, e, raw, sizeof raw);
+            if (n >= 0 && (size_t)n <= sizeof raw && decode_raw(scratch, e->type, raw, (size_t)n, &current)) {
+                values[i] = current;
+            }
+        }
+        size_t at = 0U;
+        const char *why = unwritable(e->type, &values[i], &at);
+        if (why != NULL) {
+            refuse(o, "0x%04X:%02X: its %s value has %s (at byte %lu), which a line of a CiA 306 file cannot hold; "
+                      "nothing written", (unsigned)e->index, (unsigned)e->sub, eds_type_name(e->type), why,
+                   (unsigned long)at);
+            errno = EINVAL;
+            return NULL;
+        }
+    }
+    return values;
+}
+
 static void put(FILE *out, const char *key, const char *value)
 {
     fprintf(out, "%s=%s\n", key, value != NULL ? value : "");
 }
 
-static void write_entry(FILE *out, eds_file_t *scratch, const eds_entry_t *e, const char *section,
-                        uint8_t object_type, const eds_write_options_t *o)
+/* A key with a value of the entry's type; the text is as long as the value needs (a fixed buffer cut long strings
+ * and domains). False when out of memory. */
+static bool put_value(FILE *out, const char *key, uint8_t type, const eds_value_t *v)
 {
-    char text[1024];
+    char small[64];
+    const size_t cap = v->kind == EDS_V_BYTES ? v->len * 2U + 8U : sizeof small;
+    char *text = cap <= sizeof small ? small : malloc(cap);
+    if (text == NULL) {
+        return false;
+    }
+    eds_format_value(text, cap, type, v);
+    put(out, key, text);
+    if (text != small) {
+        free(text);
+    }
+    return true;
+}
+
+/* param: the entry's DCF value (NULL for an EDS). False when out of memory. */
+static bool write_entry(FILE *out, const eds_entry_t *e, const char *section, uint8_t object_type,
+                        const eds_write_options_t *o, const eds_value_t *param)
+{
     fprintf(out, "\n[%s]\n", section);
     put(out, "ParameterName", e->name);
     if (o->dcf && e->denotation != NULL) {
@@ -68,31 +192,18 @@ static void write_entry(FILE *out, eds_file_t *scratch, const eds_entry_t *e, co
     }
     fprintf(out, "ObjectType=0x%X\nDataType=0x%04X\nAccessType=%s\n", (unsigned)object_type, (unsigned)e->type,
             eds_access_name(e->access));
-    eds_format_value(text, sizeof text, e->type, &e->def);
-    put(out, "DefaultValue", text);
+    bool ok = put_value(out, "DefaultValue", e->type, &e->def);
     fprintf(out, "PDOMapping=%d\n", e->pdo_mapping ? 1 : 0);
     if (e->low.kind != EDS_V_NONE) {
-        eds_format_value(text, sizeof text, e->type, &e->low);
-        put(out, "LowLimit", text);
+        ok = put_value(out, "LowLimit", e->type, &e->low) && ok;
     }
     if (e->high.kind != EDS_V_NONE) {
-        eds_format_value(text, sizeof text, e->type, &e->high);
-        put(out, "HighLimit", text);
+        ok = put_value(out, "HighLimit", e->type, &e->high) && ok;
     }
-    if (!o->dcf) {
-        return;
+    if (param != NULL) {
+        ok = put_value(out, "ParameterValue", e->type, param) && ok;
     }
-    const eds_value_t *value = e->param.kind != EDS_V_NONE ? &e->param : &e->def;
-    eds_value_t current;
-    if (o->current != NULL) {
-        uint8_t raw[1024];
-        long n = o->current(o->ctx, e, raw, sizeof raw);
-        if (n >= 0 && decode_raw(scratch, e->type, raw, (size_t)n, &current)) {
-            value = &current;
-        }
-    }
-    eds_format_value(text, sizeof text, e->type, value);
-    put(out, "ParameterValue", text);
+    return ok;
 }
 
 static void write_list(FILE *out, const eds_file_t *f, const char *name, int which)
@@ -170,8 +281,23 @@ int eds_write(FILE *out, const eds_file_t *f, const eds_write_options_t *options
     eds_write_options_t none;
     memset(&none, 0, sizeof none);
     const eds_write_options_t *o = options != NULL ? options : &none;
+    if (o->error != NULL && o->error_cap > 0U) {
+        o->error[0] = '\0';
+    }
+    if (o->file_name != NULL && strpbrk(o->file_name, "\r\n") != NULL) {
+        refuse(o, "the file name has a line break, which a line of a CiA 306 file cannot hold; nothing written");
+        errno = EINVAL;
+        return -1;
+    }
     eds_file_t scratch; /* owns decoded current values */
     memset(&scratch, 0, sizeof scratch);
+    const eds_value_t *values = NULL;
+    if (o->dcf && (values = dcf_values(&scratch, f, o)) == NULL) {
+        eds_arena_free(scratch.arena);
+        free(scratch.diagnostics);
+        return -1;
+    }
+    bool ok = true;
     write_info(out, f, "FileInfo", o);
     write_info(out, f, "DeviceInfo", o);
     fprintf(out, "\n[DummyUsage]\n");
@@ -204,7 +330,7 @@ int eds_write(FILE *out, const eds_file_t *f, const eds_write_options_t *options
         bool var = obj->object_type == 0x7U || obj->object_type == 0x2U || obj->object_type == 0x5U;
         snprintf(section, sizeof section, "%04X", (unsigned)obj->index);
         if (var) {
-            write_entry(out, &scratch, first, section, obj->object_type, o);
+            ok = write_entry(out, first, section, obj->object_type, o, values != NULL ? &values[obj->first] : NULL) && ok;
         } else {
             fprintf(out, "\n[%s]\n", section);
             put(out, "ParameterName", obj->name);
@@ -215,7 +341,7 @@ int eds_write(FILE *out, const eds_file_t *f, const eds_write_options_t *options
             for (uint32_t k = 0; k < obj->count; k++) {
                 const eds_entry_t *e = &f->entries[obj->first + k];
                 snprintf(section, sizeof section, "%04Xsub%X", (unsigned)e->index, (unsigned)e->sub);
-                write_entry(out, &scratch, e, section, 0x7U, o);
+                ok = write_entry(out, e, section, 0x7U, o, values != NULL ? &values[obj->first + k] : NULL) && ok;
             }
         }
         if (obj->n_links > 0U) {
@@ -227,5 +353,10 @@ int eds_write(FILE *out, const eds_file_t *f, const eds_write_options_t *options
     }
     eds_arena_free(scratch.arena);
     free(scratch.diagnostics);
+    if (!ok) {
+        refuse(o, "out of memory");
+        errno = ENOMEM;
+        return -1;
+    }
     return ferror(out) ? -1 : 0;
 }

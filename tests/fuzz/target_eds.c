@@ -1,7 +1,13 @@
 /*
  * Fuzz target "eds": the EDS/DCF reader (src/eds/) on any bytes, as canopen-eds and canopen-emu read a file.
  *
- * Input: the file's bytes.
+ * Input: the file's bytes; or, when the first byte is 0x01, a size case: 0x01, K, HEAD, 0x02, UNIT, 0x02, TAIL
+ * (a missing 0x02 ends a part) is the file HEAD, UNIT written 2^(K % 17) times with each '@' in it replaced by the
+ * copy's number as four hexadecimal digits ("[@]" makes 65536 objects), TAIL; at most 4 MiB. Inputs are short
+ * (-max_len=4096): the size case reaches the sizes where a cost that grows faster than the file shows
+ * (libFuzzer's -timeout and -rss_limit_mb catch it: 40,000 sections took 10 s before the reader was linear). A size
+ * case is read and its model checked, not written back: the writer gives a CompactSubObj object as up to 254 sub-index
+ * sections, each with the object's default, so the DCF of a large file can exceed what the reader takes (16 MiB).
  * Invariants (a violation prints "==fuzz== INVARIANT VIOLATION" and aborts):
  *  - a file read without errors is a model the emulator can use: entries sorted by (index, sub) and unique, each of
  *    a known type, its default (and DCF value) of the type's kind and representable in it (node-ID-relative ones
@@ -12,6 +18,10 @@
  *    the reader keeps as it is: "; kept"), as the same model
  *    (every entry's type, access, mapping flag, name, default, limits, DCF value), and written again gives the
  *    same bytes (the writer reaches a fixed point at once);
+ *  - written with current values as canopen-emu's export-dcf gives them (strings cut from the file's own text, so
+ *    line breaks and section headers among them), the DCF is refused with the entry named, or reads again with
+ *    those values (leading and trailing blanks aside, which CiA 306 trims) and nothing else changed: no value
+ *    writes sections or keys of its own;
  *  - no crash, leak, hang or undefined behaviour (ASan, UBSan, LeakSanitizer, libFuzzer's timeout).
  */
 #define _GNU_SOURCE
@@ -175,13 +185,181 @@ static char *write_dcf(const eds_file_t *f, size_t *len)
     return buf;
 }
 
+/* ---- Current values: what an SDO master could have written into the strings -------------------------------- */
+
+typedef struct text {
+    const char *data;
+    size_t len;
+} text_t;
+
+/* A string entry's current value: up to 64 bytes of the file's text, from a place its index and sub-index pick. */
+static size_t current_slice(const text_t *t, const eds_entry_t *e, const char **at)
+{
+    if (t->len == 0U || (e->type != 0x09U && e->type != 0x0BU)) {
+        return 0U;
+    }
+    const size_t key = (size_t)e->index * 257U + e->sub;
+    const size_t offset = key * 40503U % t->len;
+    size_t len = key % 65U;
+    if (len > t->len - offset) {
+        len = t->len - offset;
+    }
+    *at = t->data + offset;
+    return len;
+}
+
+static long current_value(void *ctx, const eds_entry_t *e, uint8_t *buf, size_t cap)
+{
+    const char *at = NULL;
+    const size_t len = current_slice(ctx, e, &at);
+    if (at == NULL || len > cap) {
+        return -1;
+    }
+    memcpy(buf, at, len);
+    return (long)len;
+}
+
+/* The value the reader gives back for a current value: a VISIBLE_STRING to its first NUL, a UNICODE_STRING to its
+ * first U+0000; CiA 306 trims blanks (space, tab) at either end of a line. Unit: 1 or 2 bytes. */
+static void expected_back(const uint8_t *v, size_t len, size_t unit, size_t *from, size_t *to)
+{
+    size_t end = 0U;
+    while (end + unit <= len && !(v[end] == 0U && (unit == 1U || v[end + 1U] == 0U))) {
+        end += unit;
+    }
+#define FZ_BLANK(i) ((v[i] == ' ' || v[i] == '\t') && (unit == 1U || v[(i) + 1U] == 0U))
+    size_t start = 0U;
+    while (start < end && FZ_BLANK(start)) {
+        start += unit;
+    }
+    while (end > start && FZ_BLANK(end - unit)) {
+        end -= unit;
+    }
+#undef FZ_BLANK
+    *from = start;
+    *to = end;
+}
+
+static void check_current_values(const eds_file_t *f, const text_t *t)
+{
+    char *buf = NULL, error[512] = "";
+    size_t len = 0U;
+    FILE *out = open_memstream(&buf, &len);
+    if (out == NULL) {
+        abort();
+    }
+    eds_write_options_t o;
+    memset(&o, 0, sizeof o);
+    o.dcf = true;
+    o.node_id = 5;
+    o.current = current_value;
+    o.ctx = (void *)t;
+    o.error = error;
+    o.error_cap = sizeof error;
+    const int rc = eds_write(out, f, &o);
+    fclose(out);
+    if (rc != 0) {
+        if (len != 0U || strstr(error, "0x") == NULL || strstr(error, "cannot hold") == NULL) {
+            violation("a refused DCF without the entry named, or written in part: %s", error);
+        }
+        free(buf);
+        return;
+    }
+    eds_file_t *g = eds_read_buffer("current.dcf", buf, len);
+    if (g == NULL) {
+        abort();
+    }
+    for (uint32_t i = 0; i < g->n_diagnostics && i < EDS_MAX_DIAGNOSTICS; i++) {
+        if (strstr(g->diagnostics[i], "; kept") == NULL) {
+            violation("the DCF with current values has a diagnostic: %s", g->diagnostics[i]);
+        }
+    }
+    if (g->n_entries != f->n_entries) {
+        fail("the DCF with current values has another number of entries", NULL);
+    }
+    for (uint32_t i = 0; i < f->n_entries; i++) {
+        const eds_entry_t *a = &f->entries[i], *b = &g->entries[i];
+        if (a->index != b->index || a->sub != b->sub || a->type != b->type) {
+            fail("the DCF with current values has another entry", a);
+        }
+        const char *at = NULL;
+        const size_t n = current_slice(t, a, &at);
+        if (at == NULL) {
+            continue;
+        }
+        size_t from, to;
+        expected_back((const uint8_t *)at, n, a->type == 0x0BU ? 2U : 1U, &from, &to);
+        if (b->param.kind != EDS_V_BYTES || b->param.len != to - from || memcmp(b->param.bytes, at + from, to - from) != 0) {
+            fail("a current value read back as another", a);
+        }
+    }
+    eds_free(g);
+    free(buf);
+}
+
+/* ---- Size cases -------------------------------------------------------------------------------------------- */
+
+#define SIZE_CASE_MAX (4UL * 1024UL * 1024UL)
+
+/* The file of a size case (see the head of this file), malloc'd. */
+static char *size_case(const uint8_t *data, size_t size, size_t *out_len)
+{
+    const unsigned copies = 1U << (size > 1U ? data[1] % 17U : 0U);
+    const char *p = size > 2U ? (const char *)data + 2 : "", *end = (const char *)data + size;
+    const char *parts[3];
+    size_t lens[3];
+    for (int i = 0; i < 3; i++) {
+        const char *sep = p < end ? memchr(p, 0x02, (size_t)(end - p)) : NULL;
+        parts[i] = p;
+        lens[i] = sep != NULL ? (size_t)(sep - p) : (p < end ? (size_t)(end - p) : 0U);
+        p = sep != NULL ? sep + 1 : end;
+    }
+    size_t ats = 0U;
+    for (size_t i = 0U; i < lens[1]; i++) {
+        ats += parts[1][i] == '@';
+    }
+    const size_t unit = lens[1] + ats * 3U;
+    char *file = malloc(SIZE_CASE_MAX + 1U);
+    if (file == NULL) {
+        abort();
+    }
+    size_t n = 0U;
+    if (lens[0] <= SIZE_CASE_MAX) {
+        memcpy(file, parts[0], lens[0]);
+        n = lens[0];
+    }
+    for (unsigned c = 0U; c < copies && unit > 0U && n + unit + lens[2] <= SIZE_CASE_MAX; c++) {
+        for (size_t i = 0U; i < lens[1]; i++) {
+            if (parts[1][i] == '@') {
+                n += (size_t)snprintf(file + n, 5U, "%04X", c & 0xFFFFU);
+            } else {
+                file[n++] = parts[1][i];
+            }
+        }
+    }
+    if (n + lens[2] <= SIZE_CASE_MAX) {
+        memcpy(file + n, parts[2], lens[2]);
+        n += lens[2];
+    }
+    *out_len = n;
+    return file;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
+    char *built = NULL;
+    if (size > 0U && data[0] == 0x01U) {
+        data = (const uint8_t *)(built = size_case(data, size, &size));
+    }
+    const text_t text = {(const char *)data, size};
     eds_file_t *f = eds_read_buffer("fuzz.eds", (const char *)data, size);
     if (f == NULL) {
+        free(built);
         return 0;
     }
-    if (f->errors == 0U) {
+    if (f->errors == 0U && built != NULL) {
+        check_model(f);
+    } else if (f->errors == 0U) {
         check_model(f);
         size_t len1 = 0U, len2 = 0U;
         char *text1 = write_dcf(f, &len1);
@@ -223,7 +401,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         free(text1);
         free(text2);
         eds_free(g);
+        check_current_values(f, &text);
     }
     eds_free(f);
+    free(built);
     return 0;
 }
