@@ -100,7 +100,7 @@ bool parse_spec(const char *arg, node_spec_t *spec, bool quiet)
         }
         spec->id = spec->cls->default_node_id;
         if (colon == NULL && spec->id == 0U) {
-            fprintf(stderr, "canopen-emu: %s: give the node-ID (%s:ID): the file has no [DeviceComissioning] NodeID\n",
+            fprintf(stderr, "canopen-emu: %s: give the node-ID (%s:ID): the file has no [DeviceComissioning] NodeID in 1..127\n",
                     arg, name);
             return false;
         }

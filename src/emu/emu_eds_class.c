@@ -377,10 +377,15 @@ bool eds_class_export(device_t *dev, const char *path, char *why, size_t cap)
     o.file_name = base != NULL ? base + 1 : path;
     o.current = current_value;
     o.ctx = dev;
+    why[0] = '\0';
+    o.error = why; /* a value a CiA 306 line cannot hold (a line break written over SDO): the entry named */
+    o.error_cap = cap;
     const int written = eds_write(out, c->file, &o);
     const bool closed = fflush(out) == 0 && fsync(fileno(out)) == 0;
     if (fclose(out) != 0 || written != 0 || !closed) {
-        snprintf(why, cap, "%s: %s", tmp, strerror(errno != 0 ? errno : EIO));
+        if (written == 0 || why[0] == '\0') {
+            snprintf(why, cap, "%s: %s", tmp, strerror(errno != 0 ? errno : EIO));
+        }
         (void)unlink(tmp);
         return false;
     }
