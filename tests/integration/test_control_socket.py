@@ -427,14 +427,35 @@ def test_clients_that_misbehave_cost_nothing(emulator, tmp_path):
     assert json.loads(c.line()) == {"id": None, "ok": False, "error": "line 3 is longer than 2047 bytes: ignored"}
     c.sock.sendall(b'{"cmd":"li\x00st"}\n')
     assert json.loads(c.line()) == {"id": None, "ok": False, "error": "line 4 holds a NUL byte: ignored"}
-    # one that asks and never reads: disconnected once 1 MiB waits for it, and the others go on
+    # one that asks and never reads: once its answers wait unread its lines wait too (they cost nothing) and it is
+    # read no more, so its sending blocks; the others go on; the events it subscribed to, which do not wait, cut it
+    # off once more than 1 MiB of them is unread
     greedy = Client(path)
     greedy.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    greedy.sock.sendall(b"subscribe frame 0x7E0\n")
+    greedy.sock.settimeout(1.0)
+    sent = 0
     try:
-        for _ in range(3000):
+        while sent < 100000:
             greedy.sock.sendall(b"help 16\n")
-    except (BrokenPipeError, ConnectionResetError):
+            sent += 1
+    except socket.timeout:
         pass
+    assert sent < 100000, "the emulator read all of a client that does not read its answers"
+    assert c.request(id=1, cmd="get", node=16, object="0x1017")["value"] == 5000
+    bus = can.Bus(channel=IFACE, interface="socketcan")
+    try:
+        for k in range(30000):  # ~45 bytes of event each
+            while True:
+                try:
+                    bus.send(can.Message(arbitration_id=0x7E0, data=k.to_bytes(4, "little"), is_extended_id=False))
+                    break
+                except can.CanOperationError:  # the interface's queue is full: the emulator reads it meanwhile
+                    time.sleep(0.001)
+            if k % 1000 == 999 and emu.log_contains("disconnected: it left more than 1048576 bytes unread", timeout=0):
+                break
+    finally:
+        bus.shutdown()
     assert emu.log_contains("disconnected: it left more than 1048576 bytes unread", timeout=10), emu.err_lines[-5:]
     assert c.request(id=1, cmd="get", node=16, object="0x1017")["value"] == 5000
     silent.close()
