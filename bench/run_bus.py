@@ -3,12 +3,17 @@
 JSON file with every figure. Standard library only.
 
     run_bus.py --bin DIR --emu PATH --work DIR --out FILE [--mode full|quick|smoke] [--only SECTION]
+    run_bus.py --clients-table LABEL=FILE [LABEL=FILE ...]    (on the host: the `clients` tables, Markdown)
 
 Sections (docs/performance.md explains each): SDO round trip against bench-echo (the floor) and
 canopen-emu; heartbeat/TPDO periods next to the ideal generator; the heartbeat while a control client floods
 the control socket; instructions per SDO request, heartbeat
 and TPDO of canopen-emu under callgrind (difference of runs); 127 nodes: CPU share, period error, highest
 lossless SDO rate. Any program failing (non-zero status, unparsable output) fails the whole run.
+
+The section `clients` runs only when asked (`--only clients`; tools/bench does not show it): the heartbeat at
+100 ms while 64 control clients keep the emulator busy (issue 32, N2), idle and under three loads, one emulator run
+per phase. --emu picks the program, so that the same section measures an older build next to the current one.
 """
 import argparse
 import json
@@ -29,11 +34,11 @@ NODE = 1  # the Bürkert flow controller's own default node-ID
 SIZES = {
     "full": dict(rtt_n=5000, period_s=12, cg_n=2000, cg_hold_s=5, scale_window_s=30, scale_rounds=3, rate_step_ms=2000,
                  rates=[250, 500, 1000, 1500, 2000, 3000, 4000, 6000, 8000, 12000],
-                 callgrind=True),
+                 callgrind=True, clients_s=10),
     "quick": dict(rtt_n=500, period_s=3, cg_n=200, cg_hold_s=1, scale_window_s=6, scale_rounds=3, rate_step_ms=500,
-                  rates=[500, 1000, 2000, 4000, 8000, 16000, 32000], callgrind=True),
+                  rates=[500, 1000, 2000, 4000, 8000, 16000, 32000], callgrind=True, clients_s=5),
     "smoke": dict(rtt_n=20, period_s=1, cg_n=0, cg_hold_s=0, scale_window_s=1, scale_rounds=1, rate_step_ms=200,
-                  rates=[100, 200], callgrind=False),
+                  rates=[100, 200], callgrind=False, clients_s=2),
 }
 
 
@@ -56,6 +61,7 @@ class Runner:
             a = a.replace(self.bin + "/", "")
             a = a.replace(self.emu_path, "canopen-emu")
             a = a.replace(self.work, "$WORK")
+            a = a.replace(os.path.abspath(__file__), "bench/run_bus.py").replace(sys.executable, "python3")
             out.append(a)
         return " ".join(out)
 
@@ -72,9 +78,9 @@ class Runner:
         except (ValueError, IndexError) as e:
             raise BenchError(f"{self.show(argv)}: output not JSON ({e}): {p.stdout!r}") from e
 
-    def start(self, section, argv, stdout=subprocess.PIPE):
+    def start(self, section, argv, stdout=subprocess.PIPE, stdin=None):
         self.commands.append((section, self.show(argv)))
-        return subprocess.Popen(argv, stdout=stdout, stderr=subprocess.PIPE, text=True)
+        return subprocess.Popen(argv, stdin=stdin, stdout=stdout, stderr=subprocess.PIPE, text=True)
 
     def stop(self, proc, what, timeout=120):
         """SIGTERM and wait; the program must exit 0 (canopen-emu and bench-echo do on SIGTERM)."""
@@ -259,6 +265,242 @@ def control_flood(r, sz):
         r.stop(emu, "canopen-emu (control socket)")
     return res
 
+
+# ---- 64 busy control clients (issue 32, N2)
+CLIENTS = 64  # the control socket's most clients at once (MAX_CLIENTS, src/emu/emu_socket.h)
+CLIENTS_PERIOD_US = 100000
+CLIENT_REQUESTS = {"objects": b'{"cmd":"objects","node":1,"values":true}\n', "hello": b'{"cmd":"hello"}\n'}
+CLIENT_IN_FLIGHT = (2, 4)  # a reading client asks again when only 2 answers are due, up to 4 again
+SILENT_REQUESTS = 100  # what a client that never reads sends, at once
+# The phases: what the 64 clients do (none, reading `objects` answers, never reading them, `hello`).
+CLIENT_PHASES = (("idle", None), ("objects", "objects"), ("silent", "objects"), ("hello", "hello"))
+CLIENTS_LEAD_S = 1  # the recording runs this long before the clients begin: a stall they cause at once is inside it
+
+
+def client_load(phase, path, n_clients):
+    """The 64 clients of one phase, in a process of their own (`run_bus.py client-load PHASE PATH N`): one poll()
+    over all sockets, no busy waiting (User-Mode Linux has one CPU for them and the emulator). Prints "ready" once
+    all are connected, and begins to ask when a line comes on stdin; the counts are noted then and on SIGUSR1 (the
+    recorded window's end); SIGTERM ends it and prints the notes as JSON. A reading client counts answers by their
+    line ends and checks its first answer whole; a silent client only sends, and is watched for being closed by the
+    emulator."""
+    import select
+    import socket
+    kind = dict(CLIENT_PHASES)[phase]
+    request = CLIENT_REQUESTS[kind]
+    reading = phase != "silent"
+    socks = []
+    deadline = time.monotonic() + 10
+    while len(socks) < n_clients:
+        s = socket.socket(socket.AF_UNIX)
+        try:
+            s.connect(path)
+        except OSError:
+            s.close()
+            if socks or time.monotonic() > deadline:
+                raise
+            time.sleep(0.05)  # the socket is not there yet
+            continue
+        socks.append(s)
+    by_fd = {s.fileno(): s for s in socks}
+    due = {fd: 0 for fd in by_fd}  # answers asked for and not yet received
+    out = {fd: b"" for fd in by_fd}  # requests not yet taken by the socket
+    first = {fd: b"" for fd in by_fd}  # the first answer, until whole
+    counts = {"answers": 0, "bytes": 0, "refused": 0, "closed_by_emulator": 0}
+    poller = select.poll()
+    marks, stop = [], []
+
+    def mark(*_):
+        t = os.times()
+        marks.append({"t": time.monotonic(), "cpu_s": t.user + t.system, **counts})
+
+    signal.signal(signal.SIGUSR1, mark)
+    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
+    print("ready", flush=True)
+    sys.stdin.readline()  # go
+    mark()
+    for fd, s in by_fd.items():
+        if reading:
+            due[fd] = CLIENT_IN_FLIGHT[1]
+            out[fd] = request * CLIENT_IN_FLIGHT[1]
+        else:
+            s.sendall(request * SILENT_REQUESTS)
+        s.setblocking(False)
+
+    def flush(fd):
+        try:
+            n = by_fd[fd].send(out[fd])
+        except BlockingIOError:
+            n = 0
+        out[fd] = out[fd][n:]
+        poller.modify(fd, select.POLLIN | (select.POLLOUT if out[fd] else 0))
+
+    for fd in by_fd:
+        poller.register(fd, select.POLLIN if reading else select.POLLRDHUP)
+        if reading:
+            flush(fd)
+    while not stop:
+        try:
+            events = poller.poll(200)
+        except InterruptedError:
+            continue
+        for fd, ev in events:
+            s = by_fd[fd]
+            if not reading:  # only a hang-up wakes a silent client
+                counts["closed_by_emulator"] += 1
+                poller.unregister(fd)
+                continue
+            if ev & select.POLLOUT:
+                flush(fd)
+            if not ev & (select.POLLIN | select.POLLHUP | select.POLLERR):
+                continue
+            try:
+                data = s.recv(1 << 18)
+            except BlockingIOError:
+                continue
+            except OSError:
+                data = b""
+            if not data:
+                counts["closed_by_emulator"] += 1
+                poller.unregister(fd)
+                continue
+            lines = data.count(b"\n")
+            counts["answers"] += lines
+            counts["bytes"] += len(data)
+            counts["refused"] += data.count(b'"ok":false')
+            if first[fd] is not None:
+                first[fd] += data
+                if b"\n" in first[fd]:
+                    answer = json.loads(first[fd].split(b"\n", 1)[0])
+                    if not answer.get("ok") or (kind == "objects" and not answer.get("objects")):
+                        raise BenchError(f"client-load: a wrong first answer: {str(answer)[:300]}")
+                    first[fd] = None
+            due[fd] -= lines
+            if due[fd] <= CLIENT_IN_FLIGHT[0]:
+                out[fd] += request * (CLIENT_IN_FLIGHT[1] - due[fd])
+                due[fd] = CLIENT_IN_FLIGHT[1]
+                flush(fd)
+    mark()
+    for s in socks:
+        s.close()
+    print(json.dumps({"clients": n_clients, "marks": marks}), flush=True)
+    return 0
+
+
+def clients_phase(r, phase, d):
+    """One emulator run: heartbeat 100 ms; the heartbeat and the ideal generator recorded for d seconds, the phase's
+    clients connected before and asking from CLIENTS_LEAD_S on (a stall that began before the window would not be
+    an interval of it). Recorded twice at once: against the period (deviation, intervals over 1.5 periods) and
+    against a period of 1 µs, whose deviations are the intervals themselves (the largest gap, the p99 interval)."""
+    path = os.path.join(r.work, f"ctl-{phase}.sock")
+    emu = r.emu("clients", [f"buerkert:{NODE}"], extra=["--control-socket", path])
+    load = None
+    rd = {"phase": phase}
+    try:
+        r.run_json("clients", [r.prog("bench-sdo"), "-i", IFACE, "ready", str(NODE), "w", str(NODE), "0x1017", "2",
+                               str(CLIENTS_PERIOD_US // 1000)])
+        if dict(CLIENT_PHASES)[phase]:
+            load = r.start("clients", [sys.executable, os.path.abspath(__file__), "client-load", phase, path,
+                                       str(CLIENTS)], stdin=subprocess.PIPE)
+            if load.stdout.readline().strip() != "ready":
+                load.wait(timeout=30)
+                raise BenchError(f"client-load {phase}: {load.stderr.read()}")
+        hb, ideal = f"heartbeat=0x{0x700 + NODE:03X}", "ideal=0x7F0"
+        rec = r.start("clients", [r.prog("bench-record"), "-i", IFACE, "-b", str(RECORD_BATCH_MS), "-p",
+                                  str(CLIENTS_PERIOD_US), "-d", str(d), hb, ideal])
+        gaps = r.start("clients", [r.prog("bench-record"), "-i", IFACE, "-b", str(RECORD_BATCH_MS), "-p", "1",
+                                   "-d", str(d), hb, ideal])
+        gen = r.start("clients", [r.prog("bench-gen"), "-i", IFACE, "-p", str(CLIENTS_PERIOD_US), "-d", str(d + 1),
+                                  "0x7F0"])
+        time.sleep(CLIENTS_LEAD_S)
+        t0, wall0, cpu0 = time.monotonic(), time.time(), cpu_ticks(emu.pid)
+        if load is not None:
+            load.stdin.write("go\n")
+            load.stdin.flush()
+        outs = {}
+        for name, proc in (("record", rec), ("gaps", gaps), ("gen", gen)):
+            out, err = proc.communicate(timeout=d + 60)
+            if proc.returncode != 0:
+                raise BenchError(f"bench-{name}: exit {proc.returncode}: {err}")
+            outs[name] = json.loads(out)
+        t1, wall1, cpu1 = time.monotonic(), time.time(), cpu_ticks(emu.pid)
+        if load is not None:
+            load.send_signal(signal.SIGUSR1)
+            time.sleep(0.3)  # the mark is taken before the end
+            out, err = r.stop(load, f"client-load {phase}")
+            marks = json.loads(out.strip().splitlines()[-1])["marks"]
+            a, b = marks[0], marks[1]
+            dt = b["t"] - a["t"]
+            rd["load"] = {"answers": b["answers"] - a["answers"], "answers_per_s": (b["answers"] - a["answers"]) / dt,
+                          "bytes_per_s": (b["bytes"] - a["bytes"]) / dt, "refused": marks[-1]["refused"],
+                          "closed_by_emulator": marks[-1]["closed_by_emulator"],
+                          "cpu_share": (b["cpu_s"] - a["cpu_s"]) / dt}
+            load = None
+        tck = os.sysconf("SC_CLK_TCK")
+        rd.update({"load_s": t1 - t0, "wall": [wall0, wall1], "loadavg_window": loadavg(),
+                   "emu_cpu_share": (sum(cpu1) - sum(cpu0)) / tck / (t1 - t0),
+                   "record": outs["record"], "gaps": outs["gaps"], "gen": outs["gen"]})
+    finally:
+        if load is not None and load.poll() is None:
+            load.kill()
+            load.communicate()
+        _, err = r.stop(emu, f"canopen-emu (control socket, {phase})")
+        rd["emu_stderr"] = err.strip()[-1000:]
+    return rd
+
+
+def busy_clients(r, sz):
+    """The heartbeat (100 ms) beside the ideal generator while 64 control clients: do nothing; ask `objects` with
+    values as fast as they read the answers (2-4 on the way each); send 100 such requests each and never read;
+    send `hello` as fast as answered. Before issue 32's fix, a pass of the emulator's loop ran every client's
+    waiting lines and the heartbeat waited for all of them."""
+    d = sz["clients_s"]
+    return {"period_us": CLIENTS_PERIOD_US, "seconds": d, "lead_s": CLIENTS_LEAD_S, "clients": CLIENTS,
+            "in_flight": list(CLIENT_IN_FLIGHT),
+            "silent_requests": SILENT_REQUESTS, "emu": r.emu_path,
+            "phases": [clients_phase(r, phase, d) for phase, _ in CLIENT_PHASES]}
+
+
+def stream_cells(res, rd, stream):
+    """A stream's cells of the `clients` table: frames received of those due in the window, intervals over 1.5
+    periods, the largest gap (ms, the 1 µs recording's largest interval), p99 and max deviation from the period."""
+    g, iv = rd["record"]["groups"][stream], rd["gaps"]["groups"][stream]["abs_dev_us"]
+    due = res["seconds"] * 1000000 // res["period_us"]
+    return [f"{g['frames']}/{due}", str(g["missing"]), f"{iv['max'] / 1000:,.0f}",
+            f"{g['abs_dev_us']['p99'] / 1000:,.1f}", f"{g['abs_dev_us']['max'] / 1000:,.1f}"]
+
+
+CLIENTS_WHAT = {"idle": "none", "objects": "64 reading `objects`", "silent": "64 never reading",
+                "hello": "64 sending `hello`"}
+
+
+def clients_table(labelled):
+    """The `clients` tables (Markdown), one JSON file of run_bus.py per label (runs of an older and of the current
+    program), grouped by phase: the heartbeat's timing next to the ideal generator's, then what the clients got and
+    what it cost."""
+    runs = []
+    for label, path in labelled:
+        with open(path) as f:
+            runs.append((label, json.load(f)["clients"]))
+    phases = [rd["phase"] for rd in runs[0][1]["phases"]]
+    lines = ["| clients | program | heartbeat frames | over 1.5 periods | largest gap ms | p99 dev ms | max dev ms "
+             "| ideal frames | over 1.5 periods | largest gap ms | p99 dev ms | max dev ms |",
+             "|---|---|" + "--:|" * 10]
+    for k, phase in enumerate(phases):
+        for label, res in runs:
+            rd = res["phases"][k]
+            lines.append(f"| {CLIENTS_WHAT[phase]} | {label} | " + " | ".join(stream_cells(res, rd, "heartbeat"))
+                         + " | " + " | ".join(stream_cells(res, rd, "ideal")) + " |")
+    lines += ["", "| clients | program | answers/s | MB/s read | closed by the emulator | canopen-emu CPU "
+              "| clients' CPU | load average (UML) |", "|---|---|--:|--:|--:|--:|--:|---|"]
+    for k, phase in enumerate(phases[1:], 1):
+        for label, res in runs:
+            rd = res["phases"][k]
+            ld = rd["load"]
+            lines.append(f"| {CLIENTS_WHAT[phase]} | {label} | {ld['answers_per_s']:,.0f} | "
+                         f"{ld['bytes_per_s'] / 1e6:.1f} | {ld['closed_by_emulator']} "
+                         f"| {rd['emu_cpu_share'] * 100:.0f}% | {ld['cpu_share'] * 100:.0f}% | {rd['loadavg_window']} |")
+    return "\n".join(lines)
 
 def callgrind_total(path):
     total = None
@@ -455,14 +697,20 @@ def scale(r, sz):
 
 
 def main():
+    if sys.argv[1:2] == ["client-load"]:  # the clients of a `clients` phase, started by clients_phase()
+        phase, path, n = sys.argv[2:5]
+        return client_load(phase, path, int(n))
+    if sys.argv[1:2] == ["--clients-table"]:
+        print(clients_table([a.split("=", 1) for a in sys.argv[2:]]))
+        return 0
     ap = argparse.ArgumentParser()
     ap.add_argument("--bin", required=True)
     ap.add_argument("--emu", required=True)
     ap.add_argument("--work", required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--mode", choices=sorted(SIZES), default="full")
-    ap.add_argument("--only", choices=("rtt", "periods", "flood", "callgrind", "scale"),
-                    help="run this section alone (tools/bench --emu-instructions: callgrind)")
+    ap.add_argument("--only", choices=("rtt", "periods", "flood", "callgrind", "scale", "clients"),
+                    help="run this section alone (tools/bench --emu-instructions: callgrind); clients runs only so")
     args = ap.parse_args()
     args.bin = os.path.abspath(args.bin)
     args.emu = os.path.abspath(args.emu)
@@ -477,6 +725,8 @@ def main():
     if sz["callgrind"]:
         steps.append(("callgrind", callgrind))
     steps.append(("scale", scale))
+    if args.only == "clients":
+        steps.append(("clients", busy_clients))
     if args.only:
         steps = [(name, fn) for name, fn in steps if name == args.only]
     try:
