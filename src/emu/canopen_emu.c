@@ -1,7 +1,7 @@
 /*
- * canopen-emu: emulated CANopen devices on SocketCAN interfaces.
+ * canopen-emu: emulated CANopen devices on CAN buses: SocketCAN interfaces, UDP multicast groups, virtual buses.
  *
- *   canopen-emu [-i IFACE]... [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID][@IFACE] ...
+ *   canopen-emu [-i BUS]... [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID][@BUS] ...
  *
  * This file reads the options and hands them to the runtime (emu_runtime.h); emu.h says where everything else
  * lives. See docs/emulator.md.
@@ -35,27 +35,40 @@ static void print_version(void)
     }
 }
 
-static bool add_interface(emu_config_t *cfg, const char *name)
+/* The bus that text (-i BUS, or NODE@BUS) names: one already given under the same name, or a new one. A bare name
+ * (vcan1) names a bus of that name of any kind (@plant after -i virtual:plant); two kinds, or two sets of options,
+ * under one name are refused. Its index, or -1 after a message. */
+static int add_bus(emu_config_t *cfg, const char *text)
 {
-    if (name[0] == '\0') {
-        fprintf(stderr, "canopen-emu: -i/--interface needs an interface name, not an empty one\n");
-        return false;
+    if (text[0] == '\0') {
+        fprintf(stderr, "canopen-emu: -i/--interface needs a bus (an interface name, udp_multicast[:GROUP[:PORT]], "
+                "virtual:NAME), not an empty one\n");
+        return -1;
     }
-    if (strlen(name) >= IF_NAMESIZE) {
-        fprintf(stderr, "canopen-emu: interface name '%s' is longer than %d characters\n", name, IF_NAMESIZE - 1);
-        return false;
+    can_channel_spec_t spec;
+    char err[256];
+    if (can_channel_parse(text, &spec, err, sizeof err) != 0) {
+        fprintf(stderr, "canopen-emu: %s\n", err);
+        return -1;
     }
-    for (size_t i = 0U; i < cfg->n_ifaces; i++) {
-        if (strcmp(cfg->ifaces[i], name) == 0) {
-            return true; /* named twice (-i and @IFACE): one bus */
+    for (size_t i = 0U; i < cfg->n_buses; i++) {
+        const can_channel_spec_t *b = &cfg->buses[i];
+        if (strcmp(b->name, spec.name) != 0) {
+            continue;
         }
+        if (spec.kind_given && (b->kind != spec.kind || memcmp(&b->udp, &spec.udp, sizeof spec.udp) != 0)) {
+            fprintf(stderr, "canopen-emu: '%s' names bus %s (%s) again, as another kind or with other options\n", text,
+                    b->name, can_channel_kind_name(b->kind));
+            return -1;
+        }
+        return (int)i; /* named twice (-i and @BUS): one bus */
     }
-    if (cfg->n_ifaces == MAX_BUSES) {
-        fprintf(stderr, "canopen-emu: at most %d interfaces\n", MAX_BUSES);
-        return false;
+    if (cfg->n_buses == MAX_BUSES) {
+        fprintf(stderr, "canopen-emu: at most %d buses\n", MAX_BUSES);
+        return -1;
     }
-    cfg->ifaces[cfg->n_ifaces++] = name;
-    return true;
+    cfg->buses[cfg->n_buses] = spec;
+    return (int)cfg->n_buses++;
 }
 
 /* --control-tcp and --web: HOST:PORT, checked before anything starts (the address is resolved later). */
@@ -78,18 +91,15 @@ static bool parse_specs(emu_config_t *cfg, int argc, char **argv, bool quiet)
         if (!parse_spec(argv[a], s, quiet)) {
             return false;
         }
-        if (s->iface[0] == '\0' || strcmp(s->iface, cfg->ifaces[0]) == 0) {
-            s->iface[0] = '\0';
-        } else {
-            const char *at = strrchr(argv[a], '@'); /* the name lives in argv for the whole run */
-            if (!add_interface(cfg, at + 1)) {
-                return false;
-            }
+        const int bus = s->bus[0] == '\0' ? 0 : add_bus(cfg, s->bus);
+        if (bus < 0) {
+            return false;
         }
+        s->bus_index = (size_t)bus;
         for (size_t k = 0U; k < cfg->n_specs; k++) {
-            if (cfg->specs[k].id == s->id && strcmp(cfg->specs[k].iface, s->iface) == 0) {
+            if (cfg->specs[k].id == s->id && cfg->specs[k].bus_index == s->bus_index) {
                 fprintf(stderr, "canopen-emu: node-ID %u is given twice on %s (%s and %s); each node of a bus needs its "
-                        "own\n", s->id, s->iface[0] != '\0' ? s->iface : cfg->ifaces[0], argv[k], argv[a]);
+                        "own\n", s->id, cfg->buses[bus].name, argv[k], argv[a]);
                 return false;
             }
         }
@@ -119,7 +129,7 @@ int main(int argc, char **argv)
     while ((opt = getopt_long(argc, argv, "i:vqh", opts, NULL)) != -1) {
         switch (opt) {
         case 'i':
-            if (!add_interface(&config, optarg)) {
+            if (add_bus(&config, optarg) < 0) {
                 return 2;
             }
             break;
@@ -193,8 +203,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "canopen-emu: at most %d nodes\n", MAX_NODES_ALL);
         return 2;
     }
-    if (config.n_ifaces == 0U) {
-        config.ifaces[config.n_ifaces++] = "vcan0";
+    if (config.n_buses == 0U) {
+        (void)add_bus(&config, "vcan0");
     }
     atexit(eds_class_free_all); /* the classes read from EDS files outlive every node */
     if (!parse_specs(&config, argc - optind, &argv[optind], emu.log_level == LOG_QUIET)) {

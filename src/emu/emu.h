@@ -2,7 +2,7 @@
  * The canopen-emu runtime's state, shared by its modules. Where each concern lives:
  *   canopen_emu.c   main: the options, then emu_runtime
  *   emu_runtime.c   start (buses, nodes), the exit summary; emu_loop.c the main loop (one poll for everything)
- *   emu_bus.c       one CAN interface: its socket, the frames between its local nodes, routing each frame to
+ *   emu_bus.c       one bus: its channel (src/linux/can_channel.h), the frames between its local nodes, routing each frame to
  *                   the nodes that take its CAN-ID; emu_bus_pass.c a pass of the loop for it (frames in, nodes run)
  *   emu_node.c      one emulated node: the device, its port (CAN through its bus, NVM files)
  *   emu_faults.c    protocol faults injected between a node and its bus
@@ -24,7 +24,7 @@
 #include <stdint.h>
 
 #include "../linux/nvm_file.h"
-#include "../linux/socketcan.h"
+#include "../linux/can_channel.h"
 #include "device.h"
 #include "emu_control.h"
 #include "emu_faults.h"
@@ -56,7 +56,7 @@ typedef struct emu_node {
     struct emu_bus *bus;
     uint8_t cmdline_id;
     size_t index;           /* position in its bus's nodes */
-    char key[64];           /* NVM file name stem: DEVICE-ID, or DEVICE-ID@IFACE on every bus but the first */
+    char key[160];          /* NVM file name stem: DEVICE-ID, or DEVICE-ID@BUS on every bus but the first */
     node_faults_t faults;   /* protocol faults injected (emu_faults.h) */
     co_time_us_t deadline;  /* what device_process last returned, or earlier when a fault must run */
     bool dirty;             /* a frame concerned the node or a command ran on it: process before sleeping */
@@ -84,7 +84,7 @@ typedef struct heard_node {
 
 typedef struct emu_bus {
     struct emu *emu;
-    socketcan_t can;
+    can_channel_t can;      /* its medium: a SocketCAN interface, a multicast group, none (can_channel.h) */
     emu_node_t *nodes[MAX_NODES];
     size_t n_nodes;
     local_frame_t local[LOCAL_QUEUE_LEN];

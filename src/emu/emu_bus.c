@@ -1,4 +1,4 @@
-/* One CAN interface and its nodes: see emu_bus.h. */
+/* One bus and its nodes: see emu_bus.h. */
 #define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
 #include "emu_bus.h"
 
@@ -8,15 +8,15 @@
 #include "emu_events.h"
 #include "emu_output.h"
 
-/* The port's lines are all problems or their end (interface down / up again, gone / back, error frames, frames
- * lost, a failed send): shown with -q too, which keeps only problems. */
+/* The channel's lines are all problems or their end (interface down / up again, gone / back, error frames, frames
+ * lost, a failed send, datagrams that are not frames): shown with -q too, which keeps only problems. */
 static void can_log(void *ctx, const char *line)
 {
     logline(LOG_QUIET, "%s", line);
     events_interface((emu_bus_t *)ctx, line);
 }
 
-int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t errlen)
+int bus_open(emu_bus_t *b, const can_channel_spec_t *spec, int log_level, char *err, size_t errlen)
 {
     b->n_nodes = 0U;
     b->local_head = 0U;
@@ -26,7 +26,12 @@ int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t 
     b->any_dirty = false;
     b->nodes_next = 0U; /* the first pass is a full one */
     b->tx_pending = false;
-    return socketcan_open(&b->can, ifname, can_log, b, err, errlen);
+    const int e = can_channel_open(&b->can, spec, can_log, b, err, errlen);
+    char about[320];
+    if (e == 0 && can_channel_describe(&b->can, about, sizeof about)) {
+        logline(LOG_NORMAL, "%s", about);
+    }
+    return e;
 }
 
 void bus_add_node(emu_bus_t *b, emu_node_t *n)
@@ -90,7 +95,7 @@ static inline __attribute__((always_inline)) void frame_sent(emu_bus_t *b, emu_n
 
 co_status_t bus_send(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
 {
-    const co_status_t st = socketcan_send(&b->can, f);
+    const co_status_t st = can_channel_send(&b->can, f);
     if (st == CO_OK) {
         frame_sent(b, from, f);
     }
@@ -119,7 +124,7 @@ co_status_t bus_node_send(void *ctx, const co_frame_t *f)
         return send_through_faults(n, f);
     }
     emu_bus_t *b = n->bus;
-    const co_status_t st = socketcan_send(&b->can, f);
+    const co_status_t st = can_channel_send(&b->can, f);
     if (st == CO_OK) {
         frame_sent(b, n, f);
     }
@@ -129,7 +134,7 @@ co_status_t bus_node_send(void *ctx, const co_frame_t *f)
 void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost)
 {
     if (b->local_lost > 0U) {
-        logline(LOG_QUIET, "%s: %lu frame(s) between local nodes were lost (queue full)", b->can.ifname, b->local_lost);
+        logline(LOG_QUIET, "%s: %lu frame(s) between local nodes were lost (queue full)", b->can.name, b->local_lost);
     }
     for (size_t i = 0U; i < b->n_nodes; i++) {
         const co_node_stats_t *st = &b->nodes[i]->dev.node.stats;
@@ -140,7 +145,7 @@ void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsign
                     b->nodes[i]->dev.cls->name, (unsigned long)st->tx_dropped);
         }
     }
-    socketcan_flush_log(&b->can);
-    *rx_lost += b->can.rx_dropped;
-    socketcan_close(&b->can);
+    can_channel_flush_log(&b->can);
+    *rx_lost += can_channel_rx_dropped(&b->can);
+    can_channel_close(&b->can);
 }

@@ -1,11 +1,12 @@
 /*
- * One CAN interface of canopen-emu and the nodes on it. All nodes of a bus share one CAN socket: a frame read from
+ * One bus of canopen-emu and the nodes on it. All nodes of a bus share one channel (a SocketCAN socket, a multicast
+ * group's sockets or none: can_channel.h): a frame read from
  * the bus is given to the nodes of the bus that take its CAN-ID (a table per CAN-ID, from each node's
  * co_node_rx_ids, kept up to date by CO_EV_RX_FILTER: the cost of a frame does not grow with the number of nodes),
  * and a frame one node sends is also given to the bus's other nodes (the kernel does not loop a socket's frames back to itself), through a
  * queue drained by the main loop so that no node is re-entered while it runs. One socket instead of one per node
  * keeps the system calls per bus frame at one, which matters with 127 nodes. Buses are independent: a node-ID is
- * unique per bus, each bus has its own socket and its own error handling (socketcan.c).
+ * unique per bus, each bus has its own channel and its own error handling (socketcan.c, udp_multicast.c).
  */
 #ifndef EMU_BUS_H
 #define EMU_BUS_H
@@ -14,8 +15,9 @@
 
 #include "emu.h"
 
-/** Opens the interface (b->emu set by the caller); 0, or an errno with a message in err. */
-int bus_open(emu_bus_t *b, const char *ifname, int log_level, char *err, size_t errlen);
+/** Opens the bus's channel (b->emu set by the caller) and logs what the user should know of it (where a multicast
+ *  group is joined); 0, or an errno with a message in err. */
+int bus_open(emu_bus_t *b, const can_channel_spec_t *spec, int log_level, char *err, size_t errlen);
 
 /** Adds a node (at most MAX_NODES); sets its bus and index. */
 void bus_add_node(emu_bus_t *b, emu_node_t *n);
@@ -50,7 +52,7 @@ co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us
 int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next,
                   short revents);
 
-/** The exit report of the bus (its lost frames), its counts added to sent, dropped and rx_lost; closes the socket. */
+/** The exit report of the bus (its lost frames), its counts added to sent, dropped and rx_lost; closes the channel. */
 void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost);
 
 #endif /* EMU_BUS_H */

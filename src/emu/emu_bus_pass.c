@@ -85,7 +85,7 @@ static inline co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pend
     const co_time_us_t next = b->local_count == 0U && !b->any_dirty && now < b->nodes_next ? b->nodes_next
                                                                                           : run_nodes(b, now);
     *tx_pending = b->tx_pending;
-    const co_time_us_t r = socketcan_service(&b->can, now);
+    const co_time_us_t r = can_channel_service(&b->can, now);
     return r < next ? r : next;
 }
 
@@ -94,7 +94,7 @@ static inline co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pend
 static inline __attribute__((always_inline)) co_time_us_t bus_receive(emu_bus_t *b, co_time_us_t now, co_time_us_t due)
 {
     co_frame_t f;
-    for (unsigned k = 0U; k < 1024U && socketcan_read(&b->can, &f) == 1; k++) {
+    for (unsigned k = 0U; k < 1024U && can_channel_read(&b->can, &f, now) == 1; k++) {
         if (b->log_level >= LOG_VERBOSE) {
             /* 8 digits for a 29-bit identifier, as candump: an extended 0x181 must not read as TPDO1 of node 1 */
             logline(LOG_VERBOSE, "rx %0*X [%u]%s", (f.flags & CO_FRAME_EFF) != 0U ? 8 : 3, (unsigned)f.id, f.len,
@@ -111,8 +111,8 @@ static inline __attribute__((always_inline)) co_time_us_t bus_receive(emu_bus_t 
          * flood could hold every heartbeat back until 1024 frames were read (a 350 ms gap failed test_bus_faults'
          * flood test in a loaded run). Looked at once a read-ahead batch is used up, where stopping loses nothing;
          * a batch that emptied the kernel's queue ends the reading without another call. */
-        if (socketcan_read_ahead_empty(&b->can)) {
-            if (socketcan_read_drained(&b->can)) {
+        if (can_channel_read_ahead_empty(&b->can)) {
+            if (can_channel_read_drained(&b->can)) {
                 break;
             }
             now = socketcan_now_us();
@@ -158,7 +158,7 @@ co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us
 int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next, short revents)
 {
     emu_bus_t *b = emu->buses[0];
-    struct pollfd pfd = {b->can.fd, POLLIN, revents};
+    struct pollfd pfd = {can_channel_fd(&b->can), POLLIN, revents};
     /* The time and the deadline in locals, given back at the end: the inlined pass keeps them in registers. */
     co_time_us_t t = *now;
     co_time_us_t deadline = *next;
@@ -169,8 +169,8 @@ int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *n
         if (output_flush()) {
             break; /* output waits: loop_run polls for it */
         }
-        pfd.fd = b->can.fd;
-        pfd.events = socketcan_poll_events(&b->can, tx_pending);
+        pfd.fd = can_channel_fd(&b->can);
+        pfd.events = can_channel_poll_events(&b->can, tx_pending);
         pfd.revents = 0;
         t = socketcan_now_us();
         struct timespec ts;

@@ -79,11 +79,11 @@ bool parse_spec(const char *arg, node_spec_t *spec, bool quiet)
     char *at = strchr(text, '@');
     if (at != NULL) {
         *at++ = '\0';
-        if (at[0] == '\0' || strlen(at) >= sizeof spec->iface || strchr(at, '/') != NULL) {
-            fprintf(stderr, "canopen-emu: bad interface '%s' in '%s'\n", at, arg);
+        if (at[0] == '\0' || strlen(at) >= sizeof spec->bus || strchr(at, '/') != NULL) {
+            fprintf(stderr, "canopen-emu: bad bus '%s' in '%s'\n", at, arg);
             return false;
         }
-        (void)snprintf(spec->iface, sizeof spec->iface, "%s", at);
+        (void)snprintf(spec->bus, sizeof spec->bus, "%s", at);
     }
     const char *colon = strchr(text, ':');
     const size_t nlen = colon != NULL ? (size_t)(colon - text) : strlen(text);

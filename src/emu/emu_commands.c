@@ -89,7 +89,7 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, b
     if (at != NULL) {
         *at = '\0';
         for (size_t i = 0U; i < emu->n_buses; i++) {
-            if (strcmp(emu->buses[i]->can.ifname, at + 1) == 0) {
+            if (strcmp(emu->buses[i]->can.name, at + 1) == 0) {
                 sel->bus = emu->buses[i];
             }
         }
@@ -110,8 +110,8 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, b
             const emu_node_t *n = emu->nodes[i];
             if (has_id(n, sel->id)) {
                 if (found != NULL && found != n->bus) {
-                    reply("error: node %lld is on %s and on %s: say %lld@%s", sel->id, found->can.ifname,
-                          n->bus->can.ifname, sel->id, found->can.ifname);
+                    reply("error: node %lld is on %s and on %s: say %lld@%s", sel->id, found->can.name,
+                          n->bus->can.name, sel->id, found->can.name);
                     return false;
                 }
                 found = n->bus;
@@ -206,7 +206,7 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
             const emu_node_t *n = emu->nodes[i];
             reply("node %u: %s (started as %u) %s%s%s", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
                   co_nmt_state_name(co_node_state(&n->dev.node)), emu->n_buses > 1U ? " on " : "",
-                  emu->n_buses > 1U ? n->bus->can.ifname : "");
+                  emu->n_buses > 1U ? n->bus->can.name : "");
         }
         return COMMAND_OK;
     }

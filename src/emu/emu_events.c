@@ -61,7 +61,7 @@ static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const em
                 (void)json_object_set_new(o, "event", json_string(event_kind_name(kind)));
                 (void)json_object_set_new(o, "time_us", json_integer((json_int_t)t));
                 if (bus != NULL) {
-                    (void)json_object_set_new(o, "bus", json_string(bus->can.ifname));
+                    (void)json_object_set_new(o, "bus", json_string(bus->can.name));
                 }
                 if (n != NULL) {
                     (void)json_object_set_new(o, "node", json_integer(id));
@@ -92,10 +92,10 @@ static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const em
                 int w;
                 if (n != NULL) {
                     w = snprintf(raw, sizeof raw, "event %s %.6f node %u@%s (%s): %s", event_kind_name(kind),
-                                 (double)t / 1e6, id, bus->can.ifname, n->dev.cls->name, text != NULL ? text : "");
+                                 (double)t / 1e6, id, bus->can.name, n->dev.cls->name, text != NULL ? text : "");
                 } else {
                     w = snprintf(raw, sizeof raw, "event %s %.6f %s: %s", event_kind_name(kind),
-                                 (double)t / 1e6, bus != NULL ? bus->can.ifname : "-", text != NULL ? text : "");
+                                 (double)t / 1e6, bus != NULL ? bus->can.name : "-", text != NULL ? text : "");
                 }
                 const size_t raw_len = w < 0 ? 0U : (size_t)w < sizeof raw ? (size_t)w : sizeof raw - 1U;
                 text_len = text_escape(text_line, sizeof text_line - 1U, raw, raw_len, TEXT_ONE_LINE);

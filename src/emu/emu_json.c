@@ -234,7 +234,7 @@ static json_t *node_summary(const emu_t *emu, const emu_node_t *n)
                                                                           : json_null());
     (void)json_object_set_new(o, "started_as", json_integer(n->cmdline_id));
     (void)json_object_set_new(o, "state", json_string(co_nmt_state_name(co_node_state(&n->dev.node))));
-    (void)json_object_set_new(o, "bus", json_string(n->bus != NULL ? n->bus->can.ifname : ""));
+    (void)json_object_set_new(o, "bus", json_string(n->bus != NULL ? n->bus->can.name : ""));
     (void)emu;
     return o;
 }
@@ -263,7 +263,7 @@ static void cmd_hello(const request_t *q)
     (void)json_object_set_new(r, "events", kinds);
     json_t *buses = json_array();
     for (size_t i = 0U; i < q->emu->n_buses; i++) {
-        (void)json_array_append_new(buses, json_string(q->emu->buses[i]->can.ifname));
+        (void)json_array_append_new(buses, json_string(q->emu->buses[i]->can.name));
     }
     (void)json_object_set_new(r, "buses", buses);
     /* The events' clock (µs since the start) and the wall clock read together: a client turns time_us into dates
@@ -334,7 +334,7 @@ static json_t *heard_nodes(const emu_t *emu, const char *word)
     json_t *list = json_array();
     for (size_t k = 0U; k < emu->n_buses; k++) {
         const emu_bus_t *b = emu->buses[k];
-        if (bus_name != NULL && strcmp(bus_name, b->can.ifname) != 0) {
+        if (bus_name != NULL && strcmp(bus_name, b->can.name) != 0) {
             continue;
         }
         bool ours[128] = {false};
@@ -348,7 +348,7 @@ static json_t *heard_nodes(const emu_t *emu, const char *word)
             }
             json_t *o = json_object();
             (void)json_object_set_new(o, "node", json_integer(id));
-            (void)json_object_set_new(o, "bus", json_string(b->can.ifname));
+            (void)json_object_set_new(o, "bus", json_string(b->can.name));
             /* a boot-up (0x00) means it is now PRE-OPERATIONAL */
             (void)json_object_set_new(o, "state", json_string(h->state == 0U ? "PRE-OPERATIONAL"
                                                                              : co_nmt_state_name((co_nmt_state_t)h->state)));

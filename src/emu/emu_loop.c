@@ -88,8 +88,8 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             bool tx_pending = false;
             const co_time_us_t t = bus_pass(b, &now, pfd[i].revents, due, &tx_pending);
             next = t < next ? t : next;
-            pfd[i].fd = b->can.fd; /* -1 while the interface is gone: poll ignores it */
-            pfd[i].events = socketcan_poll_events(&b->can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
+            pfd[i].fd = can_channel_fd(&b->can); /* -1 while the interface is gone, on a virtual bus: poll ignores it */
+            pfd[i].events = can_channel_poll_events(&b->can, tx_pending); /* no POLLOUT after ENOBUFS: it would spin */
             pfd[i].revents = 0;
         }
         nfds = (nfds_t)emu->n_buses;

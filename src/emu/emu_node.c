@@ -25,9 +25,14 @@ static co_status_t port_nvm_read(void *ctx, co_nvm_area_t a, uint32_t off, void 
 static co_status_t port_bit_rate(void *ctx, uint32_t kbit)
 {
     emu_node_t *n = (emu_node_t *)ctx;
+    if (n->bus->can.kind != CAN_CHANNEL_SOCKETCAN) {
+        logline(LOG_NORMAL, "node %u (%s): bit rate %lu kbit/s requested; a %s bus has none", co_node_id(&n->dev.node),
+                n->dev.cls->name, (unsigned long)kbit, can_channel_kind_name(n->bus->can.kind));
+        return CO_OK;
+    }
     logline(LOG_NORMAL, "node %u (%s): bit rate %lu kbit/s requested; the interface's rate is the system's "
             "(ip link set %s type can bitrate %lu000)", co_node_id(&n->dev.node), n->dev.cls->name,
-            (unsigned long)kbit, n->bus->can.ifname, (unsigned long)kbit);
+            (unsigned long)kbit, n->bus->can.name, (unsigned long)kbit);
     return CO_OK;
 }
 
@@ -54,7 +59,7 @@ emu_node_t *node_create(emu_bus_t *bus, bool first_bus, const node_spec_t *spec,
     if (first_bus) {
         (void)snprintf(n->key, sizeof n->key, "%s-%u", cls->name, spec->id);
     } else {
-        (void)snprintf(n->key, sizeof n->key, "%s-%u@%s", cls->name, spec->id, bus->can.ifname);
+        (void)snprintf(n->key, sizeof n->key, "%s-%u@%s", cls->name, spec->id, bus->can.name);
     }
     char err[512];
     n->dev.cls = cls; /* for logs before device_init */
@@ -89,7 +94,7 @@ emu_node_t *node_create(emu_bus_t *bus, bool first_bus, const node_spec_t *spec,
         return NULL;
     }
     logline(LOG_NORMAL, "node %u (%s%s%s) on %s, NVM %s/%s.*", co_node_id(&n->dev.node), cls->name,
-            spec->variant[0] != '\0' ? "/" : "", spec->variant, bus->can.ifname, nvm_dir, n->key);
+            spec->variant[0] != '\0' ? "/" : "", spec->variant, bus->can.name, nvm_dir, n->key);
     return n;
 }
 

@@ -7,12 +7,13 @@
 
 #include "emu.h"
 
-/** What the command line asked for: DEVICE[/VARIANT][:NODE-ID][@IFACE]. */
+/** What the command line asked for: DEVICE[/VARIANT][:NODE-ID][@BUS]. */
 typedef struct node_spec {
     const device_class_t *cls;
     char variant[32];       /* "" for the default */
     uint8_t id;
-    char iface[IF_NAMESIZE]; /* "" for the first interface */
+    char bus[CAN_CHANNEL_NAME_MAX]; /* the text after @ (can_channel.h): "" for the first bus */
+    size_t bus_index;       /* the bus it names, among the command line's (set by the caller of parse_spec) */
 } node_spec_t;
 
 /** Creates and powers on the node of spec on bus (key: see emu_node_t), then adds it to the bus. NULL, with a

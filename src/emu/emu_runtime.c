@@ -75,7 +75,7 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
                     "devices (the page hands its token to whoever loads it)", emu->web.listener.name);
         }
     }
-    for (size_t i = 0U; i < cfg->n_ifaces; i++) {
+    for (size_t i = 0U; i < cfg->n_buses; i++) {
         emu_bus_t *b = calloc(1U, sizeof *b);
         if (b == NULL) {
             output_error("out of memory");
@@ -83,7 +83,7 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
         }
         emu->buses[emu->n_buses++] = b;
         b->emu = emu;
-        if (bus_open(b, cfg->ifaces[i], emu->log_level, err, sizeof err) != 0) {
+        if (bus_open(b, &cfg->buses[i], emu->log_level, err, sizeof err) != 0) {
             output_error("%s", err);
             return 1;
         }
@@ -93,12 +93,7 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
     const co_time_us_t power_on = socketcan_now_us();
     for (size_t i = 0U; i < cfg->n_specs; i++) {
         const node_spec_t *s = &cfg->specs[i];
-        size_t bus = 0U;
-        for (size_t k = 0U; k < emu->n_buses; k++) {
-            if (s->iface[0] != '\0' && strcmp(cfg->ifaces[k], s->iface) == 0) {
-                bus = k;
-            }
-        }
+        const size_t bus = s->bus_index;
         emu_node_t *n = node_create(emu->buses[bus], bus == 0U, s, cfg->nvm_dir, power_on);
         if (n == NULL) {
             return 1;

@@ -10,8 +10,8 @@
 #include "emu_node.h"
 
 typedef struct emu_config {
-    const char *ifaces[MAX_BUSES];   /* the first is where nodes without @IFACE go */
-    size_t n_ifaces;
+    can_channel_spec_t buses[MAX_BUSES]; /* the first is where nodes without @BUS go */
+    size_t n_buses;
     node_spec_t specs[MAX_NODES_ALL];
     size_t n_specs;
     const char *nvm_dir;

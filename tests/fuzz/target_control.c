@@ -554,7 +554,7 @@ static void nodes_start(void)
     g_emu.n_nodes = N_NODES;
     g_emu.n_buses = 2U;
     for (size_t b = 0U; b < 2U; b++) {
-        (void)snprintf(g_buses[b].can.ifname, sizeof g_buses[b].can.ifname, "vcan%zu", b);
+        (void)snprintf(g_buses[b].can.name, sizeof g_buses[b].can.name, "vcan%zu", b);
         g_buses[b].emu = &g_emu;
         g_emu.buses[b] = &g_buses[b];
     }
