@@ -1,6 +1,7 @@
 /* Behaviour rules of an EDS device: see emu_rules.h and docs/eds.md "Rules". YAML by libyaml (Debian libyaml-dev). */
 #define _GNU_SOURCE
 #include "emu_rules.h"
+#include "emu_text.h"
 
 #include <errno.h>
 #include <math.h>
@@ -165,7 +166,13 @@ static void fail(parse_t *p, const yaml_node_t *at, const char *fmt, const char 
     } else {
         fprintf(p->log, "%s: error: ", p->path);
     }
-    fprintf(p->log, fmt, a != NULL ? a : "", b != NULL ? b : "");
+    /* a and b quote the file's own words: escaped, so that an error stays one line and no control byte of the
+     * file reaches the terminal (emu_text.h) */
+    char ea[256];
+    char eb[256];
+    ea[text_escape(ea, sizeof ea - 1U, a != NULL ? a : "", a != NULL ? strlen(a) : 0U, TEXT_ONE_LINE)] = '\0';
+    eb[text_escape(eb, sizeof eb - 1U, b != NULL ? b : "", b != NULL ? strlen(b) : 0U, TEXT_ONE_LINE)] = '\0';
+    fprintf(p->log, fmt, ea, eb);
     fputc('\n', p->log);
 }
 

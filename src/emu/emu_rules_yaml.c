@@ -1,6 +1,7 @@
 /* A rules file read event by event into a libyaml document, with its bounds: see emu_rules_yaml.h. */
 #define _GNU_SOURCE
 #include "emu_rules_yaml.h"
+#include "emu_text.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -31,10 +32,15 @@ __attribute__((format(printf, 3, 4)))
 static void refuse(reader_t *r, yaml_mark_t at, const char *fmt, ...)
 {
     fprintf(r->log, "%s:%lu:%lu: error: ", r->path, (unsigned long)at.line + 1UL, (unsigned long)at.column + 1UL);
+    char text[512];
     va_list ap;
     va_start(ap, fmt);
-    vfprintf(r->log, fmt, ap);
+    const int n = vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    const size_t len = n < 0 ? 0U : (size_t)n < sizeof text ? (size_t)n : sizeof text - 1U;
+    /* the message quotes the file's words (a key, an anchor's name): escaped, one line, no control byte */
+    char shown[sizeof text * 4U];
+    fwrite(shown, 1U, text_escape(shown, sizeof shown, text, len, TEXT_ONE_LINE), r->log);
     fputc('\n', r->log);
     r->failed = true;
 }

@@ -187,6 +187,17 @@ def test_a_nul_in_a_value_is_refused(tmp_path):
     assert "rules.yaml:2:3: error: a value with a NUL character" in err, err
 
 
+def test_an_error_quoting_the_files_words_stays_one_line_and_escaped(tmp_path):
+    """A message quotes a key or a value of the file: one with line breaks and ESC[2J made several lines of the log
+    and reached the terminal raw (found by the rules fuzz target). Escaped as the log is (emu_text.h)."""
+    err = refuse(tmp_path, 'objects:\n  "0x20\\n\\n\\e[2J05": {constant: 1}\n')
+    assert "'0x20\\x0a\\x0a\\x1b[2J05' is not an object" in err and "\x1b" not in err, err
+    assert len(err.splitlines()) == 1, err
+    err = refuse(tmp_path, 'objects:\n  "0x2002\\n\\ex": {constant: 1}\n  "0x2002\\n\\ex": {constant: 2}\n')
+    assert "the key '0x2002\\x0a\\x1bx' is given twice" in err and "\x1b" not in err, err
+    assert len(err.splitlines()) == 1, err
+
+
 def test_not_yaml_names_line_and_column(tmp_path):
     err = refuse(tmp_path, "objects: [\n")
     assert "rules.yaml:2:1: error: not YAML: did not find expected node content" in err, err
