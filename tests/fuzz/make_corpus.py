@@ -1009,6 +1009,63 @@ def rules_seeds():
     }
 
 
+def msgpack(v):
+    """The msgpack bytes of v (str keys, bool, None, int, float, bytes, list, dict), as python-can's packb writes them."""
+    if v is None:
+        return b"\xc0"
+    if isinstance(v, bool):
+        return b"\xc3" if v else b"\xc2"
+    if isinstance(v, int):
+        if 0 <= v < 0x80:
+            return bytes([v])
+        if -32 <= v < 0:
+            return struct.pack(">b", v)
+        if 0 <= v < 0x100:
+            return b"\xcc" + bytes([v])
+        if 0 <= v < 0x10000:
+            return b"\xcd" + struct.pack(">H", v)
+        if 0 <= v < 0x100000000:
+            return b"\xce" + struct.pack(">I", v)
+        return b"\xd3" + struct.pack(">q", v)
+    if isinstance(v, float):
+        return b"\xcb" + struct.pack(">d", v)
+    if isinstance(v, str):
+        b = v.encode()
+        return (bytes([0xA0 | len(b)]) if len(b) < 32 else b"\xd9" + bytes([len(b)])) + b
+    if isinstance(v, bytes):
+        return b"\xc4" + bytes([len(v)]) + v
+    if isinstance(v, list):
+        return bytes([0x90 | len(v)]) + b"".join(msgpack(x) for x in v)
+    return bytes([0x80 | len(v)]) + b"".join(msgpack(k) + msgpack(x) for k, x in v.items())
+
+
+def udp_datagram_seeds():
+    """python-can's udp_multicast datagrams: frames of each kind, FD and error frames, and ones it refuses."""
+    def message(**over):
+        m = {"timestamp": 1767225600.5, "arbitration_id": 0x612, "is_extended_id": False, "is_remote_frame": False,
+             "is_error_frame": False, "channel": None, "dlc": 8, "data": bytes([0x40, 0x18, 0x10, 1, 0, 0, 0, 0]),
+             "is_fd": False, "bitrate_switch": False, "error_state_indicator": False}
+        m.update(over)
+        return msgpack(m)
+    return {
+        "sdo-request": message(),
+        "heartbeat": message(arbitration_id=0x710, dlc=1, data=b"\x05"),
+        "dlc0": message(arbitration_id=0x080, dlc=0, data=b""),
+        "extended": message(arbitration_id=0x18FF0001, is_extended_id=True, dlc=3, data=b"\x01\x02\x03"),
+        "remote": message(arbitration_id=0x711, is_remote_frame=True, dlc=1, data=b""),
+        "fd": message(is_fd=True, bitrate_switch=True, dlc=12, data=bytes(12)),
+        "error-frame": message(is_error_frame=True, dlc=0, data=b""),
+        "defaults": msgpack({}),
+        "channel-and-is_rx": message(channel="vcan0", is_rx=True),
+        "dlc-none": message(dlc=None),
+        "wrong-types": message(arbitration_id="0x612", is_fd=0),
+        "dlc-mismatch": message(dlc=2),
+        "list": msgpack([1, 2, 3]),
+        "map32-claims-4G": b"\xdf\xff\xff\xff\xff",
+        "nested": b"\x91" * 40 + b"\xc0",
+    }
+
+
 def targets():
     out = {}
     out["core"] = vector_seeds((0, OWN, 0, 0), (0, 0xFF, 0, 0))
@@ -1023,6 +1080,7 @@ def targets():
     out["control"] = control_seeds()
     out["eds"] = eds_seeds()
     out["rules"] = rules_seeds()
+    out["udp_datagram"] = udp_datagram_seeds()
     return out
 
 
