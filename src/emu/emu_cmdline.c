@@ -11,12 +11,17 @@
 void usage(FILE *out)
 {
     fprintf(out,
-            "usage: canopen-emu [-i IFACE]... [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID][@IFACE] ...\n"
-            "       canopen-emu [options] FILE.eds:NODE-ID[@IFACE] FILE.dcf[:NODE-ID][@IFACE] ...\n"
-            "Emulates CANopen devices on SocketCAN interfaces (default vcan0): the built-in ones (--list-devices)\n"
+            "usage: canopen-emu [-i BUS]... [--nvm-dir DIR] [options] DEVICE[/VARIANT][:NODE-ID][@BUS] ...\n"
+            "       canopen-emu [options] FILE.eds:NODE-ID[@BUS] FILE.dcf[:NODE-ID][@BUS] ...\n"
+            "Emulates CANopen devices on CAN buses (default vcan0): the built-in ones (--list-devices)\n"
             "and any device from its EDS or DCF (docs/eds.md), in any mix.\n\n"
-            "  -i, --interface IFACE   CAN interface (default vcan0); repeat it for several buses: nodes\n"
-            "                          without @IFACE go to the first\n"
+            "  -i, --interface BUS     the bus (default vcan0); repeat it for several buses: nodes without @BUS go\n"
+            "                          to the first. BUS is python-can's interface name and channel:\n"
+            "                            IFACE, socketcan:IFACE  a SocketCAN interface (vcan0, can0)\n"
+            "                            udp_multicast[:GROUP[:PORT]][,ttl=N][,iface=NAME]  python-can's\n"
+            "                                udp_multicast: no kernel CAN, no root (default 239.74.163.2:43113,\n"
+            "                                TTL 1; IPv6 as [ff15::1]:43113); whoever is on the link is on the bus\n"
+            "                            virtual:NAME  a bus inside this process only (docs/buses.md)\n"
             "      --nvm-dir DIR       where stored parameters live (default $XDG_STATE_HOME/canopen-emu\n"
             "                          or ~/.local/state/canopen-emu)\n"
             "      --control -         read control commands from stdin even when it is not a terminal\n"
@@ -35,7 +40,9 @@ void usage(FILE *out)
             "      --version           the version (and the git revision it was built from) and exit\n\n"
             "NODE-ID is 1..127, decimal or 0x-hex; default: the device's own (see --list-devices); unique per bus.\n"
             "Example: canopen-emu pro-ionizer:0x10 sds/E:11 buerkert:12 drive.eds:20\n"
-            "         canopen-emu -i vcan0 -i vcan1 sds:16 sds:16@vcan1\n");
+            "         canopen-emu -i vcan0 -i vcan1 sds:16 sds:16@vcan1\n"
+            "         canopen-emu -i udp_multicast sds:16     (python-can: interface='udp_multicast',\n"
+            "                                                  channel='239.74.163.2')\n");
 }
 
 void list_devices(FILE *out)
@@ -65,14 +72,14 @@ static bool parse_node_id(const char *text, const char *arg, node_spec_t *spec)
     return true;
 }
 
-/* DEVICE[/VARIANT][:NODE-ID][@IFACE], or FILE.eds|FILE.dcf[:NODE-ID][@IFACE] */
+/* DEVICE[/VARIANT][:NODE-ID][@BUS], or FILE.eds|FILE.dcf[:NODE-ID][@BUS] */
 bool parse_spec(const char *arg, node_spec_t *spec, bool quiet)
 {
     char text[PATH_MAX + 64];
     char name[PATH_MAX];
     memset(spec, 0, sizeof *spec);
     if (strlen(arg) >= sizeof text) {
-        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID][@IFACE]\n", arg);
+        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID][@BUS]\n", arg);
         return false;
     }
     (void)snprintf(text, sizeof text, "%s", arg);
@@ -88,7 +95,7 @@ bool parse_spec(const char *arg, node_spec_t *spec, bool quiet)
     const char *colon = strchr(text, ':');
     const size_t nlen = colon != NULL ? (size_t)(colon - text) : strlen(text);
     if (nlen == 0U || nlen >= sizeof name) {
-        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID][@IFACE]\n", arg);
+        fprintf(stderr, "canopen-emu: '%s' is not DEVICE[/VARIANT][:NODE-ID][@BUS]\n", arg);
         return false;
     }
     memcpy(name, text, nlen);

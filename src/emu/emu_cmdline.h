@@ -1,5 +1,5 @@
 /*
- * The command line of canopen-emu: its help, the device list, DEVICE[/VARIANT][:NODE-ID][@IFACE] arguments and the default
+ * The command line of canopen-emu: its help, the device list, DEVICE[/VARIANT][:NODE-ID][@BUS] arguments and the default
  * NVM directory. Messages about a bad argument go to stderr.
  */
 #ifndef EMU_CMDLINE_H
@@ -18,7 +18,7 @@ void usage(FILE *out);
 /** The device types, one a line (--list-devices). */
 void list_devices(FILE *out);
 
-/** DEVICE[/VARIANT][:NODE-ID][@IFACE]: the class, the variant ("" for the default), the node-ID (the class's default
+/** DEVICE[/VARIANT][:NODE-ID][@BUS]: the class, the variant ("" for the default), the node-ID (the class's default
  *  when none is given) and the interface ("" for the first). DEVICE may be an EDS or DCF file (FILE.eds, FILE.dcf):
  *  its class is built once (emu_eds_class.h); the reader's warnings go to stderr unless quiet. false, with a
  *  message, when the argument is not one or the file cannot be emulated. */

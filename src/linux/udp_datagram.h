@@ -14,7 +14,7 @@
  * arrival), and a datagram python-can would refuse is malformed here too; it is stricter only about types (a flag
  * must be a bool, an identifier an integer, data a bin or nil). msgpack-c decodes; the datagram's containers are
  * checked first to claim no more entries than it has bytes left, since msgpack-c allocates a container's entries
- * from its header before reading them (a 5-byte map header could otherwise ask for 128 GiB).
+ * from its header before reading them (a 5-byte map header could otherwise ask for 256 GiB).
  */
 #ifndef UDP_DATAGRAM_H
 #define UDP_DATAGRAM_H
