@@ -235,6 +235,8 @@ static json_t *node_summary(const emu_t *emu, const emu_node_t *n)
     (void)json_object_set_new(o, "started_as", json_integer(n->cmdline_id));
     (void)json_object_set_new(o, "state", json_string(co_nmt_state_name(co_node_state(&n->dev.node))));
     (void)json_object_set_new(o, "bus", json_string(n->bus != NULL ? n->bus->can.name : ""));
+    /* The kind beside the name: "vcan0" or "plant" alone does not say whether a python-can master reaches it */
+    (void)json_object_set_new(o, "bus_kind", json_string(n->bus != NULL ? can_channel_kind_name(n->bus->can.kind) : ""));
     (void)emu;
     return o;
 }
@@ -266,6 +268,14 @@ static void cmd_hello(const request_t *q)
         (void)json_array_append_new(buses, json_string(q->emu->buses[i]->can.name));
     }
     (void)json_object_set_new(r, "buses", buses);
+    /* Added to version 1 beside "buses" (which stays a list of names for the clients that read it): each bus's kind
+     * by its name, python-can's interface name ("socketcan", "udp_multicast", "virtual"). */
+    json_t *bus_kinds = json_object();
+    for (size_t i = 0U; i < q->emu->n_buses; i++) {
+        const can_channel_t *c = &q->emu->buses[i]->can;
+        (void)json_object_set_new(bus_kinds, c->name, json_string(can_channel_kind_name(c->kind)));
+    }
+    (void)json_object_set_new(r, "bus_kinds", bus_kinds);
     /* The events' clock (µs since the start) and the wall clock read together: a client turns time_us into dates
      * (a candump log's time stamps) without a second request. */
     struct timespec wall;
@@ -349,6 +359,7 @@ static json_t *heard_nodes(const emu_t *emu, const char *word)
             json_t *o = json_object();
             (void)json_object_set_new(o, "node", json_integer(id));
             (void)json_object_set_new(o, "bus", json_string(b->can.name));
+            (void)json_object_set_new(o, "bus_kind", json_string(can_channel_kind_name(b->can.kind)));
             /* a boot-up (0x00) means it is now PRE-OPERATIONAL */
             (void)json_object_set_new(o, "state", json_string(h->state == 0U ? "PRE-OPERATIONAL"
                                                                              : co_nmt_state_name((co_nmt_state_t)h->state)));

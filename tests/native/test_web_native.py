@@ -283,12 +283,13 @@ def test_session_round_trip_reaches_the_bus(emu):
     hello, nodes, written = answer.lines()
     for msg, cmd in ((hello, "hello"), (nodes, "list"), (written, "set")):
         check_schema(msg, cmd)
-    assert (hello["id"], hello["ok"], hello["program"], hello["protocol"], hello["buses"]) == \
-        (1, True, "canopen-emu", 1, ["fakecan0"])
+    assert (hello["id"], hello["ok"], hello["program"], hello["protocol"], hello["buses"], hello["bus_kinds"]) == \
+        (1, True, "canopen-emu", 1, ["fakecan0"], {"fakecan0": "socketcan"})
     assert nodes == {"id": 2, "ok": True, "nodes": [
         {"node": 16, "device": "pro-ionizer", "variant": "full", "started_as": 16, "state": "PRE-OPERATIONAL",
-         "bus": "fakecan0"},
-        {"node": 17, "device": "sds", "variant": "N", "started_as": 17, "state": "PRE-OPERATIONAL", "bus": "fakecan0"}]}
+         "bus": "fakecan0", "bus_kind": "socketcan"},
+        {"node": 17, "device": "sds", "variant": "N", "started_as": 17, "state": "PRE-OPERATIONAL", "bus": "fakecan0",
+         "bus_kind": "socketcan"}]}
     assert written == {"id": 3, "ok": True, "node": 16, "object": "0x1017:00", "value": 500, "type": "UNSIGNED16",
                        "name": "Producer heartbeat time"}
     emu.bus.expect(lambda i, d: i == 0x710, 3.0, "a first heartbeat after the set")
@@ -384,8 +385,8 @@ def test_show_all_lists_the_nodes_heard_on_the_bus(emu):
         if later["heard"][1]["state"] == "OPERATIONAL" or time.monotonic() > deadline:
             break
         time.sleep(0.05)
-    assert later["heard"][1] == {"node": 9, "bus": "fakecan0", "state": "OPERATIONAL", "boot_up": False,
-                                 "last_heartbeat_us": later["heard"][1]["last_heartbeat_us"]}, later["heard"]
+    assert later["heard"][1] == {"node": 9, "bus": "fakecan0", "bus_kind": "socketcan", "state": "OPERATIONAL",
+                                 "boot_up": False, "last_heartbeat_us": later["heard"][1]["last_heartbeat_us"]}, later["heard"]
     assert later["heard"][1]["last_heartbeat_us"] > answer["heard"][1]["last_heartbeat_us"]
     one = emu.exchange(session, '{"id":3,"cmd":"show","node":16}').lines()[0]
     check_schema(one, "show")
