@@ -75,7 +75,7 @@ function scheduleDraw() {
     frame = requestAnimationFrame(() => {
       frame = null;
       const ms = performance.now();
-      overview.render(nodes.rows(ms), exchangeProblem ?? requestProblem);
+      overview.render(nodes.rows(ms), exchangeProblem ?? requestProblem, nodes.buses());
       for (const p of panels) {
         p.draw?.(ms);
       }

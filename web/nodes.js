@@ -48,8 +48,18 @@ export function nodeRef(key) {
   return `${key.slice(slash + 1)}@${key.slice(0, slash)}`;
 }
 
+/**
+ * A bus as the page names it: its name and its kind (python-can's interface name, show's bus_kind), "vcan0
+ * (socketcan)", "plant (virtual)"; a udp_multicast bus's name says its kind already
+ * ("udp_multicast:239.74.163.2:43113"), and an emulator older than bus_kind gives none: the name alone then.
+ */
+export function busLabel(name, kind) {
+  return !kind || name.startsWith(`${kind}:`) ? name : `${name} (${kind})`;
+}
+
 export class NodeTable {
   #nodes = new Map(); // key -> the node as `show` gives it, changed in place by events
+  #buses = new Map(); // bus name -> its kind (null: not given), in the order of the last show
   clock = new EmuClock();
 
   get size() {
@@ -66,6 +76,12 @@ export class NodeTable {
     const buses = [...new Set(all.map((n) => n.bus))];
     const sorted = all.sort((a, b) => buses.indexOf(a.bus) - buses.indexOf(b.bus) || a.node - b.node);
     this.#nodes = new Map(sorted.map((n) => [nodeKey(n.bus, n.node), {...n, faults: [...n.faults]}]));
+    this.#buses = new Map(buses.map((bus) => [bus, all.find((n) => n.bus === bus).bus_kind ?? null]));
+  }
+
+  /** The buses of the last show, in its order: [{name, kind}] (kind null from an emulator that gives none). */
+  buses() {
+    return [...this.#buses].map(([name, kind]) => ({name, kind}));
   }
 
   /** Whether `key` is a node heard on the bus rather than an emulated one (nothing to open of it). */
@@ -147,10 +163,11 @@ function heardRow(key, n, now) {
 
 /**
  * The overview's rows with a heading before each bus's first row when there are several buses (one table, a part
- * per interface): [{key: "bus:vcan1", heading: "vcan1: 2 nodes, 1 heard on the bus"}, row, ...]. With one bus, the
- * rows as they are.
+ * per bus): [{key: "bus:vcan1", heading: "vcan1 (socketcan): 2 nodes, 1 heard on the bus"}, row, ...], each bus named
+ * with its kind from `buses` (NodeTable.buses()). With one bus, the rows as they are.
  */
-export function withBusHeadings(rows) {
+export function withBusHeadings(rows, known = []) {
+  const kinds = new Map(known.map((b) => [b.name, b.kind]));
   const buses = [...new Set(rows.map((r) => r.cells.bus))];
   if (buses.length < 2) {
     return rows;
@@ -160,9 +177,18 @@ export function withBusHeadings(rows) {
     const own = rows.filter((r) => r.cells.bus === bus);
     const heard = own.filter((r) => r.heard).length;
     const emulated = own.length - heard;
-    items.push({key: `bus:${bus}`, heading: `${bus}: ${emulated} ${emulated === 1 ? "node" : "nodes"}` +
-      (heard > 0 ? `, ${heard} heard on the bus` : "")});
+    const count = `${emulated} ${emulated === 1 ? "node" : "nodes"}` + (heard > 0 ? `, ${heard} heard on the bus` : "");
+    items.push({key: `bus:${bus}`, heading: `${busLabel(bus, kinds.get(bus))}: ${count}`});
     items.push(...own);
   }
   return items;
+}
+
+/** The status line: the buses, each with its kind, and the count of nodes on them: "vcan0 (socketcan): 3 nodes",
+ * "plant (virtual), udp_multicast:239.74.163.2:43113: 2 nodes, 1 heard on the bus"; the count alone without buses. */
+export function nodeCount(rows, buses = []) {
+  const heard = rows.filter((r) => r.heard).length;
+  const emulated = rows.length - heard;
+  const count = `${emulated} ${emulated === 1 ? "node" : "nodes"}` + (heard > 0 ? `, ${heard} heard on the bus` : "");
+  return buses.length === 0 ? count : `${buses.map((b) => busLabel(b.name, b.kind)).join(", ")}: ${count}`;
 }

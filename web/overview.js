@@ -3,7 +3,7 @@
 // that 127 nodes redrawn four times a second cost little. A click on a row opens that node.
 
 import {tableHead} from "./dom.js";
-import {COLUMNS, withBusHeadings} from "./nodes.js";
+import {COLUMNS, busLabel, nodeCount, withBusHeadings} from "./nodes.js";
 
 export class Overview {
   #body;
@@ -19,9 +19,11 @@ export class Overview {
     this.#status = status;
   }
 
-  /** Shows `rows` (NodeTable.rows()) and in the status line `problem`, or the count of nodes when it is null. */
-  render(rows, problem) {
-    const items = withBusHeadings(rows);
+  /** Shows `rows` (NodeTable.rows()) and in the status line `problem`, or when it is null the count of nodes and the
+   * buses (NodeTable.buses(): each named with its kind) they are on. */
+  render(rows, problem, buses = []) {
+    const kinds = new Map(buses.map((b) => [b.name, b.kind]));
+    const items = withBusHeadings(rows, buses);
     const keys = new Set(items.map((r) => r.key));
     for (const [key, {tr}] of this.#rows) {
       if (!keys.has(key)) {
@@ -41,6 +43,10 @@ export class Overview {
           cells[field].textContent = text; // text, never markup: nothing the emulator says becomes HTML
         }
       }
+      const busTitle = busLabel(row.cells.bus, kinds.get(row.cells.bus)); // the kind on hovering over the bus
+      if (cells.bus.title !== busTitle) {
+        cells.bus.title = busTitle;
+      }
       if (tr.dataset.heard !== String(row.heard)) {
         tr.dataset.heard = String(row.heard); // a node heard on the bus: not emulated, nothing to open
         tr.title = row.heard ? "a node heard on the bus (not emulated here)" : "open this node";
@@ -50,10 +56,7 @@ export class Overview {
       }
       previous = this.#place(tr, previous);
     }
-    const heard = rows.filter((r) => r.heard).length;
-    const emulated = rows.length - heard;
-    const count = `${emulated} ${emulated === 1 ? "node" : "nodes"}` + (heard > 0 ? `, ${heard} heard on the bus` : "");
-    this.#status.textContent = problem ?? count;
+    this.#status.textContent = problem ?? nodeCount(rows, buses);
     this.#status.classList.toggle("problem", problem !== null);
   }
 

@@ -67,11 +67,15 @@ def test_the_page_lists_the_nodes_with_their_devices_and_states(page, start_emul
     assert titles == TITLES
     shot = wait_for(driver, "the heartbeat ages", lambda s: all(AGE.fullmatch(r["heartbeat-age"])
                                                                  for r in s["rows"].values()), 5.0)
-    assert shot["status"] == "3 nodes"
+    assert shot["status"] == "fakecan0 (socketcan): 3 nodes"
     assert shot["order"] == [16, 17, 18]
     columns = driver.execute_script(
         "return [...document.querySelectorAll('#nodes tbody tr')].map((tr) => [...tr.cells].map((td) => td.dataset.field))")
     assert columns == [list(FIELDS)] * 3
+    # the bus by its name in its column, by its name and kind on hovering over it (and in the status line)
+    bus_titles = driver.execute_script(
+        "return [...document.querySelectorAll('#nodes tbody td[data-field=bus]')].map((td) => td.title)")
+    assert bus_titles == ["fakecan0 (socketcan)"] * 3
     for row in shot["rows"].values():
         assert age(row.pop("heartbeat-age")) < 30.0  # its first heartbeat: the emulator started a moment ago
     # device types, heartbeat periods: the EDS files (od/*.eds); nothing raised, no fault injected
@@ -152,7 +156,7 @@ def test_127_nodes_are_127_rows_and_the_heartbeats_keep_their_time(page, start_e
     shot = snapshot(driver)
     assert shot["order"] == list(range(1, 128))
     assert {(r["device"], r["state"]) for r in shot["rows"].values()} == {("sds (N)", "PRE-OPERATIONAL")}
-    assert shot["status"] == "127 nodes"
+    assert shot["status"] == "fakecan0 (socketcan): 127 nodes"
     emu.bus.send(0x000, bytes([0x01, 0x00]))
     wait_for(driver, "OPERATIONAL for all 127",
              lambda s: {r["state"] for r in s["rows"].values()} == {"OPERATIONAL"}, 2.0)
@@ -174,7 +178,7 @@ def test_127_nodes_are_127_rows_and_the_heartbeats_keep_their_time(page, start_e
     assert 127 * 5 <= len(periods), len(periods)
     assert 0.49 <= statistics.median(periods) <= 0.51, statistics.median(periods)
     assert max(periods) < 0.8, sorted(periods)[-10:]
-    assert snapshot(driver)["status"] == "127 nodes"
+    assert snapshot(driver)["status"] == "fakecan0 (socketcan): 127 nodes"
 
 
 def test_the_page_comes_back_after_its_session_expired(page, start_emulator):
@@ -197,7 +201,7 @@ def test_the_page_comes_back_after_its_session_expired(page, start_emulator):
         driver.delete_network_conditions()
     shot = wait_for(driver, "OPERATIONAL for all three through a new session",
                     lambda s: [r["state"] for r in s["rows"].values()] == ["OPERATIONAL"] * 3, 5.0)
-    assert shot["status"] == "3 nodes"
+    assert shot["status"] == "fakecan0 (socketcan): 3 nodes"
     command(emu, "emcy 16 0x3210 0x05")  # and its events come again
     wait_for(driver, "the EMCY of node 16", lambda s: s["rows"]["16"]["emcy"] == "0x3210 reg 0x05 info 0000000000", 2.0)
 
@@ -213,7 +217,7 @@ def test_nodes_heard_on_the_bus_get_a_row_that_does_not_open(page, start_emulato
         "node": "5", "bus": "fakecan0", "device": "heard on the bus", "state": "OPERATIONAL", "device-type": "",
         "heartbeat": "", "error-register": "", "faults": "", "emcy": "", "emcy-age": ""}
     assert age(row["heartbeat-age"]) < 3.0
-    assert shot["status"] == "3 nodes, 1 heard on the bus"
+    assert shot["status"] == "fakecan0 (socketcan): 3 nodes, 1 heard on the bus"
     emu.bus.send(0x705, b"\x00")  # its boot-up: it was reset
     wait_for(driver, "node 5 booted", lambda s: s["rows"]["5"]["device"] == "heard on the bus (boot-up)"
              and s["rows"]["5"]["state"] == "PRE-OPERATIONAL", 3.0)

@@ -2,7 +2,7 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {COLUMNS, EmuClock, NodeTable, withBusHeadings} from "../../../web/nodes.js";
+import {COLUMNS, EmuClock, NodeTable, busLabel, nodeCount, withBusHeadings} from "../../../web/nodes.js";
 
 // As show answers them (docs/control-protocol.md), the three devices of the README's example.
 function shown(node, device, variant, extra = {}) {
@@ -127,7 +127,7 @@ test("nodes heard on the bus get rows of their own, in node-ID order among the e
   assert.equal(table.rows(0).length, 3);
 });
 
-test("several buses: a heading before each bus's rows, with its counts; one bus: no heading", () => {
+test("several buses: a heading before each bus's rows, with its kind and counts; one bus: no heading", () => {
   const table = new NodeTable();
   table.show({...SHOW, nodes: [...SHOW.nodes, shown(16, "sds", "N", {bus: "vcan1"})],
     heard: [{node: 5, bus: "vcan1", state: "OPERATIONAL", boot_up: false, last_heartbeat_us: 1_200_000}]}, 0);
@@ -139,4 +139,33 @@ test("several buses: a heading before each bus's rows, with its counts; one bus:
   const one = new NodeTable();
   one.show(SHOW, 0);
   assert.deepEqual(withBusHeadings(one.rows(0)), one.rows(0));
+
+  // with the kinds show gives (bus_kind): each heading names its bus's kind
+  const kinds = new NodeTable();
+  kinds.show({...SHOW, nodes: [shown(16, "sds", "N", {bus_kind: "socketcan"}),
+    shown(16, "sds", "N", {bus: "plant", bus_kind: "virtual"})]}, 0);
+  assert.deepEqual(withBusHeadings(kinds.rows(0), kinds.buses()).filter((r) => r.heading).map((r) => r.heading),
+    ["vcan0 (socketcan): 1 node", "plant (virtual): 1 node"]);
+});
+
+test("each bus by its name and its kind: buses() in show's order, the label, the status line's count", () => {
+  const table = new NodeTable();
+  const udp = "udp_multicast:239.74.163.2:43113";
+  table.show({...SHOW, nodes: [shown(16, "sds", "N", {bus: "plant", bus_kind: "virtual"}),
+    shown(17, "sds", "N", {bus: udp, bus_kind: "udp_multicast"})],
+  heard: [{node: 5, bus: "vcan1", bus_kind: "socketcan", state: "OPERATIONAL", boot_up: false,
+    last_heartbeat_us: 1_200_000}]}, 0);
+  // a bus with heard nodes only has its kind from them
+  assert.deepEqual(table.buses(), [{name: "plant", kind: "virtual"}, {name: udp, kind: "udp_multicast"},
+    {name: "vcan1", kind: "socketcan"}]);
+  assert.equal(busLabel("vcan0", "socketcan"), "vcan0 (socketcan)");
+  assert.equal(busLabel(udp, "udp_multicast"), udp); // its name says it already
+  assert.equal(busLabel("vcan0", null), "vcan0"); // an emulator without bus_kind
+  assert.equal(nodeCount(table.rows(0), table.buses()),
+    `plant (virtual), ${udp}, vcan1 (socketcan): 2 nodes, 1 heard on the bus`);
+  assert.equal(nodeCount(table.rows(0)), "2 nodes, 1 heard on the bus");
+  const old = new NodeTable(); // an emulator before bus_kind: the names alone
+  old.show(SHOW, 0);
+  assert.deepEqual(old.buses(), [{name: "vcan0", kind: null}]);
+  assert.equal(nodeCount(old.rows(0), old.buses()), "vcan0: 3 nodes");
 });
