@@ -287,7 +287,8 @@ def test_an_empty_nvm_dir_or_interface_name_is_refused(tmp_path):
     r = run_emu("--nvm-dir", "", "sds")
     assert r.returncode == 2 and "--nvm-dir needs a directory name, not an empty one" in r.stderr, r.stderr
     r = run_emu("-i", "", "--nvm-dir", str(tmp_path), "sds")
-    assert r.returncode == 2 and "-i/--interface needs an interface name, not an empty one" in r.stderr, r.stderr
+    assert r.returncode == 2 and ("-i/--interface needs a bus (an interface name, udp_multicast[:GROUP[:PORT]], "
+                                  "virtual:NAME), not an empty one") in r.stderr, r.stderr
 
 
 def test_an_interface_that_is_not_can_is_named_so(tmp_path):
