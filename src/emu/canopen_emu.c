@@ -71,7 +71,7 @@ static int add_bus(emu_config_t *cfg, const char *text)
     return (int)cfg->n_buses++;
 }
 
-/* --control-tcp and --web: HOST:PORT, checked before anything starts (the address is resolved later). */
+/* --control-tcp, --web and --socketcand: HOST:PORT, checked before anything starts (the address is resolved later). */
 static bool host_port_option(const char *option, const char *example_port, const char *arg, const char **out)
 {
     if (!tcp_host_port_ok(arg)) {
@@ -122,6 +122,7 @@ int main(int argc, char **argv)
         {"version", no_argument, NULL, 'V'},         {"control-socket", required_argument, NULL, 'u'},
         {"control-tcp", required_argument, NULL, 't'}, {"rules", required_argument, NULL, 'r'},
         {"web", required_argument, NULL, 'w'},       {"control-token-file", required_argument, NULL, 'T'},
+        {"socketcand", required_argument, NULL, 'S'},
         {NULL, 0, NULL, 0}};
     const char *rules[16];
     size_t n_rules = 0U;
@@ -170,6 +171,11 @@ int main(int argc, char **argv)
             break;
         case 'w':
             if (!host_port_option("--web", "8080", optarg, &config.web)) {
+                return 2;
+            }
+            break;
+        case 'S':
+            if (!host_port_option("--socketcand", "29536", optarg, &config.socketcand)) {
                 return 2;
             }
             break;
@@ -231,6 +237,7 @@ int main(int argc, char **argv)
     if (status != 0) {
         sockets_close(&emu, &emu.sockets); /* a socket file made before the failure goes */
         web_stop(&emu, &emu.web);
+        socketcand_stop(&emu, &emu.socketcand);
         return status;
     }
     status = runtime_loop(&emu);

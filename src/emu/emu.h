@@ -12,6 +12,7 @@
  *                   control sockets; emu_tcp.c binds TCP) and emu_web.c (the web view, --web: HTTP checks and
  *                   answers in emu_web_checks.c, emu_web_answers.c, sessions in emu_web_sessions.c) are its
  *                   transports
+ *   emu_socketcand.c  --socketcand: the buses as channels of linux-can socketcand's protocol (socketcand_proto.c)
  *   emu_commands.c  the command language; emu_script.c (--script) feeds it lines too; emu_lines.c cuts lines
  *   emu_cmdline.c   help, device list, DEVICE[/VARIANT][:NODE-ID][@IFACE] arguments
  *   emu_output.c    log and replies, never blocking; emu_fd_flags.c stdin's O_NONBLOCK, cleared at exit
@@ -31,6 +32,7 @@
 #include "emu_script.h"
 #include "emu_session.h"
 #include "emu_socket.h"
+#include "emu_socketcand.h"
 #include "emu_web.h"
 
 /** Nodes on one bus: node-IDs 1..127. */
@@ -100,6 +102,7 @@ typedef struct emu_bus {
     co_time_us_t nodes_next;
     bool tx_pending;
     heard_node_t heard[128];  /* by node-ID; frames of this program's own nodes never come back to its socket */
+    size_t socketcand_readers; /* socketcand clients in rawmode on this bus: its frames go to them (emu_socketcand.h) */
 } emu_bus_t;
 
 typedef struct emu {
@@ -113,6 +116,7 @@ typedef struct emu {
     emu_control_t control;
     emu_sockets_t sockets;
     emu_web_t web;
+    emu_socketcand_t socketcand; /* --socketcand: the buses as socketcand channels */
     emu_session_t *sessions[MAX_SESSIONS]; /* those that may subscribe to events */
     size_t n_sessions;
     size_t session_turn;    /* the session sessions_work begins with: each pass goes on where the last one stopped */

@@ -70,7 +70,7 @@ static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_
 }
 
 /* What a sent frame means beyond the interface: an event, the sender's heartbeat age, the copy for the other
- * local nodes, the -v line. */
+ * local nodes, the socketcand clients' copies, the -v line. */
 static inline __attribute__((always_inline)) void frame_sent(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
 {
     const co_time_us_t at = from->dev.now != 0U ? from->dev.now : socketcan_now_us();
@@ -87,6 +87,9 @@ static inline __attribute__((always_inline)) void frame_sent(emu_bus_t *b, emu_n
             l->sender = from->index;
             b->local_count++;
         }
+    }
+    if (b->socketcand_readers > 0U) {
+        socketcand_publish(&b->emu->socketcand, b, f, at, NULL);
     }
     if (b->log_level >= LOG_VERBOSE) {
         log_sent(from, f);

@@ -52,6 +52,11 @@ co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us
 int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *now, co_time_us_t *next,
                   short revents);
 
+/** A frame from outside the program that did not come through the bus's medium (a socketcand client's): an event,
+ *  the overview's heard nodes and the nodes that take it, as a frame read from the medium. now: the time of the
+ *  pass; the nodes run at the bus's next pass. */
+void bus_frame_in(emu_bus_t *b, const co_frame_t *f, co_time_us_t now);
+
 /** The exit report of the bus (its lost frames), its counts added to sent, dropped and rx_lost; closes the channel. */
 void bus_close(emu_bus_t *b, unsigned long *sent, unsigned long *dropped, unsigned long *rx_lost);
 

@@ -31,6 +31,8 @@ void usage(FILE *out)
             "                          when --control-tcp is not a loopback address)\n"
             "      --web HOST:PORT     serve the web view to browsers (127.0.0.1:8080, then open\n"
             "                          http://127.0.0.1:8080/; port 0: any free one; docs/web.md)\n"
+            "      --socketcand HOST:PORT  serve every bus as a socketcand channel of its name (127.0.0.1:29536;\n"
+            "                          python-can's interface='socketcand'); whoever reaches it is on the buses\n"
             "      --script FILE       run control commands from FILE ('@MS command' lines, see canopen-emu(1))\n"
             "      --rules FILE        behaviour rules (YAML) for a device read from an EDS/DCF (docs/eds.md)\n"
             "      --list-devices      list the device types and exit\n"

@@ -14,6 +14,7 @@
 #include "emu_output.h"
 #include "emu_script.h"
 #include "emu_socket.h"
+#include "emu_socketcand.h"
 #include "emu_web.h"
 
 /* Control sockets listening or connected: only then has a pass their flushing, polling and servicing to do. */
@@ -25,7 +26,8 @@ static bool sockets_in_use(const emu_sockets_t *k)
 int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
 {
     /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients, the web */
-    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1];
+    /* and the socketcand listener and clients */
+    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1 + 1 + SOCKETCAND_CLIENTS_MAX];
     for (size_t i = 0U; i < emu->n_buses; i++) {
         pfd[i].revents = 0; /* nothing woke the buses before the first pass */
     }
@@ -34,9 +36,11 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
      * deadline and not late by this pass's work. */
     co_time_us_t now = socketcan_now_us();
     co_time_us_t next = CO_NEVER; /* the earliest deadline the last pass found: a flood's reading stops there */
-    nfds_t stdin_index = 0U, sockets_index = 0U, web_index = 0U, nfds = 0U; /* where the last poll put them */
+    /* where the last poll put them */
+    nfds_t stdin_index = 0U, sockets_index = 0U, socketcand_index = 0U, web_index = 0U, nfds = 0U;
     const bool alone = emu->n_buses == 1U && !emu->control.open && !sockets_in_use(&emu->sockets) &&
-                       emu->web.daemon == NULL && script_next_at(&emu->script) == CO_NEVER;
+                       emu->web.daemon == NULL && !socketcand_active(&emu->socketcand) &&
+                       script_next_at(&emu->script) == CO_NEVER;
     while (!emu->quit && *stop == 0) {
         if (alone) {
             if (bus_run_alone(emu, stop, &now, &next, pfd[0].revents) != 0) {
@@ -54,8 +58,8 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             commands = true;
         }
         const bool sockets = sockets_in_use(&emu->sockets);
-        if (sockets && web_index > sockets_index) {
-            sockets_service(emu, &emu->sockets, &pfd[sockets_index], web_index - sockets_index);
+        if (sockets && socketcand_index > sockets_index) {
+            sockets_service(emu, &emu->sockets, &pfd[sockets_index], socketcand_index - sockets_index);
             commands = true;
         }
         if (emu->web.daemon != NULL && nfds > 0U) {
@@ -76,6 +80,13 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             const co_time_us_t t = socketcan_now_us();
             const co_time_us_t budget_end = t + SESSION_PASS_BUDGET_US;
             sessions_pending = sessions_work(emu, next < budget_end ? next : budget_end);
+            commands = true;
+        }
+        /* The socketcand clients' frames, within their own bounds and never past the nodes' earliest deadline (the
+         * first always runs): the nodes take them in this pass. */
+        if (socketcand_active(&emu->socketcand)) {
+            sessions_pending = socketcand_service(emu, &emu->socketcand, &pfd[socketcand_index],
+                                                  web_index - socketcand_index, next) || sessions_pending;
             commands = true;
         }
         if (commands) {
@@ -113,8 +124,13 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             sockets_tidy(emu, &emu->sockets);
             nfds += sockets_poll_fds(&emu->sockets, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U);
         }
-        web_index = nfds;
         now = socketcan_now_us();
+        socketcand_index = nfds;
+        if (socketcand_active(&emu->socketcand)) { /* what the buses' pass gave its clients leaves here */
+            nfds += socketcand_poll_fds(emu, &emu->socketcand, &pfd[nfds], (nfds_t)(sizeof pfd / sizeof pfd[0]) - nfds - 1U,
+                                        now, &next);
+        }
+        web_index = nfds;
         if (emu->web.daemon != NULL) { /* without --web a pass pays for neither call */
             nfds += web_poll_fds(&emu->web, &pfd[web_index], now, &next);
         }

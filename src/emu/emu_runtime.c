@@ -29,6 +29,7 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
     /* From here on the log and the replies go through emu_output.c, which never blocks (it ignores SIGPIPE). */
     sockets_init(&emu->sockets);
     web_init(&emu->web);
+    socketcand_init(&emu->socketcand);
     if (cfg->control_socket != NULL) {
         if (sockets_listen_unix(&emu->sockets, cfg->control_socket, err, sizeof err) != 0) {
             output_error("%s", err);
@@ -75,6 +76,19 @@ int runtime_start(emu_t *emu, const emu_config_t *cfg)
                     "devices (the page hands its token to whoever loads it)", emu->web.listener.name);
         }
     }
+    if (cfg->socketcand != NULL) {
+        if (socketcand_start(&emu->socketcand, cfg->socketcand, err, sizeof err) != 0) {
+            output_error("%s", err);
+            return 1;
+        }
+        logline(LOG_NORMAL, "socketcand: listening on %s: every bus is a channel of its name",
+                emu->socketcand.listener.name);
+        if (emu->socketcand.listener.remote) {
+            logline(LOG_QUIET, "socketcand: warning: %s is not a loopback address: whoever reaches it is on the "
+                    "buses (reads every frame, sends any), and the connection is not encrypted",
+                    emu->socketcand.listener.name);
+        }
+    }
     for (size_t i = 0U; i < cfg->n_buses; i++) {
         emu_bus_t *b = calloc(1U, sizeof *b);
         if (b == NULL) {
@@ -114,6 +128,7 @@ void runtime_stop(emu_t *emu)
     logline(LOG_NORMAL, "stopping%s", stop_signal != 0 ? " (signal)" : "");
     sockets_close(emu, &emu->sockets);
     web_stop(emu, &emu->web);
+    socketcand_stop(emu, &emu->socketcand);
     unsigned long sent = 0UL, dropped = 0UL, rx_lost = 0UL;
     for (size_t i = 0U; i < emu->n_buses; i++) {
         bus_close(emu->buses[i], &sent, &dropped, &rx_lost);

@@ -21,6 +21,7 @@ typedef struct emu_config {
     const char *control_tcp;         /* HOST:PORT, or NULL */
     const char *control_token_file;  /* the token TCP clients must give first, or NULL (required off loopback) */
     const char *web;                 /* HOST:PORT of the web view, or NULL */
+    const char *socketcand;          /* HOST:PORT of the socketcand server, or NULL */
     int log_level;
 } emu_config_t;
 
