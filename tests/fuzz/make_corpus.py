@@ -1066,6 +1066,31 @@ def udp_datagram_seeds():
     }
 
 
+def socketcand_seeds():
+    """A socketcand client's bytes (byte 0: the piece size, 0 all at once): python-can's session, socketcand's own
+    commands, and what a hostile client sends."""
+    def conn(text, piece=0):
+        return bytes([piece]) + (text if isinstance(text, bytes) else text.encode())
+    session = "< open plant >< rawmode >< send 612 8 40 18 10 1 0 0 0 0 >< send 1ABCDEF0 3 1 2 3 >"
+    return {
+        "python-can-session": conn(session),
+        "python-can-session-bytewise": conn(session, 1),
+        "python-can-remote": conn("< open plant >< rawmode >< send 712 1  >"),
+        "python-can-fd": conn("< open plant >< send 321 C " + "0 " * 12 + ">"),
+        "sendrtr-and-echo": conn("< open plant >< sendrtr 1FFFFFFF 8 >< echo >< bcmmode >"),
+        "dlc0-and-max-ids": conn("<open plant>\n<send 7FF 0>\n<send 1FFFFFFF 8 ff ff ff ff ff ff ff ff>\n", 7),
+        "fdsend": conn("< open p >< fdsend 123 01 16 " + "aa " * 16 + ">"),
+        "unsupported": conn("< open p >< subscribe 0 0 123 >< add 1 0 123 8 11 22 33 44 55 66 77 88 >"),
+        "bad-sends": conn("< open p >< send 800 0 >< send 123 9 >< send 123 2 1 >< send xyz 1 1 >< send 123 1 100 >"),
+        "http-post": conn("POST / HTTP/1.1\r\nHost: 127.0.0.1:29536\r\nContent-Type: text/plain\r\n\r\n"
+                          "< open plant >< rawmode >< send 000 2 1 0 >"),
+        "junk-between": conn("< open p > junk < echo >" + "x" * 300 + "< echo >", 5),
+        "overlong": conn("< open p ><" + "a" * 600 + "> < echo >", 64),
+        "nested-open": conn("< < open p > > <>< >"),
+        "control-bytes": conn(b"< open p\x00 >< send 123\x01 0 >\xff\xfe< echo >"),
+    }
+
+
 def targets():
     out = {}
     out["core"] = vector_seeds((0, OWN, 0, 0), (0, 0xFF, 0, 0))
@@ -1081,6 +1106,7 @@ def targets():
     out["eds"] = eds_seeds()
     out["rules"] = rules_seeds()
     out["udp_datagram"] = udp_datagram_seeds()
+    out["socketcand"] = socketcand_seeds()
     return out
 
 
