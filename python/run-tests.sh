@@ -1,15 +1,22 @@
 #!/bin/sh
 # Tests of the Python package (python/tests) and of the test engineer's example suite (examples/pytest) against
-# the real canopen-emu on vcan, with the package installed as a user installs it: a fresh venv,
-# `pip install ./python` (not editable, no sys.path tricks), the pinned test packages, and pytest loading the
-# plugin through its entry point.
+# the real canopen-emu, with the package installed as a user installs it: a fresh venv, `pip install ./python[udp]`
+# (not editable, no sys.path tricks), the pinned test packages, and pytest loading the plugin through its entry point.
+# Two passes, on two kinds of bus, the example suite unchanged in both:
 #
-#   CANOPEN_EMU=/path/to/canopen-emu [CO_SOURCE_DIR=/path/to/source] sh python/run-tests.sh BUILD_DIR [PYTEST-ARGS]
+#   vcan  python/tests (but those marked netns) and examples/pytest on vcan0 (--canopen-emu-bus auto finds it up)
+#   udp   python/tests marked netns and examples/pytest on udp_multicast, inside tests/udp/netns-run: a network
+#         namespace of their own whose only interface is lo (no datagram reaches this machine's network), where
+#         auto finds no vcan0 and gives the session a udp_multicast group of its own
+#
+#   CANOPEN_EMU=/path/to/canopen-emu [CO_SOURCE_DIR=/path/to/source] [CO_PYTHON_TESTS_PASSES="vcan udp"] \
+#     sh python/run-tests.sh BUILD_DIR [PYTEST-ARGS]
 #
 # BUILD_DIR receives the venv (python-venv/), the copy of python/ it is installed from (python-src/: pip builds in
 # the directory it installs from, which must not be the source tree) and the JUnit reports (python-tests.xml,
-# examples-pytest.xml). CO_SOURCE_DIR defaults to the directory above this script; PYTHON (default python3)
-# makes the venv. The pinned versions of canopen, python-can and pytest are those of tests/requirements.txt.
+# examples-pytest.xml; the udp pass's python-tests-udp.xml, examples-pytest-udp.xml). CO_SOURCE_DIR defaults to the
+# directory above this script; PYTHON (default python3) makes the venv; CO_PYTHON_TESTS_PASSES names the passes to
+# run (default both). The pinned versions of canopen, python-can, pytest and msgpack are tests/requirements.txt's.
 #
 # Where it runs: pip needs the package index, and tools/vcan-run's User-Mode Linux has no network. So the venv is
 # made here, and the tests then run at once if vcan0 exists (a kernel with vcan, a CI runner after
@@ -17,8 +24,9 @@
 # script starts itself (vcan0 and vcan1 are up there). Do not wrap the whole script in tools/vcan-run on a machine
 # without CAN: the install would fail for lack of network.
 #
-# Exit status: 0 when both suites pass, 1 when one fails, 2 for a usage error, 77 when no vcan is to be had
-# (tools/vcan-run's "skip").
+# The udp pass needs unshare -rn (user namespaces), no root. Exit status: 0 when the suites of the passes pass, 1 when
+# one fails, 2 for a usage error, 77 when every pass asked for was skipped (no vcan to be had: tools/vcan-run's
+# "skip"; no user namespaces).
 set -eu
 
 usage() {
@@ -48,45 +56,82 @@ esac
 [ -x "$CANOPEN_EMU" ] || { echo "run-tests.sh: $CANOPEN_EMU is not an executable file" >&2; exit 2; }
 export CANOPEN_EMU
 
+# run_suites PASS MARKS [PYTEST-ARGS...]: python/tests selected by -m MARKS, then examples/pytest as it is.
 run_suites() {
   python=$venv/bin/python
+  pass=$1 marks=$2
+  shift 2
+  suffix=$([ "$pass" = vcan ] || echo "-$pass")
   status=0
-  echo "== python/tests: the canopen_emu package ($("$python" -c 'import canopen_emu; print(canopen_emu.__file__)'))"
-  (cd "$src/python" && "$python" -m pytest -p no:cacheprovider -o junit_family=xunit2 \
-    --junitxml="$build/python-tests.xml" "$@" tests) || status=1
-  echo "== examples/pytest: the test engineer's example suite"
+  echo "== $pass pass: python/tests -m '$marks': the canopen_emu package" \
+       "($("$python" -c 'import canopen_emu; print(canopen_emu.__file__)'))"
+  (cd "$src/python" && "$python" -m pytest -p no:cacheprovider -o junit_family=xunit2 -m "$marks" \
+    --junitxml="$build/python-tests$suffix.xml" "$@" tests) || status=1
+  echo "== $pass pass: examples/pytest: the test engineer's example suite"
   (cd "$src/examples/pytest" && "$python" -m pytest -p no:cacheprovider -o junit_family=xunit2 \
-    --junitxml="$build/examples-pytest.xml" "$@") || status=1
-  [ "$status" -eq 0 ] && echo "run-tests.sh: both suites passed" || echo "run-tests.sh: FAILED" >&2
+    --junitxml="$build/examples-pytest$suffix.xml" "$@") || status=1
+  [ "$status" -eq 0 ] && echo "run-tests.sh: $pass pass: both suites passed" ||
+    echo "run-tests.sh: $pass pass FAILED" >&2
   return "$status"
 }
 
-if [ "${CO_PYTHON_TESTS_STAGE:-}" = run ]; then
-  # Second stage, inside tools/vcan-run: the venv is ready.
-  run_suites "$@"
-  exit $?
-fi
+# Second stages: the venv is ready.
+case ${CO_PYTHON_TESTS_STAGE:-} in
+  run) run_suites vcan "not netns" "$@"; exit $? ;;   # inside tools/vcan-run, or where vcan0 is
+  netns)                                              # inside tests/udp/netns-run
+    # (ip asks the kernel: /sys/class/net shows the namespace sysfs was mounted in)
+    links=$(ip -o link show | awk -F': ' '{print $2}')
+    [ "$links" = lo ] || { echo "run-tests.sh: the udp pass runs only where lo is the only interface" \
+      "(tests/udp/netns-run), not with: $(echo $links)" >&2; exit 1; }
+    run_suites udp "netns" "$@"; exit $? ;;
+esac
 
-pins=$(grep -E '^(canopen|python-can|pytest)==' "$src/tests/requirements.txt" || true)
-[ "$(echo "$pins" | wc -l)" -eq 3 ] || {
-  echo "run-tests.sh: tests/requirements.txt must pin canopen, python-can and pytest (found: $pins)" >&2; exit 2; }
+passes=${CO_PYTHON_TESTS_PASSES:-vcan udp}
+for pass in $passes; do
+  case $pass in vcan|udp) ;; *) echo "run-tests.sh: CO_PYTHON_TESTS_PASSES takes vcan and udp, not $pass" >&2; exit 2 ;;
+  esac
+done
 
-echo "== fresh venv $venv, pip install ./python" $pins
+pins=$(grep -E '^(canopen|python-can|pytest|msgpack)==' "$src/tests/requirements.txt" | sed 's/[[:space:]]*#.*//' || true)
+[ "$(echo "$pins" | wc -l)" -eq 4 ] || {
+  echo "run-tests.sh: tests/requirements.txt must pin canopen, python-can, pytest and msgpack (found: $pins)" >&2
+  exit 2; }
+
+echo "== fresh venv $venv, pip install ./python[udp]" $pins
 rm -rf "$venv" "$build/python-src"
 cp -R "$src/python" "$build/python-src"
 rm -rf "$build/python-src/build" "$build/python-src"/src/*.egg-info
 "${PYTHON:-python3}" -m venv "$venv"
 # shellcheck disable=SC2086
-if ! "$venv/bin/python" -m pip install -q --disable-pip-version-check "$build/python-src" $pins; then
+if ! "$venv/bin/python" -m pip install -q --disable-pip-version-check "$build/python-src[udp]" $pins; then
   echo "run-tests.sh: pip install failed; it needs the package index (tools/vcan-run's User-Mode Linux has no" \
        "network: run this script outside it, it starts tools/vcan-run itself when vcan0 is missing)" >&2
   exit 1
 fi
 
-if [ -e /sys/class/net/vcan0 ]; then
-  run_suites "$@"
-  exit $?
-fi
-export CO_PYTHON_TESTS_STAGE=run  # CO_* variables pass into tools/vcan-run; CANOPEN_EMU must be named
-export VCAN_RUN_PASS_ENV="${VCAN_RUN_PASS_ENV:-} CANOPEN_EMU"
-exec "$src/tools/vcan-run" sh "$here/run-tests.sh" "$build" "$@"
+failed=0 ran=0
+for pass in $passes; do
+  status=0
+  if [ "$pass" = vcan ]; then
+    if [ -e /sys/class/net/vcan0 ]; then
+      CO_PYTHON_TESTS_STAGE=run sh "$here/run-tests.sh" "$build" "$@" || status=$?
+    else
+      # CO_* variables pass into tools/vcan-run; CANOPEN_EMU must be named
+      CO_PYTHON_TESTS_STAGE=run VCAN_RUN_PASS_ENV="${VCAN_RUN_PASS_ENV:-} CANOPEN_EMU" \
+        "$src/tools/vcan-run" sh "$here/run-tests.sh" "$build" "$@" || status=$?
+    fi
+  elif ! unshare -rn true 2>/dev/null; then
+    echo "run-tests.sh: udp pass skipped: unshare -rn fails here (user namespaces not allowed)" >&2
+    status=77
+  else
+    CO_PYTHON_TESTS_STAGE=netns "$src/tests/udp/netns-run" sh "$here/run-tests.sh" "$build" "$@" || status=$?
+  fi
+  case $status in
+    0) ran=1 ;;
+    77) echo "run-tests.sh: $pass pass skipped" >&2 ;;
+    *) ran=1 failed=1 ;;
+  esac
+done
+[ "$failed" -eq 0 ] || exit 1
+[ "$ran" -eq 1 ] || exit 77
+exit 0

@@ -20,13 +20,10 @@ EDS = {"pro-ionizer": EDS_DIR / "pro-ionizer.eds", "sds": EDS_DIR / "sds.eds",
 
 
 @pytest.fixture
-def network(pytestconfig: pytest.Config) -> Iterator[canopen.Network]:
-    """python-canopen on the emulators' bus (the plugin's --canopen-emu-interface, vcan0 by default)."""
-    interfaces = pytestconfig.getoption("canopen_emu_interface") or pytestconfig.getini("canopen_emu_interface")
-    net = canopen.Network()
-    net.connect(interface="socketcan", channel=interfaces[0])
-    yield net
-    net.disconnect()
+def network(canopen_emu_network: canopen.Network) -> canopen.Network:
+    """python-canopen on the emulators' bus, whatever its kind: the plugin's canopen_emu_network, on the bus its
+    --canopen-emu-bus chose (auto: vcan0 where it is up, else a udp_multicast group of this session's own)."""
+    return canopen_emu_network
 
 
 @pytest.fixture

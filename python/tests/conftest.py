@@ -1,4 +1,5 @@
-"""Tests of the installed canopen_emu package against the real canopen-emu on vcan0/vcan1.
+"""Tests of the installed canopen_emu package against the real canopen-emu on vcan0/vcan1 (and, marked netns, on
+udp_multicast inside a network namespace of their own).
 
 python/run-tests.sh runs them in a fresh venv where ./python was pip-installed as a user installs it: the
 canopen_emu imported here is the installed one, and the plugin's fixtures (canopen_emu, canopen_emu_factory...)
@@ -13,6 +14,12 @@ import canopen
 import pytest
 
 pytest_plugins = ("pytester",)
+
+
+def pytest_configure(config):
+    # run-tests.sh's second pass runs these alone, inside tests/udp/netns-run (a network namespace whose only
+    # interface is lo); its first pass, on vcan, leaves them out
+    config.addinivalue_line("markers", "netns: runs on udp_multicast inside a network namespace of its own (only lo)")
 
 SOURCE_DIR = Path(os.environ.get("CO_SOURCE_DIR") or Path(__file__).resolve().parents[2])
 EDS = {"pro-ionizer": SOURCE_DIR / "od/pro-ionizer.eds", "sds": SOURCE_DIR / "od/sds.eds",

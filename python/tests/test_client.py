@@ -136,14 +136,14 @@ def test_commands_return_lines_and_refusals_carry_them(canopen_emu):
 def test_hello_nodes_and_show(canopen_emu):
     c = canopen_emu.client
     hello = c.hello()
-    assert (hello.program, hello.version, hello.protocol, hello.buses) == (
-        "canopen-emu", PACKAGE_VERSION, 1, ("vcan0",))
+    assert (hello.program, hello.version, hello.protocol, hello.buses, hello.bus_kinds) == (
+        "canopen-emu", PACKAGE_VERSION, 1, ("vcan0",), {"vcan0": "socketcan"})
     assert hello.events == EVENT_KINDS
     assert c.server == hello  # connect() asked it already
     assert abs(hello.clock_unix_us / 1e6 - time.time()) < 5 and hello.clock_time_us > 0
-    expected = [NodeInfo(16, "sds", "N", 16, "PRE-OPERATIONAL", "vcan0"),
-                NodeInfo(17, "buerkert", None, 17, "PRE-OPERATIONAL", "vcan0"),
-                NodeInfo(0x20, "pro-ionizer", "full", 0x20, "PRE-OPERATIONAL", "vcan0")]
+    expected = [NodeInfo(16, "sds", "N", 16, "PRE-OPERATIONAL", "vcan0", "socketcan"),
+                NodeInfo(17, "buerkert", None, 17, "PRE-OPERATIONAL", "vcan0", "socketcan"),
+                NodeInfo(0x20, "pro-ionizer", "full", 0x20, "PRE-OPERATIONAL", "vcan0", "socketcan")]
     assert c.nodes() == expected
     assert c.list() == expected
     shown = c.show(17)
@@ -151,6 +151,7 @@ def test_hello_nodes_and_show(canopen_emu):
     assert (shown[0].node, shown[0].error_register, shown[0].errors, shown[0].tx_dropped) == (17, 0, (), 0)
     assert shown[0].tx_frames >= 1  # its boot-up at least
     assert [s.node for s in c.show()] == [16, 17, 0x20]
+    assert shown[0].bus_kind == "socketcan"
     sds = c.show(16)[0]
     # od/sds.eds: device type 0x191 (CiA 401), heartbeat 5000 ms; its boot-up counts as its last heartbeat
     assert (sds.device_type, sds.heartbeat_ms, sds.faults, sds.last_emcy) == (0x191, 5000, (), None)
@@ -167,7 +168,8 @@ def test_heard_lists_the_other_nodes_on_the_bus(canopen_emu, can_bus):
     while not heard and time.monotonic() < deadline:
         time.sleep(0.05)
         heard = c.heard()
-    assert [(h.node, h.bus, h.state, h.boot_up) for h in heard] == [(5, "vcan0", "OPERATIONAL", False)]
+    assert [(h.node, h.bus, h.bus_kind, h.state, h.boot_up) for h in heard] == [
+        (5, "vcan0", "socketcan", "OPERATIONAL", False)]
     assert 0 < heard[0].last_heartbeat_us
     assert c.heard("vcan0") == heard
 

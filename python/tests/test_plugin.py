@@ -36,7 +36,7 @@ def test_trace_config_names_it(pytester):
         f"  canopen-emu-{canopen_emu.__version__} at */site-packages/canopen_emu/pytest_plugin.py",
         "active plugins:",
         "    canopen_emu         : */site-packages/canopen_emu/pytest_plugin.py",
-        f"canopen-emu plugin {canopen_emu.__version__}: {EMU} on vcan0",
+        f"canopen-emu plugin {canopen_emu.__version__}: {EMU} on vcan0 (socketcan), chosen by auto: vcan0 is up",
         f"plugins: canopen-emu-{canopen_emu.__version__}",
     ])
     assert result.ret == 0
@@ -146,7 +146,7 @@ def test_options_choose_the_program_and_the_interface(pytester, monkeypatch):
     """)
     result = run(pytester, "--canopen-emu", EMU, "--canopen-emu-interface", "vcan1")
     result.assert_outcomes(passed=1)
-    result.stdout.fnmatch_lines([f"canopen-emu plugin {canopen_emu.__version__}: {EMU} on vcan1"])
+    result.stdout.fnmatch_lines([f"canopen-emu plugin {canopen_emu.__version__}: {EMU} on vcan1 (socketcan)"])
 
 
 def test_an_emulator_that_dies_fails_the_teardown(pytester):

@@ -68,18 +68,23 @@ class ServerInfo:
     #: from an emulator older than this field.
     clock_time_us: Optional[int] = field(default=None, compare=False)
     clock_unix_us: Optional[int] = field(default=None, compare=False)
+    #: Each bus's kind by its name, python-can's interface name: ``{"vcan0": "socketcan", "plant": "virtual",
+    #: "udp_multicast:239.74.163.2:43113": "udp_multicast"}``; empty from an emulator older than this field.
+    bus_kinds: Dict[str, str] = field(default_factory=dict, hash=False)
 
 
 @dataclass(frozen=True)
 class NodeInfo:
     """One node of ``list``: its current node-ID, device type, variant (None when the device has none), the
-    node-ID it was started with, its NMT state and its bus."""
+    node-ID it was started with, its NMT state, its bus's name and kind (``"socketcan"``, ``"udp_multicast"``,
+    ``"virtual"``; None from an emulator older than it)."""
     node: int
     device: str
     variant: Optional[str]
     started_as: int
     state: str
     bus: str
+    bus_kind: Optional[str] = None
 
 
 @dataclass(frozen=True)
@@ -121,12 +126,14 @@ class NodeStatus(NodeInfo):
 @dataclass(frozen=True)
 class HeardNode:
     """A node-ID heard on a bus that the emulator does not emulate there (``show all``'s ``heard``): its state from
-    its last heartbeat, boot-up or guarding answer, whether that was a boot-up, and when (µs, the events' clock)."""
+    its last heartbeat, boot-up or guarding answer, whether that was a boot-up, and when (µs, the events' clock); the
+    bus's kind as NodeInfo's."""
     node: int
     bus: str
     state: str
     boot_up: bool
     last_heartbeat_us: int
+    bus_kind: Optional[str] = None
 
 
 class _Addressed:
@@ -377,13 +384,14 @@ class Client:
                 return msg
 
     def hello(self, token: Optional[str] = None) -> ServerInfo:
-        """The emulator's program name, version, protocol version, event kinds and buses. ``token``: for the first
-        request of a connection to a socket with ``--control-token-file`` (connect() gives it)."""
+        """The emulator's program name, version, protocol version, event kinds, buses and their kinds. ``token``:
+        for the first request of a connection to a socket with ``--control-token-file`` (connect() gives it)."""
         answer = self.request("hello", token=token) if token is not None else self.request("hello")
         info = ServerInfo(program=answer["program"], version=answer["version"], protocol=answer["protocol"],
                           events=tuple(answer["events"]), buses=tuple(answer["buses"]), raw=answer,
                           clock_time_us=answer.get("clock", {}).get("time_us"),
-                          clock_unix_us=answer.get("clock", {}).get("unix_us"))
+                          clock_unix_us=answer.get("clock", {}).get("unix_us"),
+                          bus_kinds=dict(answer.get("bus_kinds", {})))
         self.server = info
         return info
 
@@ -399,7 +407,7 @@ class Client:
         return info
 
     def nodes(self) -> List[NodeInfo]:
-        """The nodes (``list``): node-ID, device, variant, the ID started with, NMT state, bus."""
+        """The nodes (``list``): node-ID, device, variant, the ID started with, NMT state, bus and its kind."""
         return [_node_info(n) for n in self.request("list")["nodes"]]
 
     list = nodes
@@ -413,8 +421,8 @@ class Client:
         """The other nodes heard on the buses (or on ``bus``) by their heartbeats: a real device or another
         emulator beside the emulated nodes."""
         answer = self.request("show", node="all" if bus is None else f"all@{bus}")
-        return [HeardNode(h["node"], h["bus"], h["state"], h["boot_up"], h["last_heartbeat_us"])
-                for h in answer.get("heard", [])]
+        return [HeardNode(h["node"], h["bus"], h["state"], h["boot_up"], h["last_heartbeat_us"],
+                          h.get("bus_kind")) for h in answer.get("heard", [])]
 
     def get(self, node: NodeRef, obj: ObjectRef, sub: Optional[int] = None, *,
             timeout: Optional[float] = None) -> Value:
@@ -746,12 +754,12 @@ def _matches(event: Event, kind: Optional[str], wanted: Mapping[str, Any]) -> bo
 
 def _node_info(n: Mapping[str, Any]) -> NodeInfo:
     return NodeInfo(node=n["node"], device=n["device"], variant=n["variant"], started_as=n["started_as"],
-                    state=n["state"], bus=n["bus"])
+                    state=n["state"], bus=n["bus"], bus_kind=n.get("bus_kind"))
 
 
 def _node_status(n: Mapping[str, Any]) -> NodeStatus:
     return NodeStatus(node=n["node"], device=n["device"], variant=n["variant"], started_as=n["started_as"],
-                      state=n["state"], bus=n["bus"], error_register=n["error_register"],
+                      state=n["state"], bus=n["bus"], bus_kind=n.get("bus_kind"), error_register=n["error_register"],
                       errors=tuple(ActiveError(e["code"], e["register"], bytes.fromhex(e["info"]))
                                    for e in n["errors"]),
                       tx_frames=n["tx_frames"], rx_frames=n["rx_frames"], tx_dropped=n["tx_dropped"],

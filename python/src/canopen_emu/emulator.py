@@ -9,8 +9,9 @@ import tempfile
 import time
 import weakref
 from pathlib import Path
-from typing import List, Optional, Sequence, Union
+from typing import Any, List, Optional, Sequence, Union
 
+from .buses import Bus
 from .client import Client, Event, connect
 from .errors import CanopenEmuError, ConnectionClosed, ControlTimeout, EmulatorError
 
@@ -53,10 +54,12 @@ def _cleanup(proc: "subprocess.Popen[bytes]", workdir: str) -> None:
 class Emulator:
     """canopen-emu running the given nodes, started by the constructor and ready when it returns.
 
-    ``interface``: one CAN interface or several (``["vcan0", "vcan1"]``; nodes go to the first unless named
-    ``DEVICE:ID@IFACE``). ``nodes``: the emulator's device arguments (``"sds:16"``, ``"pro-ionizer/efield:0x20"``).
-    ``nvm_dir``: where stored parameters live (default: a fresh directory, removed by stop()). ``executable``:
-    default ``$CANOPEN_EMU``, else ``canopen-emu`` on PATH. ``extra_args``: more options (``["-v"]``). ``web``:
+    ``interface``: one bus or several, as canopen-emu's ``-i`` names them (``"vcan0"``, ``["vcan0", "vcan1"]``,
+    ``"udp_multicast:239.74.163.2:43113"``, ``"virtual:plant"``, docs/buses.md) or as Bus objects (``choose_bus()``);
+    nodes go to the first unless named ``DEVICE:ID@BUS``. ``nodes``: the emulator's device arguments (``"sds:16"``,
+    ``"pro-ionizer/efield:0x20"``). ``nvm_dir``: where stored parameters live (default: a fresh directory, removed
+    by stop()). ``executable``: default ``$CANOPEN_EMU``, else ``canopen-emu`` on PATH. ``extra_args``: more options
+    (``["-v"]``). ``web``:
     ``HOST:PORT`` of the live view in the browser (``--web``; ``"127.0.0.1:0"`` takes a free port), its address then
     from ``web_url()``.
 
@@ -64,11 +67,14 @@ class Emulator:
     out of INITIALISING (the boot-up sent); it raises EmulatorError, with the log, when that does not happen
     within ``start_timeout`` seconds or the program exits. ``client`` is then a connected Client."""
 
-    def __init__(self, interface: Union[str, Sequence[str]] = "vcan0", nodes: Sequence[str] = DEFAULT_NODES,
+    def __init__(self, interface: Union[str, Bus, Sequence[Union[str, Bus]]] = "vcan0",
+                 nodes: Sequence[str] = DEFAULT_NODES,
                  nvm_dir: Optional[PathLike] = None, executable: Optional[PathLike] = None,
                  extra_args: Sequence[str] = (), *, start_timeout: float = 10.0, client_timeout: float = 5.0,
                  wait_boot: bool = True, web: Optional[str] = None) -> None:
-        self.interfaces: List[str] = [interface] if isinstance(interface, str) else list(interface)
+        # canopen-emu's -i texts: a Bus (choose_bus()) gives its spec
+        self.interfaces: List[str] = [str(i) for i in ([interface] if isinstance(interface, (str, Bus))
+                                                       else interface)]
         self.node_args: List[str] = [nodes] if isinstance(nodes, str) else list(nodes)
         if not self.interfaces:
             raise ValueError("an emulator needs at least one interface")
@@ -89,6 +95,7 @@ class Emulator:
                       *(["--web", web] if web is not None else []), *extra_args, *self.node_args]
         self.stop_requested = False  # stop() was called (by the test, not found dead at the end)
         self._clients: List[Client] = []
+        self._networks: List[Any] = []  # python-canopen Networks of network(), disconnected by stop()
         self._status: Optional[int] = None
         self._final_log: Optional[str] = None
         try:
@@ -188,6 +195,29 @@ class Emulator:
         client = connect(self.socket_path, timeout=self.client_timeout if timeout is None else timeout)
         self._clients.append(client)
         return client
+
+    @property
+    def buses(self) -> List[Bus]:
+        """The buses as given (``interface``), each with its kind and the emulator's name of it (canopen_emu.Bus)."""
+        return [Bus.parse(name) for name in self.interfaces]
+
+    def network(self, bus: Union[None, str, Bus] = None) -> Any:
+        """A python-canopen ``Network`` connected to a bus of this emulator (default: its first; or one of
+        ``buses`` by its name or ``-i`` text), disconnected by stop(): the master's side of the test, on whatever
+        kind of bus the emulator runs (``Bus.can_kwargs()``). Needs the ``canopen`` package, and for udp_multicast
+        ``msgpack`` (``pip install canopen-emu[udp]``)."""
+        buses = self.buses
+        if bus is None:
+            chosen = buses[0]
+        else:
+            wanted = bus.name if isinstance(bus, Bus) else str(bus)
+            found = [b for b in buses if wanted in (b.name, b.spec)]
+            if not found:
+                raise ValueError(f"{wanted!r} is not a bus of this emulator ({', '.join(b.name for b in buses)})")
+            chosen = found[0]
+        net = chosen.network()
+        self._networks.append(net)
+        return net
 
     def log_text(self) -> str:
         """The log (stderr) so far, or all of it after stop()."""
@@ -302,6 +332,10 @@ class Emulator:
         self.proc.wait()
         for client in self._clients:
             client.close()
+        for net in self._networks:
+            if net.bus is not None:  # not disconnected by the test already
+                net.disconnect()
+        self._networks.clear()
         self._final_log = self.log_text()
         self._status = self.proc.returncode
         self._finalizer()  # removes the directory (the process has ended)

@@ -5,8 +5,11 @@ Options (command line, or the ini file):
 
 - ``--canopen-emu PATH`` / ini ``canopen_emu``: the program (default ``$CANOPEN_EMU``, else ``canopen-emu`` on
   PATH);
-- ``--canopen-emu-interface IFACE`` (repeatable) / ini ``canopen_emu_interface``: the CAN interface(s), default
-  ``vcan0``;
+- ``--canopen-emu-bus BUS`` (repeatable) / ini ``canopen_emu_bus``: the bus(es) of the emulators, as canopen-emu's
+  ``-i`` names them (``vcan0``, ``socketcan:can1``, ``udp_multicast:239.74.163.2:43113``, docs/buses.md), or ``auto``
+  (the default): vcan0 where it exists and is up, else a udp_multicast group and port of this session's own, TTL 1
+  (canopen_emu.buses.session_udp_bus: two sessions on one machine, pytest-xdist's workers too, never share it);
+  ``--canopen-emu-interface`` / ini ``canopen_emu_interface`` are its older names;
 - ``--canopen-emu-web HOST:PORT`` / ini ``canopen_emu_web``: every emulator the fixtures start serves the live view
   in the browser there (``127.0.0.1:0``: a free port each); its address is written to the terminal and into a
   failed test's report;
@@ -15,8 +18,10 @@ Options (command line, or the ini file):
 
 Fixtures: ``canopen_emu_factory`` (start emulators in a test; all stopped at its end), ``canopen_emu`` (one
 emulator with the nodes of ``@pytest.mark.canopen_emu_nodes(...)``), ``canopen_emu_session`` (one for the whole
-session). A failed test's report gets, for each emulator it used, a section with the end of its log and one with
-the last events its clients received."""
+session), ``canopen_emu_network`` (a python-canopen Network on the emulators' bus, whatever its kind, for the
+master under test), ``canopen_emu_bus`` (that bus: canopen_emu.Bus, its ``can_kwargs()`` for python-can). A
+failed test's report gets, for each emulator it used, a section with the end of its log and one with the last events
+its clients received."""
 from __future__ import annotations
 
 import json
@@ -27,6 +32,7 @@ from typing import Any, Generator, Iterator, List, Optional, Sequence, Union
 import pytest
 
 from ._version import __version__
+from .buses import Bus, choose_bus, interface_is_up
 from .client import Event
 from .emulator import Emulator, PathLike, find_executable
 from .errors import EmulatorError
@@ -38,7 +44,8 @@ MARKER = "canopen_emu_nodes"
 class Settings:
     """The plugin's options, resolved once per run."""
     executable: Optional[str]   # None: $CANOPEN_EMU, else canopen-emu on PATH (looked up at each start)
-    interfaces: List[str]
+    buses: List[Bus]            # auto resolved: the buses every emulator of the run is started on
+    chosen_by: str              # how: "" when named, else what auto found
     web: Optional[str]          # HOST:PORT of the emulators' web view; None: none
     log_lines: int
     event_lines: int
@@ -53,17 +60,22 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("canopen-emu", "canopen-emu (emulated CANopen devices)")
     group.addoption("--canopen-emu", dest="canopen_emu", metavar="PATH", default=None,
                     help="the canopen-emu program (default: ini canopen_emu, $CANOPEN_EMU, canopen-emu on PATH)")
+    group.addoption("--canopen-emu-bus", dest="canopen_emu_bus", metavar="auto|BUS", action="append",
+                    default=None, help="bus of the emulators, as canopen-emu's -i names it (vcan0, "
+                                       "udp_multicast:GROUP:PORT, ...), or auto: vcan0 when it is up, else a "
+                                       "udp_multicast group of this session's own (default: ini canopen_emu_bus, "
+                                       "else auto); give it again for more buses")
     group.addoption("--canopen-emu-interface", dest="canopen_emu_interface", metavar="IFACE", action="append",
-                    default=None, help="CAN interface of the emulators (default: ini canopen_emu_interface, else "
-                                       "vcan0); give it again for more buses")
+                    default=None, help="the older name of --canopen-emu-bus")
     group.addoption("--canopen-emu-web", dest="canopen_emu_web", metavar="HOST:PORT", default=None,
                     help="serve each emulator's live view in the browser there (127.0.0.1:0: a free port each; "
                          "default: ini canopen_emu_web, else none)")
     parser.addini("canopen_emu", "the canopen-emu program (relative to the ini file's directory)", default="")
     parser.addini("canopen_emu_web", "HOST:PORT of the emulators' live view in the browser (none when empty)",
                   default="")
-    parser.addini("canopen_emu_interface", "CAN interface(s) of the emulators, separated by blanks", type="args",
-                  default=["vcan0"])
+    parser.addini("canopen_emu_bus", "bus(es) of the emulators, separated by blanks: auto (the default) or as "
+                  "canopen-emu's -i names them", type="args", default=[])
+    parser.addini("canopen_emu_interface", "the older name of canopen_emu_bus", type="args", default=[])
     parser.addini("canopen_emu_session_nodes", "nodes of the canopen_emu_session fixture (\"sds:16 buerkert:17\")",
                   type="args", default=[])
     parser.addini("canopen_emu_log_lines", "log lines of each emulator in a failed test's report", default="60")
@@ -80,9 +92,18 @@ def pytest_configure(config: pytest.Config) -> None:
         if ini and os.sep in ini and config.inipath is not None:
             ini = str(config.inipath.parent / ini)
         executable = ini or None
-    interfaces = config.getoption("canopen_emu_interface") or list(config.getini("canopen_emu_interface"))
+    choices = (config.getoption("canopen_emu_bus") or config.getoption("canopen_emu_interface")
+               or list(config.getini("canopen_emu_bus")) or list(config.getini("canopen_emu_interface")) or ["auto"])
+    try:
+        buses = [choose_bus(str(choice)) for choice in choices]
+    except (ValueError, OSError) as e:
+        raise pytest.UsageError(f"--canopen-emu-bus: {e}") from None
+    chosen_by = ""
+    if "auto" in choices:
+        chosen_by = ("auto: vcan0 is up" if interface_is_up("vcan0") else
+                     "auto: no vcan0 up, so a group of this session's own, TTL 1")
     web = config.getoption("canopen_emu_web") or str(config.getini("canopen_emu_web")) or None
-    config.stash[SETTINGS] = Settings(executable=executable, interfaces=list(interfaces) or ["vcan0"], web=web,
+    config.stash[SETTINGS] = Settings(executable=executable, buses=buses, chosen_by=chosen_by, web=web,
                                       log_lines=int(config.getini("canopen_emu_log_lines")),
                                       event_lines=int(config.getini("canopen_emu_event_lines")))
 
@@ -93,7 +114,9 @@ def pytest_report_header(config: pytest.Config) -> str:
         program = find_executable(settings.executable)
     except EmulatorError as e:
         program = f"not usable ({e})"
-    return f"canopen-emu plugin {__version__}: {program} on {', '.join(settings.interfaces)}"
+    buses = ", ".join(bus.label for bus in settings.buses)
+    return (f"canopen-emu plugin {__version__}: {program} on {buses}"
+            + (f", chosen by {settings.chosen_by}" if settings.chosen_by else ""))
 
 
 class EmulatorFactory:
@@ -110,7 +133,7 @@ class EmulatorFactory:
                  executable: Optional[PathLike] = None, start_timeout: float = 10.0) -> Emulator:
         if not nodes:
             raise ValueError("canopen_emu_factory needs the nodes: canopen_emu_factory(\"sds:16\", ...)")
-        emu = Emulator(interface if interface is not None else self.settings.interfaces, list(nodes), nvm_dir,
+        emu = Emulator(interface if interface is not None else self.settings.buses, list(nodes), nvm_dir,
                        executable if executable is not None else self.settings.executable, extra_args,
                        start_timeout=start_timeout, web=self.settings.web)
         self.started.append(emu)
@@ -167,7 +190,7 @@ def canopen_emu_session_nodes(pytestconfig: pytest.Config) -> List[str]:
 def canopen_emu_session(request: pytest.FixtureRequest, canopen_emu_session_nodes: List[str]) -> Iterator[Emulator]:
     """One emulator for the whole session, shared by the tests that use it (they see each other's changes)."""
     settings = request.config.stash[SETTINGS]
-    emu = Emulator(settings.interfaces, canopen_emu_session_nodes, executable=settings.executable, web=settings.web)
+    emu = Emulator(settings.buses, canopen_emu_session_nodes, executable=settings.executable, web=settings.web)
     request.config.stash[SESSION_EMULATOR] = emu
     announce_web(request.config, emu)
     yield emu
@@ -177,6 +200,26 @@ def canopen_emu_session(request: pytest.FixtureRequest, canopen_emu_session_node
     if status != 0 and not asked:
         pytest.fail(f"canopen-emu ({' '.join(emu.node_args)}) of the session ended by itself with status "
                     f"{status}:\n{emu.describe(settings.log_lines)}", pytrace=False)
+
+
+@pytest.fixture(scope="session")
+def canopen_emu_bus(pytestconfig: pytest.Config) -> Bus:
+    """The emulators' (first) bus, as --canopen-emu-bus chose it: its ``kind``, ``name`` and ``can_kwargs()``
+    (``can.Bus(**canopen_emu_bus.can_kwargs())`` joins it with python-can)."""
+    return pytestconfig.stash[SETTINGS].buses[0]
+
+
+@pytest.fixture
+def canopen_emu_network(canopen_emu_bus: Bus) -> Iterator[Any]:
+    """A python-canopen ``Network`` connected to the emulators' bus, whatever its kind (vcan0, the session's
+    udp_multicast group...), disconnected at the end of the test: hand it to the master under test. Needs the
+    ``canopen`` package (and ``msgpack`` for udp_multicast: ``pip install canopen-emu[udp]``)."""
+    try:
+        net = canopen_emu_bus.network()
+    except (ImportError, ValueError) as e:
+        pytest.fail(f"canopen_emu_network: {e}", pytrace=False)
+    yield net
+    net.disconnect()
 
 
 def announce_web(config: pytest.Config, emu: Emulator) -> None:
