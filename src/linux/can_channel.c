@@ -10,18 +10,6 @@ static const char KIND_SOCKETCAN[] = "socketcan:";
 static const char KIND_UDP[] = "udp_multicast";
 static const char KIND_VIRTUAL[] = "virtual:";
 
-const char *can_channel_kind_name(can_channel_kind_t kind)
-{
-    switch (kind) {
-    case CAN_CHANNEL_UDP_MULTICAST:
-        return "udp_multicast";
-    case CAN_CHANNEL_VIRTUAL:
-        return "virtual";
-    default:
-        return "socketcan";
-    }
-}
-
 static bool starts_with(const char *text, const char *prefix)
 {
     return strncmp(text, prefix, strlen(prefix)) == 0;

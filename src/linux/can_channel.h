@@ -46,8 +46,19 @@ typedef struct can_channel_spec {
 /** Parses KIND:ARGS or a bare interface name (see above). 0, or EINVAL with a message in err. */
 int can_channel_parse(const char *text, can_channel_spec_t *spec, char *err, size_t errlen);
 
-/** "socketcan", "udp_multicast", "virtual": python-can's interface names. */
-const char *can_channel_kind_name(can_channel_kind_t kind);
+/** "socketcan", "udp_multicast", "virtual": python-can's interface names. Inline: the control path's fuzz target
+ *  names a bus's kind without linking the channels. */
+static inline const char *can_channel_kind_name(can_channel_kind_t kind)
+{
+    switch (kind) {
+    case CAN_CHANNEL_UDP_MULTICAST:
+        return "udp_multicast";
+    case CAN_CHANNEL_VIRTUAL:
+        return "virtual";
+    default:
+        return "socketcan";
+    }
+}
 
 typedef struct can_channel {
     can_channel_kind_t kind;
