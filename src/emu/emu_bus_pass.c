@@ -101,7 +101,7 @@ static inline __attribute__((always_inline)) co_time_us_t run_nodes(emu_bus_t *b
     return next;
 }
 
-static inline co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
+static inline __attribute__((always_inline)) co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
 {
     /* Deadline gating: with no local frame waiting, no node dirty and none due, a pass over the nodes would change
      * nothing (a node's deadline moves only when it is processed) and find what the last one found. */
