@@ -48,7 +48,7 @@ def test_auto_is_vcan0_when_it_is_up_else_a_udp_multicast_group_of_the_sessions_
 
     assert choose_bus("auto", is_up=up) == Bus.parse("vcan0") and asked == ["vcan0"]
     bus = choose_bus("auto", is_up=lambda name: False)  # vcan0 down or missing
-    assert bus.kind == "udp_multicast" and bus.ttl == 1 and bus.spec == bus.name, bus
+    assert bus.kind == "udp_multicast" and bus.ttl == 0 and bus.spec == bus.name + ",ttl=0", bus
     assert bus.group.startswith("239.74.") and bus.port in SESSION_PORTS, bus
     own_port = SESSION_PORTS.start + os.getpid() % len(SESSION_PORTS)  # the pid's, unless something has it
     assert bus.port == own_port or not port_is_free(own_port), bus
@@ -142,6 +142,6 @@ def test_auto_gives_two_sessions_at_once_a_udp_multicast_bus_each(own_namespace,
     outs = [proc.communicate(timeout=300)[0] for proc in sessions]
     assert [proc.returncode for proc in sessions] == [0, 0], outs
     for out in outs:
-        assert ", chosen by auto: no vcan0 up, so a group of this session's own, TTL 1\n" in out, out
+        assert ", chosen by auto: no vcan0 up, so a group of this session's own, TTL 0 (never leaves the machine)\n" in out, out
     buses = [Bus.parse((tmp_path / d / "bus").read_text()) for d in ("a", "b")]
     assert all(b.kind == "udp_multicast" for b in buses) and buses[0].port != buses[1].port, buses

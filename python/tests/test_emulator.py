@@ -1,6 +1,7 @@
 """The launcher: it returns once every node has booted, stops with status 0 (or by signals when quit is not
 possible), reports a failed start with the log, finds its program, runs several buses, keeps nvm_dir."""
 import os
+import tempfile
 import re
 import signal
 import struct
@@ -75,15 +76,16 @@ def test_stop_of_a_hung_emulator_ends_with_sigkill():
     (["nosuch:5"], "vcan0", 2, "canopen-emu: unknown device 'nosuch'; known devices:"),
     (["sds:16"], "vcan9", 1, "canopen-emu: interface vcan9 does not exist; create a virtual one with:"),
 ])
-def test_a_failed_start_raises_with_the_log(nodes, interface, status, message):
-    before = set(os.listdir(os.environ.get("TMPDIR", "/tmp")))
+def test_a_failed_start_raises_with_the_log(nodes, interface, status, message, monkeypatch, tmp_path):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # its work directory in a folder of the test's own
+    before = set(os.listdir(tmp_path))
     with pytest.raises(EmulatorError) as e:
         Emulator(interface=interface, nodes=nodes)
     assert e.value.returncode == status
     assert message in e.value.log
     assert f"canopen-emu exited with status {status} before its control socket answered" in str(e.value)
     assert message in str(e.value)
-    left = {name for name in set(os.listdir(os.environ.get("TMPDIR", "/tmp"))) - before
+    left = {name for name in set(os.listdir(tmp_path)) - before
             if name.startswith("canopen-emu-")}
     assert not left  # its directory went with it
 

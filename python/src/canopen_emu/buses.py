@@ -157,7 +157,8 @@ def port_is_free(port: int) -> bool:
 
 
 def session_udp_bus(pid: Optional[int] = None, *, probe: bool = True) -> Bus:
-    """A udp_multicast bus of this process's own, TTL 1: port 20000 + pid % 10000 (the next free one when that is
+    """A udp_multicast bus of this process's own, TTL 0 (its datagrams are delivered on this machine and never sent
+    out on a link: a test session's bus stays on the machine that runs it): port 20000 + pid % 10000 (the next free one when that is
     taken), so that two sessions on one machine never share it (python-can's sockets bind the port, not the group,
     and take every group joined on it), and a group 239.74.X.Y of the pid and random bits, so that sessions on two
     machines of one link seldom share one."""
@@ -173,7 +174,7 @@ def session_udp_bus(pid: Optional[int] = None, *, probe: bool = True) -> Bus:
             raise OSError("no free UDP port in 20000..29999 for the session's udp_multicast bus")
     salt = int.from_bytes(os.urandom(2), "big")
     x, y = ((pid >> 8) ^ (salt >> 8)) & 0xFF, (pid ^ salt) & 0xFF
-    return Bus.parse(f"udp_multicast:239.74.{x}.{y}:{port}")
+    return Bus.parse(f"udp_multicast:239.74.{x}.{y}:{port},ttl=0")
 
 
 def choose_bus(choice: str = "auto", is_up: Callable[[str], bool] = interface_is_up) -> Bus:

@@ -7,7 +7,7 @@ Options (command line, or the ini file):
   PATH);
 - ``--canopen-emu-bus BUS`` (repeatable) / ini ``canopen_emu_bus``: the bus(es) of the emulators, as canopen-emu's
   ``-i`` names them (``vcan0``, ``socketcan:can1``, ``udp_multicast:239.74.163.2:43113``, docs/buses.md), or ``auto``
-  (the default): vcan0 where it exists and is up, else a udp_multicast group and port of this session's own, TTL 1
+  (the default): vcan0 where it exists and is up, else a udp_multicast group and port of this session's own, TTL 0
   (canopen_emu.buses.session_udp_bus: two sessions on one machine, pytest-xdist's workers too, never share it);
   ``--canopen-emu-interface`` / ini ``canopen_emu_interface`` are its older names;
 - ``--canopen-emu-web HOST:PORT`` / ini ``canopen_emu_web``: every emulator the fixtures start serves the live view
@@ -101,7 +101,7 @@ def pytest_configure(config: pytest.Config) -> None:
     chosen_by = ""
     if "auto" in choices:
         chosen_by = ("auto: vcan0 is up" if interface_is_up("vcan0") else
-                     "auto: no vcan0 up, so a group of this session's own, TTL 1")
+                     "auto: no vcan0 up, so a group of this session's own, TTL 0 (never leaves the machine)")
     web = config.getoption("canopen_emu_web") or str(config.getini("canopen_emu_web")) or None
     config.stash[SETTINGS] = Settings(executable=executable, buses=buses, chosen_by=chosen_by, web=web,
                                       log_lines=int(config.getini("canopen_emu_log_lines")),
