@@ -1,8 +1,11 @@
 /* Bytes waiting for a reader: see emu_buffer.h. */
+#define _GNU_SOURCE /* ssize_t and POSIX calls, as in every file of the Linux program */
 #include "emu_buffer.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 
 bool byte_buffer_append(byte_buffer_t *b, const char *data, size_t n, size_t max)
 {
@@ -51,4 +54,16 @@ void byte_buffer_free(byte_buffer_t *b)
     b->data = NULL;
     b->len = 0U;
     b->cap = 0U;
+}
+
+bool byte_buffer_send(byte_buffer_t *b, int fd)
+{
+    while (b->len > 0U) {
+        const ssize_t w = send(fd, b->data, b->len, MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (w < 0) {
+            return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+        }
+        byte_buffer_consume(b, (size_t)w);
+    }
+    return true;
 }

@@ -28,4 +28,8 @@ char *byte_buffer_take(byte_buffer_t *b, size_t *len);
 
 void byte_buffer_free(byte_buffer_t *b);
 
+/** Sends what the buffer holds to the socket fd as far as it takes it without blocking (the bytes sent are
+ *  consumed). false when the peer went away (EPIPE, ECONNRESET...); true otherwise, also when some bytes wait. */
+bool byte_buffer_send(byte_buffer_t *b, int fd);
+
 #endif /* EMU_BUFFER_H */

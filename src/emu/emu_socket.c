@@ -147,15 +147,8 @@ static void client_write(void *ctx, const char *line, size_t len)
 
 static void client_flush(control_client_t *c)
 {
-    while (c->out.len > 0U && !c->gone) {
-        const ssize_t w = send(c->fd, c->out.data, c->out.len, MSG_NOSIGNAL | MSG_DONTWAIT);
-        if (w < 0) {
-            if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
-                c->gone = true; /* EPIPE, ECONNRESET: the client went away */
-            }
-            return;
-        }
-        byte_buffer_consume(&c->out, (size_t)w);
+    if (!c->gone && !byte_buffer_send(&c->out, c->fd)) {
+        c->gone = true; /* EPIPE, ECONNRESET: the client went away */
     }
 }
 

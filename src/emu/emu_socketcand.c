@@ -67,15 +67,8 @@ static void client_flush(socketcand_client_t *c, co_time_us_t now)
     if (now < c->hold_until) {
         return; /* rawmode's "< ok >" left alone; its frames follow after the hold */
     }
-    while (c->out.len > 0U && !c->gone) {
-        const ssize_t w = send(c->fd, c->out.data, c->out.len, MSG_NOSIGNAL | MSG_DONTWAIT);
-        if (w < 0) {
-            if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
-                c->gone = true; /* EPIPE, ECONNRESET: the client went away */
-            }
-            return;
-        }
-        byte_buffer_consume(&c->out, (size_t)w);
+    if (!c->gone && !byte_buffer_send(&c->out, c->fd)) {
+        c->gone = true; /* EPIPE, ECONNRESET: the client went away */
     }
 }
 
