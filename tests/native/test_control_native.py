@@ -23,10 +23,20 @@ class Program:
         self.tmp_path = tmp_path
         self.bus, self.proc = start_program(tmp_path, "--nvm-dir", str(tmp_path / "nvm"), *args)
         self.err_lines = []
-        threading.Thread(target=lambda: self.err_lines.extend(self.proc.stderr), daemon=True).start()
-        threading.Thread(target=lambda: [None for _ in self.proc.stdout], daemon=True).start()
+        self.readers = [threading.Thread(target=lambda: self.err_lines.extend(self.proc.stderr), daemon=True),
+                        threading.Thread(target=lambda: [None for _ in self.proc.stdout], daemon=True)]
+        for reader in self.readers:
+            reader.start()
         if accept:
             self.bus.accept()
+
+    def exit_status(self, timeout=20):
+        """The program's exit status once it has ended and all it wrote has been read (the readers are threads:
+        without the join, the log of a program that has just exited may still be on its way)."""
+        status = self.proc.wait(timeout=timeout)
+        for reader in self.readers:
+            reader.join(timeout=timeout)
+        return status
 
     def log(self):
         return "".join(self.err_lines)
@@ -50,11 +60,11 @@ class Program:
         try:
             self.proc.stdin.write("quit\n")
             self.proc.stdin.flush()
-            self.proc.wait(timeout=20)
+            self.exit_status()
         finally:
             if self.proc.poll() is None:
                 self.proc.kill()
-                self.proc.wait()
+                self.exit_status()
             self.bus.close() if hasattr(self.bus, "close") else None
         log = self.log()
         assert not any(mark in log for mark in SANITIZER_MARKS), log[-6000:]
@@ -203,7 +213,7 @@ def test_a_tcp_socket_with_a_token_takes_nothing_before_it(tmp_path, token_file)
 
 def test_a_remote_tcp_socket_needs_a_token(tmp_path, token_file):
     program = Program(tmp_path, "--control-tcp", "0.0.0.0:0", "sds:17", accept=False)
-    assert program.proc.wait(timeout=20) == 1
+    assert program.exit_status() == 1
     assert ("--control-tcp 0.0.0.0:" in program.log() and "is not a loopback address: give --control-token-file FILE"
             in program.log()), program.log()
     program = Program(tmp_path, "--control-tcp", "0.0.0.0:0", "--control-token-file", str(token_file), "sds:17")
@@ -222,13 +232,13 @@ def test_a_bad_token_file_stops_the_start(tmp_path, content, why):
     if content is not None:
         f.write_text(content)
     program = Program(tmp_path, "--control-tcp", "127.0.0.1:0", "--control-token-file", str(f), "sds:17", accept=False)
-    assert program.proc.wait(timeout=20) == 1
+    assert program.exit_status() == 1
     assert f"--control-token-file {f}: " in program.log() and why in program.log(), program.log()
 
 
 def test_a_token_file_without_a_tcp_socket_is_an_error(tmp_path, token_file):
     program = Program(tmp_path, "--control-token-file", str(token_file), "sds:17", accept=False)
-    assert program.proc.wait(timeout=20) == 1
+    assert program.exit_status() == 1
     assert "--control-token-file is the token of --control-tcp, which is not given" in program.log()
 
 

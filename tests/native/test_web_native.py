@@ -52,8 +52,10 @@ class WebEmulator:
     def __init__(self, tmp_path, web="127.0.0.1:0", nodes=NODES):
         self.bus, self.proc = start_program(tmp_path, "--nvm-dir", str(tmp_path / "nvm"), "--web", web, *nodes)
         self.err_lines, self.out_lines = [], []
-        for stream, lines in ((self.proc.stderr, self.err_lines), (self.proc.stdout, self.out_lines)):
-            threading.Thread(target=lambda s=stream, l=lines: l.extend(s), daemon=True).start()
+        self.readers = [threading.Thread(target=lambda s=stream, l=lines: l.extend(s), daemon=True)
+                        for stream, lines in ((self.proc.stderr, self.err_lines), (self.proc.stdout, self.out_lines))]
+        for reader in self.readers:
+            reader.start()
         self.bus.accept()
         line = self.wait_log("web: listening on http://")
         self.address, port = re.search(r"web: listening on http://(.+):(\d+)/$", line).groups()
@@ -132,7 +134,8 @@ class WebEmulator:
             raise AssertionError("canopen-emu did not end after quit:\n" + self.log()[-3000:])
         finally:
             self.bus.close()
-        time.sleep(0.1)  # the pump threads take the last lines
+        for reader in self.readers:  # the last lines, read once the program has ended
+            reader.join(timeout=timeout)
         assert not any(mark in self.log() for mark in SANITIZER_MARKS), self.log()[-6000:]
         return self.proc.returncode
 
