@@ -1,6 +1,10 @@
-"""Fixtures of the vcan integration suite: a real SocketCAN bus (vcan0, made by tools/vcan-run), the
-canopen-emu program started with the devices a test asks for, python-canopen as the master, and a raw
-capture of every frame on the bus with its time."""
+"""Fixtures of the integration suite: the bus under test, the canopen-emu program started with the devices a test
+asks for, python-canopen as the master, and a capture of every frame on the bus with its time.
+
+The bus is CO_TEST_BUS: `socketcan` (vcan0, made by tools/vcan-run: tests/integration/CMakeLists.txt runs the tests
+marked socketcan so, the kernel's own behaviour) or `udp_multicast` (python-can's udp_multicast on loopback, TTL 0,
+inside tests/udp/netns-run's network namespace of its own; every test not marked socketcan runs so, natively, no
+User-Mode Linux). Time stamps are the kernel's on both: SocketCAN's receive time, SO_TIMESTAMPNS of the datagram."""
 import os
 import socket
 import subprocess
@@ -9,12 +13,26 @@ import time
 from pathlib import Path
 
 import can
+import can.interfaces.udp_multicast
+import can.interfaces.udp_multicast.utils
 import canopen
 import pytest
 
 SRC = Path(os.environ.get("CO_SOURCE_DIR", Path(__file__).resolve().parents[2]))
 EMU = os.environ.get("CO_EMU", "")
+SANITIZER_MARKS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:",
+                   "SUMMARY: UndefinedBehaviorSanitizer")
+BUS_KIND = os.environ.get("CO_TEST_BUS", "socketcan")
 IFACE = os.environ.get("CO_VCAN_IFACE", "vcan0")
+UDP_GROUP, UDP_PORT = "239.74.163.2", 43113  # python-can's defaults: the test's own namespace has nobody else
+if BUS_KIND == "socketcan":
+    BUS_NAME = IFACE                              # the bus's name in the emulator's log, events and answers
+    BUS_ARG = IFACE                               # canopen-emu's -i
+elif BUS_KIND == "udp_multicast":
+    BUS_NAME = f"udp_multicast:{UDP_GROUP}:{UDP_PORT}"
+    BUS_ARG = f"{BUS_NAME},ttl=0"
+else:
+    raise RuntimeError(f"CO_TEST_BUS={BUS_KIND!r}: socketcan or udp_multicast")
 EDS = {"pro-ionizer": SRC / "od/pro-ionizer.eds", "sds": SRC / "od/sds.eds",
        "buerkert": SRC / "od/buerkert-flow-controller.eds"}
 
@@ -121,9 +139,57 @@ def deep_receive_buffer(bus, size=4 << 20):
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, size)
 
 
+class LoopbackUdpBus(can.interfaces.udp_multicast.UdpMulticastBus):
+    """python-can's udp_multicast bus as a SocketCAN socket behaves: it does not receive what it sent itself.
+
+    python-can's bus sends from the socket that receives (group port, multicast loop on) and so reads its own
+    datagrams back, a frame a vcan socket never sees; a test that sends and captures on one bus would count them.
+    This one sends from a socket of its own port (TTL 0: nothing leaves the machine) and drops datagrams from it."""
+
+    def __init__(self, channel=UDP_GROUP, port=UDP_PORT, **kwargs):
+        super().__init__(channel=channel, port=port, hop_limit=0, **kwargs)
+        self.socket = self._multicast._socket  # for deep_receive_buffer
+        self._tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self._tx.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, 0)
+        self._tx.bind(("127.0.0.1", 0))
+        self._own_port = self._tx.getsockname()[1]
+        self._group = (channel, port)
+
+    def _recv_internal(self, timeout):
+        result = self._multicast.recv(timeout)
+        if not result or result[1][1] == self._own_port:
+            return None, False
+        data, _, stamp = result
+        return can.interfaces.udp_multicast.utils.unpack_message(data, replace={"timestamp": stamp},
+                                                                 check=True), False
+
+    def send(self, msg, timeout=None):
+        self.send_datagram(can.interfaces.udp_multicast.utils.pack_message(msg))
+
+    def send_datagram(self, data):
+        """A datagram as it is, a malformed one too (tests of bad input)."""
+        self._tx.sendto(data, self._group)
+
+    def shutdown(self):
+        super().shutdown()
+        self._tx.close()
+
+
+def open_bus(receive_own_messages=False):
+    """A python-can bus on the bus under test."""
+    if BUS_KIND == "socketcan":
+        return can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=receive_own_messages)
+    assert not receive_own_messages, "udp_multicast: a bus does not receive its own frames"
+    return LoopbackUdpBus()
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "socketcan: tests SocketCAN itself (the kernel interface): run on vcan0 only")
+
+
 @pytest.fixture
 def capture():
-    bus = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
+    bus = open_bus()
     deep_receive_buffer(bus)
     cap = Capture()
     notifier = can.Notifier(bus, [cap], timeout=0.05)
@@ -135,7 +201,7 @@ def capture():
 class Emulator:
     def __init__(self, args, nvm_dir, control=True):
         assert EMU, "CO_EMU (path of canopen-emu) is not set"
-        self.args = [EMU, "-i", IFACE, "--nvm-dir", str(nvm_dir)] + (["--control", "-"] if control else []) + list(args)
+        self.args = [EMU, "-i", BUS_ARG, "--nvm-dir", str(nvm_dir)] + (["--control", "-"] if control else []) + list(args)
         self.proc = subprocess.Popen(self.args, stdin=subprocess.PIPE if control else subprocess.DEVNULL,
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, bufsize=1)
         self.out_lines, self.err_lines = [], []
@@ -225,12 +291,16 @@ def emulator(request, tmp_path):
     yield start
     for emu in started:
         emu.stop()
+    # the suite also runs with canopen-emu built with ASan+UBSan (tools/run-tests): a report fails the test
+    for emu in started:
+        reports = [line for line in emu.err_lines if any(mark in line for mark in SANITIZER_MARKS)]
+        assert not reports, emu.describe(200)
 
 
 @pytest.fixture
 def network():
-    net = canopen.Network()
-    net.connect(interface="socketcan", channel=IFACE)
+    net = canopen.Network(open_bus())
+    net.connect()
     deep_receive_buffer(net.bus)
     yield net
     net.disconnect()

@@ -9,6 +9,7 @@ here are the bus's, not this test's scheduling. Changing the interface needs roo
 tools/vcan-run gives that in User-Mode Linux; natively, run the suite as root."""
 import errno
 import os
+import queue
 import re
 import select
 import signal
@@ -21,7 +22,9 @@ import time
 import canopen
 import pytest
 
-from conftest import EDS, IFACE, Deadline
+import can
+
+from conftest import BUS_KIND, EDS, IFACE, Deadline, LoopbackUdpBus, deep_receive_buffer
 
 CAN_FMT = "=IB3x8s"
 SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)
@@ -85,15 +88,29 @@ def abort_answer(index, sub, code):
 
 class RawCan:
     """A CAN_RAW socket on IFACE that receives only the given identifiers (kernel filter), with a deep receive
-    buffer and kernel receive timestamps (CLOCK_REALTIME, comparable with time.time())."""
+    buffer and kernel receive timestamps (CLOCK_REALTIME, comparable with time.time()). On udp_multicast
+    (CO_TEST_BUS) the same calls go through the test's udp bus: identifiers filtered here, the datagrams' kernel
+    receive times (SO_TIMESTAMPNS, the same clock)."""
 
     def __init__(self, ids=()):
         self.ids = tuple(ids)
         self.sock = None
+        self.udp = None
         self.enobufs = 0
         self.open()
 
     def open(self):
+        if BUS_KIND != "socketcan":
+            # The kernel cannot filter datagrams by CAN-ID: a thread takes every datagram as it comes and keeps
+            # those asked for, as the kernel filter and the deep buffer do on SocketCAN (a test that reads only at
+            # its end would otherwise lose most of them in a buffer full of other frames).
+            self.udp = LoopbackUdpBus()
+            deep_receive_buffer(self.udp)
+            self.sock = self.udp.socket
+            self.queue = queue.SimpleQueue()
+            self.reader = threading.Thread(target=self._read_udp, daemon=True)
+            self.reader.start()
+            return
         s = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
         try:
             if self.ids:
@@ -111,13 +128,31 @@ class RawCan:
             raise
         self.sock = s
 
+    def _read_udp(self):
+        udp = self.udp
+        while udp is self.udp:
+            try:
+                msg = udp.recv(0.05)
+            except (OSError, ValueError, can.CanError):  # closed
+                return
+            if msg is not None and not msg.is_extended_id and not msg.is_remote_frame and (
+                    not self.ids or msg.arbitration_id in self.ids):
+                self.queue.put((msg.timestamp, msg.arbitration_id, bytes(msg.data)))
+
     def close(self):
+        if self.udp is not None:
+            udp, self.udp, self.sock = self.udp, None, None
+            self.reader.join()
+            udp.shutdown()
         if self.sock is not None:
             self.sock.close()
             self.sock = None
 
     def send(self, can_id, data, timeout=REQUEST_TIMEOUT_S):
         """Sends one frame; a full queue (ENOBUFS) is retried, as the emulator must do too."""
+        if self.udp is not None:
+            self.udp.send(can.Message(arbitration_id=can_id, is_extended_id=False, data=bytes(data)))
+            return
         frame = struct.pack(CAN_FMT, can_id, len(data), bytes(data).ljust(8, b"\0"))
         deadline = Deadline(timeout)
         while True:
@@ -133,6 +168,11 @@ class RawCan:
     def recv(self, timeout):
         """(kernel time, id, data) of the next frame, or None after timeout. Raises OSError for the socket's
         pending error (ENETDOWN when the interface went down, ENODEV when it was deleted)."""
+        if self.udp is not None:
+            try:
+                return self.queue.get(timeout=max(0.0, timeout)) if timeout > 0 else self.queue.get_nowait()
+            except queue.Empty:
+                return None
         ready, _, _ = select.select([self.sock], [], [], max(0.0, timeout))
         if not ready:
             return None
@@ -387,6 +427,7 @@ DOWN_TIMES_S = (0.05, 0.4, 0.01, 2.0, 0.2, 0.1, 0.7, 0.03, 1.5, 0.3, 0.15, 0.02)
 UP_HOLD_S = 0.3  # up time after recovery before the next outage: requests in it must all be answered
 
 
+@pytest.mark.socketcan
 @needs_admin
 def test_down_up_cycles_while_polling(emulator):
     emu, pollers = start_polled(emulator)
@@ -434,6 +475,7 @@ def test_down_up_cycles_while_polling(emulator):
 GONE_CYCLES = ((1.5, 0.0), (0.1, 0.0), (0.8, 0.7), (0.6, 0.0))
 
 
+@pytest.mark.socketcan
 @needs_admin
 def test_interface_deleted_and_readded_while_polling(emulator):
     emu, pollers = start_polled(emulator)
@@ -691,6 +733,7 @@ CONGESTED = list(range(0x60, 0x74))  # 20 nodes whose heartbeats go out at the s
 CONGESTION_S = 4.0
 
 
+@pytest.mark.socketcan
 @needs_admin
 def test_full_transmit_queue_loses_no_frame(emulator):
     # vcan itself never reports a full queue: it has no queueing discipline ("noqueue") and delivers each frame
@@ -755,6 +798,7 @@ def test_full_transmit_queue_loses_no_frame(emulator):
 
 # ---- CAN error frames -----------------------------------------------------------------------------------------
 
+@pytest.mark.socketcan
 def test_error_frames_are_logged_and_ignored(emulator):
     # A controller reports bus errors as error frames (CAN_ERR_FLAG set); on vcan a program can send one. The
     # emulator logs each with its class and data bytes 1-4 and gives none to a node. This one's low 11 bits
@@ -781,6 +825,7 @@ def test_error_frames_are_logged_and_ignored(emulator):
 ERROR_FLOOD = 2000  # a lone node on a real bus, unacknowledged, gets about this many a second
 
 
+@pytest.mark.socketcan
 def test_an_error_frame_flood_is_summed_up_not_logged_line_by_line(emulator):
     # Ten error frames a second are logged one line each (SOCKETCAN_ERROR_LINES); the rest of each second goes into
     # one summary line, so a flood cannot bury the log. Exact: the lines and the summaries account for every error
@@ -824,6 +869,7 @@ def test_an_error_frame_flood_is_summed_up_not_logged_line_by_line(emulator):
 OVERFLOW_REQUESTS = 3000  # far more than a default receive buffer holds (a few hundred frames)
 
 
+@pytest.mark.socketcan
 def test_frames_lost_in_a_full_receive_buffer_are_counted_and_reported(emulator):
     # An emulator that falls behind (here: stopped with SIGSTOP, as a scheduler or a debugger may stop it) while a
     # master keeps sending loses frames in the kernel, which drops what no longer fits into the socket's receive

@@ -6,7 +6,6 @@ import os
 import re
 import socket
 import stat
-import struct
 import subprocess
 import sys
 import time
@@ -14,7 +13,7 @@ import time
 import can
 import pytest
 
-from conftest import EMU, IFACE, SRC, Deadline
+from conftest import BUS_ARG, BUS_NAME, EMU, IFACE, SRC, Deadline, open_bus
 
 sys.path.insert(0, str(SRC / "tests/support"))
 from control_schema import VALIDATE_REQUEST, check_schema  # noqa: E402
@@ -115,14 +114,14 @@ def test_text_and_json_on_one_connection(emulator, tmp_path):
     before = time.time()
     hello = c.request(id=4, cmd="hello")
     after = time.time()
-    assert hello["protocol"] == 1 and hello["program"] == "canopen-emu" and hello["buses"] == [IFACE], hello
+    assert hello["protocol"] == 1 and hello["program"] == "canopen-emu" and hello["buses"] == [BUS_NAME], hello
     # the two clocks read together: the wall clock within the request's round trip, the events' clock since the
     # start (this test's emulator started less than a minute ago)
     assert before * 1e6 - 1000 <= hello["clock"]["unix_us"] <= after * 1e6 + 1000, (before, hello["clock"], after)
     assert 0 < hello["clock"]["time_us"] < 60_000_000, hello["clock"]
     listed = c.request(id=5, cmd="list")["nodes"]
     assert [(n["node"], n["device"], n["state"], n["bus"]) for n in listed] == [
-        (16, "sds", "PRE-OPERATIONAL", IFACE), (17, "buerkert", "PRE-OPERATIONAL", IFACE)]
+        (16, "sds", "PRE-OPERATIONAL", BUS_NAME), (17, "buerkert", "PRE-OPERATIONAL", BUS_NAME)]
     shown = c.request(id=6, cmd="emcy", node=17, args=["0x3210", 5])
     assert shown["ok"] and shown["lines"] == ["node 17: emcy 0x3210: done"], shown
     show = c.request(id=7, cmd="show", node=17)["nodes"][0]
@@ -269,11 +268,11 @@ def test_events_carry_the_emulators_time(emulator, tmp_path):
     c = Client(path)
     assert c.request(id=1, cmd="subscribe", events=["nmt", "boot-up", "emcy", "sdo-abort"], nodes=[16]) == {
         "id": 1, "ok": True, "events": ["nmt", "boot-up", "emcy", "sdo-abort"]}
-    bus = can.Bus(channel=IFACE, interface="socketcan")
+    bus = open_bus()
     try:
         bus.send(can.Message(arbitration_id=0x000, data=[0x01, 0x00], is_extended_id=False))  # start all
         ev = c.event("nmt", node=16)
-        assert ev["from"] == "PRE-OPERATIONAL" and ev["to"] == "OPERATIONAL" and ev["bus"] == IFACE, ev
+        assert ev["from"] == "PRE-OPERATIONAL" and ev["to"] == "OPERATIONAL" and ev["bus"] == BUS_NAME, ev
         assert isinstance(ev["time_us"], int) and ev["time_us"] > 0
         bus.send(can.Message(arbitration_id=0x610, data=[0x40, 0x55, 0x55, 0, 0, 0, 0, 0], is_extended_id=False))
         ev = c.event("sdo-abort", node=16)
@@ -318,7 +317,7 @@ def test_frame_events_follow_the_cob_id_filter(emulator, tmp_path):
     assert c.line() == "subscribed"
     lines = [c.line(2.0) for _ in range(3)]
     for line in lines:
-        assert re.fullmatch(rf"event frame \d+\.\d{{6}} node 17@{IFACE} \(buerkert\): tx 711#7F", line), lines
+        assert re.fullmatch(rf"event frame \d+\.\d{{6}} node 17@{BUS_NAME} \(buerkert\): tx 711#7F", line), lines
     stamps = [float(line.split()[2]) for line in lines]
     assert all(0.45 < b - a < 0.55 for a, b in zip(stamps, stamps[1:])), stamps  # the 500 ms heartbeat
     c.close()
@@ -326,7 +325,7 @@ def test_frame_events_follow_the_cob_id_filter(emulator, tmp_path):
     # answers and its heartbeats, not the requests
     j = Client(path)
     assert j.request(id=1, cmd="subscribe", events=["frame"], frames=["0x591", "0x700/0x780"])["ok"]
-    bus = can.Bus(channel=IFACE, interface="socketcan")
+    bus = open_bus()
     try:
         bus.send(can.Message(arbitration_id=0x611, data=[0x40, 0x18, 0x10, 1, 0, 0, 0, 0], is_extended_id=False))
         got = [j.event("frame", timeout=2.0) for _ in range(3)]
@@ -362,14 +361,13 @@ def test_extended_frames_are_marked_and_taken_by_extended_filters_only(emulator,
     for bad in ("0x800", "0x18FF1234", "x", "0x181/0x7FFx", "0x", "0X/0x0"):
         answer = extended.request(id=2, cmd="subscribe", events=["frame"], frames=bad)
         assert answer["ok"] is False and "COB-IDx[/MASK]" in answer["error"], (bad, answer)
-    raw = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
+    bus = open_bus()
     try:
-        raw.bind((IFACE,))
-        for can_id, data in ((0x181 | socket.CAN_EFF_FLAG, b"\x11\x22"), (0x18FF1234 | socket.CAN_EFF_FLAG, b"\x44"),
-                             (0x181, b"\x33")):  # the 11-bit frame last: an event of a frame taken wrongly comes first
-            raw.send(struct.pack("=IB3x8s", can_id, len(data), data.ljust(8, b"\0")))
+        for can_id, eff, data in ((0x181, True, b"\x11\x22"), (0x18FF1234, True, b"\x44"),
+                                  (0x181, False, b"\x33")):  # the 11-bit frame last: a frame taken wrongly comes first
+            bus.send(can.Message(arbitration_id=can_id, is_extended_id=eff, data=data))
     finally:
-        raw.close()
+        bus.shutdown()
     first, second = both.event("frame"), both.event("frame")
     assert {k: first[k] for k in ("dir", "id", "data", "eff", "text")} == {
         "dir": "rx", "id": 0x181, "data": "1122", "eff": True, "text": "rx 00000181#1122"}, first
@@ -379,8 +377,8 @@ def test_extended_frames_are_marked_and_taken_by_extended_filters_only(emulator,
     ext = extended.event("frame")
     assert (ext["id"], ext["eff"], ext["text"]) == (0x18FF1234, True, "rx 18FF1234#44"), ext
     lines = [text.line(2.0) for _ in range(2)]
-    assert re.fullmatch(rf"event frame \d+\.\d{{6}} {IFACE}: rx 00000181#1122", lines[0]), lines
-    assert re.fullmatch(rf"event frame \d+\.\d{{6}} {IFACE}: rx 181#33", lines[1]), lines
+    assert re.fullmatch(rf"event frame \d+\.\d{{6}} {BUS_NAME}: rx 00000181#1122", lines[0]), lines
+    assert re.fullmatch(rf"event frame \d+\.\d{{6}} {BUS_NAME}: rx 181#33", lines[1]), lines
     for c in (text, base, both, extended):
         c.close()
 
@@ -443,7 +441,7 @@ def test_clients_that_misbehave_cost_nothing(emulator, tmp_path):
         pass
     assert sent < 100000, "the emulator read all of a client that does not read its answers"
     assert c.request(id=1, cmd="get", node=16, object="0x1017")["value"] == 5000
-    bus = can.Bus(channel=IFACE, interface="socketcan")
+    bus = open_bus()
     try:
         for k in range(30000):  # ~45 bytes of event each
             while True:
@@ -465,7 +463,7 @@ def test_clients_that_misbehave_cost_nothing(emulator, tmp_path):
 
 def test_heartbeats_go_on_while_a_client_floods(emulator, tmp_path):
     emu, path = start(emulator, tmp_path, "buerkert:17")
-    bus = can.Bus(channel=IFACE, interface="socketcan")
+    bus = open_bus()
     c = Client(path)
     try:
         end = time.monotonic() + 3.0
@@ -515,7 +513,7 @@ def test_heartbeats_hold_under_64_busy_clients(emulator, tmp_path):
     emu, path = start(emulator, tmp_path, "buerkert:17", "sds:18")
     setup = Client(path)
     assert setup.request(id=1, cmd="set", node=17, object="0x1017", value=200)["ok"]
-    bus = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
+    bus = open_bus()
     request = b'{"cmd":"objects","node":17,"values":true}\n'
     clients = [Client(path) for _ in range(63)] + [setup]
     try:
@@ -575,12 +573,12 @@ def test_tcp_on_loopback_and_with_a_token_elsewhere(emulator, tmp_path):
 def test_socket_path_problems_stop_the_start(emulator, tmp_path):
     regular = tmp_path / "file"
     regular.write_text("x")
-    r = subprocess.run([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path), "--control-socket", str(regular), "sds:16"],
+    r = subprocess.run([EMU, "-i", BUS_ARG, "--nvm-dir", str(tmp_path), "--control-socket", str(regular), "sds:16"],
                        capture_output=True, text=True, timeout=10)
     assert r.returncode == 1 and "the path exists and is not a socket" in r.stderr, r.stderr
     # a socket left by a killed emulator is replaced; a live one is not taken over
     emu, path = start(emulator, tmp_path, "sds:16")
-    r = subprocess.run([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path / "2"), "--control-socket", path, "sds:17"],
+    r = subprocess.run([EMU, "-i", BUS_ARG, "--nvm-dir", str(tmp_path / "2"), "--control-socket", path, "sds:17"],
                        capture_output=True, text=True, timeout=10)
     assert r.returncode == 1 and "is in use by another program" in r.stderr, r.stderr
     emu.proc.kill()
@@ -589,11 +587,12 @@ def test_socket_path_problems_stop_the_start(emulator, tmp_path):
     emu2 = emulator("--control-socket", path, "sds:16", nvm_dir=tmp_path / "3")
     assert emu2.log_contains(f"control: listening on unix {path}", timeout=3), emu2.err_lines
     assert Client(path).request(id=1, cmd="hello")["ok"]
-    r = subprocess.run([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path), "--control-tcp", "nonsense", "sds:16"],
+    r = subprocess.run([EMU, "-i", BUS_ARG, "--nvm-dir", str(tmp_path), "--control-tcp", "nonsense", "sds:16"],
                        capture_output=True, text=True, timeout=10)
     assert r.returncode == 2 and "--control-tcp takes HOST:PORT" in r.stderr, r.stderr
 
 
+@pytest.mark.socketcan
 def test_interface_troubles_are_events(emulator, tmp_path):
     emu, path = start(emulator, tmp_path, "buerkert:17")
     c = Client(path)

@@ -25,7 +25,7 @@ import can
 import canopen
 import pytest
 
-from conftest import EDS, IFACE, Capture, Deadline, deep_receive_buffer
+from conftest import EDS, Capture, Deadline, deep_receive_buffer, open_bus
 
 SAVE = struct.pack("<I", 0x65766173)  # "save" for 0x1010:01
 
@@ -51,11 +51,11 @@ def download_frame(index, sub, data):
 
 
 class Bus:
-    """The test's own view of vcan0: a sending socket and a capture of every frame in arrival order."""
+    """The test's own view of the bus: a sending socket and a capture of every frame in arrival order."""
 
     def __init__(self):
-        self.tx = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
-        self.rx = can.Bus(channel=IFACE, interface="socketcan", receive_own_messages=False)
+        self.tx = open_bus()
+        self.rx = open_bus()
         deep_receive_buffer(self.rx)
         self.cap = Capture()
         self.notifier = can.Notifier(self.rx, [self.cap], timeout=0.05)

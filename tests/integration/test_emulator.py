@@ -252,9 +252,13 @@ def run_emu(*args, timeout=10):
     return subprocess.run([EMU, *args], capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
 
 
-def test_user_errors_have_actionable_messages(tmp_path):
+@pytest.mark.socketcan
+def test_a_missing_can_interface_says_how_to_make_one(tmp_path):
     r = run_emu("-i", "vcan9", "--nvm-dir", str(tmp_path), "sds")
     assert r.returncode == 1 and "ip link add dev vcan9 type vcan" in r.stderr
+
+
+def test_user_errors_have_actionable_messages(tmp_path):
     r = run_emu("--nvm-dir", str(tmp_path), "gizmo")
     assert r.returncode == 2 and "unknown device 'gizmo'" in r.stderr and "pro-ionizer" in r.stderr
     r = run_emu("--nvm-dir", str(tmp_path), "sds:0")
@@ -291,6 +295,7 @@ def test_an_empty_nvm_dir_or_interface_name_is_refused(tmp_path):
                                   "virtual:NAME), not an empty one") in r.stderr, r.stderr
 
 
+@pytest.mark.socketcan
 def test_an_interface_that_is_not_can_is_named_so(tmp_path):
     # it said "cannot bind to lo: No such device"
     r = run_emu("-i", "lo", "--nvm-dir", str(tmp_path), "sds")

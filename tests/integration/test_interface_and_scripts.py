@@ -6,7 +6,7 @@ import time
 import can
 import pytest
 
-from conftest import EMU, SRC, Deadline
+from conftest import BUS_ARG, EMU, SRC, Deadline
 
 
 def ip(*args):
@@ -17,6 +17,7 @@ def have_vcan1():
     return subprocess.run(["ip", "link", "show", "vcan1"], capture_output=True).returncode == 0
 
 
+@pytest.mark.socketcan
 def test_interface_down_and_up_is_reported_once_and_survived(emulator):
     # No master sockets here: theirs would report ENETDOWN too; the point is the emulator's.
     emu = emulator("buerkert:0x60")
@@ -43,6 +44,7 @@ def test_interface_down_and_up_is_reported_once_and_survived(emulator):
     assert emu.proc.poll() is None
 
 
+@pytest.mark.socketcan
 @pytest.mark.skipif(not have_vcan1(), reason="needs a second virtual interface (tools/vcan-run makes vcan1)")
 def test_interface_gone_and_back(tmp_path):
     # The interface goes only once the emulator has its socket on it (its boot-up is seen): deleted earlier, as a
@@ -100,7 +102,7 @@ def test_script_runs_commands_at_their_times(tmp_path, capture):
     script.write_text("# a fault at 0.8 s, cleared 0.5 s later, then stop\n"
                       "@800 emcy 0x62 0x5000 0x01\n@+500 emcy-clear 0x62 0x5000\n@+300 quit\n")
     start = time.time()
-    r = subprocess.run([EMU, "--nvm-dir", str(tmp_path), "--script", str(script), "sds:0x62"], capture_output=True,
+    r = subprocess.run([EMU, "-i", BUS_ARG, "--nvm-dir", str(tmp_path), "--script", str(script), "sds:0x62"], capture_output=True,
                        text=True, timeout=10, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stderr
     frames = capture.wait_for(0x0E2, count=2, timeout=5)
@@ -116,6 +118,7 @@ def test_script_runs_commands_at_their_times(tmp_path, capture):
     assert "emcy 0x5000: done" in r.stdout
 
 
+@pytest.mark.socketcan
 def test_readme_demo_session_runs(tmp_path):
     r = subprocess.run([sys.executable, str(SRC / "tools/demo_master.py"), "--emu", EMU], capture_output=True,
                        text=True, timeout=120, stdin=subprocess.DEVNULL)
@@ -132,7 +135,7 @@ def run_script(tmp_path, content, node="sds:0x64", timeout=10):
     script = tmp_path / "test.script"
     script.write_bytes(content if isinstance(content, bytes) else content.encode())
     try:
-        r = subprocess.run([EMU, "--nvm-dir", str(tmp_path / "nvm"), "--script", str(script), node],
+        r = subprocess.run([EMU, "-i", BUS_ARG, "--nvm-dir", str(tmp_path / "nvm"), "--script", str(script), node],
                            capture_output=True, timeout=timeout, stdin=subprocess.DEVNULL)
     except subprocess.TimeoutExpired as e:
         raise AssertionError(f"canopen-emu still ran after {timeout} s with the script {content[:200]!r}; "
@@ -185,6 +188,6 @@ def test_an_overlong_script_line_or_a_nul_byte_is_refused_with_its_line_number(t
 
 
 def test_a_script_that_is_a_directory_is_refused(tmp_path):
-    r = subprocess.run([EMU, "--nvm-dir", str(tmp_path / "nvm"), "--script", str(tmp_path), "sds:0x64"],
+    r = subprocess.run([EMU, "-i", BUS_ARG, "--nvm-dir", str(tmp_path / "nvm"), "--script", str(tmp_path), "sds:0x64"],
                        capture_output=True, text=True, timeout=10, stdin=subprocess.DEVNULL)
     assert r.returncode == 2 and f"cannot read script {tmp_path}: it is a directory" in r.stderr, r

@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from conftest import EMU, IFACE, Deadline
+from conftest import BUS_ARG, EMU, Deadline
 from test_bus_faults import HB_MS, RawCan, odv, set_heartbeats, starved_heartbeats, upload, upload_answer, \
     wait_bootups
 
@@ -47,7 +47,7 @@ def test_output_nobody_reads_never_stops_the_nodes(tmp_path):
     fcntl.fcntl(write_end, fcntl.F_SETPIPE_SZ, 4096)
     recorder = RawCan((0x700 + NODE, 0x580 + NODE))  # every heartbeat and answer, with kernel time stamps
     client = RawCan((0x700 + NODE, 0x580 + NODE))
-    proc = subprocess.Popen([EMU, "-v", "-i", IFACE, "--nvm-dir", str(tmp_path), "--control", "-", f"sds:{NODE}"],
+    proc = subprocess.Popen([EMU, "-v", "-i", BUS_ARG, "--nvm-dir", str(tmp_path), "--control", "-", f"sds:{NODE}"],
                             stdin=subprocess.PIPE, stdout=write_end, stderr=write_end)
     os.close(write_end)
     try:
@@ -145,7 +145,7 @@ def test_a_terminal_on_stdin_is_blocking_again_after_the_end(tmp_path, capture, 
     # The emulator reads commands from a terminal without blocking; the terminal's open file is the shell's too, whose
     # next read failed with EAGAIN when the emulator left it non-blocking.
     controller, terminal = pty.openpty()
-    proc = subprocess.Popen([EMU, "-i", IFACE, "--nvm-dir", str(tmp_path), f"sds:{NODE}"], stdin=terminal,
+    proc = subprocess.Popen([EMU, "-i", BUS_ARG, "--nvm-dir", str(tmp_path), f"sds:{NODE}"], stdin=terminal,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         capture.wait_for(0x700 + NODE, data=b"\x00", timeout=3)
@@ -182,7 +182,7 @@ def test_the_exit_waits_for_output_nobody_reads_a_bounded_time(tmp_path):
     read_end, write_end = os.pipe()
     fcntl.fcntl(write_end, fcntl.F_SETPIPE_SZ, 4096)
     client = RawCan((0x700 + NODE, 0x580 + NODE))
-    proc = subprocess.Popen([EMU, "-v", "-i", IFACE, "--nvm-dir", str(tmp_path), f"sds:{NODE}"],
+    proc = subprocess.Popen([EMU, "-v", "-i", BUS_ARG, "--nvm-dir", str(tmp_path), f"sds:{NODE}"],
                             stdin=subprocess.DEVNULL, stdout=write_end, stderr=write_end)
     os.close(write_end)
     try:

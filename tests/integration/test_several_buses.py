@@ -16,7 +16,8 @@ def have_other():
     return subprocess.run(["ip", "link", "show", OTHER], capture_output=True).returncode == 0
 
 
-pytestmark = pytest.mark.skipif(not have_other(), reason="needs a second virtual interface (tools/vcan-run makes vcan1)")
+pytestmark = [pytest.mark.socketcan,  # several kernel interfaces
+              pytest.mark.skipif(not have_other(), reason="needs a second virtual interface (tools/vcan-run makes vcan1)")]
 
 SDO_SERIAL = bytes([0x40, 0x18, 0x10, 0x04, 0, 0, 0, 0])  # upload 0x1018:04
 
