@@ -4,10 +4,11 @@
 # (not editable, no sys.path tricks), the pinned test packages, and pytest loading the plugin through its entry point.
 # Two passes, on two kinds of bus, the example suite unchanged in both:
 #
-#   vcan  python/tests (but those marked netns) and examples/pytest on vcan0 (--canopen-emu-bus auto finds it up)
-#   udp   python/tests marked netns and examples/pytest on udp_multicast, inside tests/udp/netns-run: a network
+#   vcan  python/tests marked vcan (several SocketCAN interfaces, SocketCAN's own messages, auto finding vcan0 up)
+#         and examples/pytest on vcan0
+#   udp   the rest of python/tests and examples/pytest on udp_multicast, inside tests/udp/netns-run: a network
 #         namespace of their own whose only interface is lo (no datagram reaches this machine's network), where
-#         auto finds no vcan0 and gives the session a udp_multicast group of its own
+#         auto finds no vcan0 and gives the session a udp_multicast group of its own; natively, no User-Mode Linux
 #
 #   CANOPEN_EMU=/path/to/canopen-emu [CO_SOURCE_DIR=/path/to/source] [CO_PYTHON_TESTS_PASSES="vcan udp"] \
 #     sh python/run-tests.sh BUILD_DIR [PYTEST-ARGS]
@@ -77,13 +78,13 @@ run_suites() {
 
 # Second stages: the venv is ready.
 case ${CO_PYTHON_TESTS_STAGE:-} in
-  run) run_suites vcan "not netns" "$@"; exit $? ;;   # inside tools/vcan-run, or where vcan0 is
+  run) run_suites vcan "vcan" "$@"; exit $? ;;   # inside tools/vcan-run, or where vcan0 is
   netns)                                              # inside tests/udp/netns-run
     # (ip asks the kernel: /sys/class/net shows the namespace sysfs was mounted in)
     links=$(ip -o link show | awk -F': ' '{print $2}')
     [ "$links" = lo ] || { echo "run-tests.sh: the udp pass runs only where lo is the only interface" \
       "(tests/udp/netns-run), not with: $(echo $links)" >&2; exit 1; }
-    run_suites udp "netns" "$@"; exit $? ;;
+    run_suites udp "not vcan" "$@"; exit $? ;;
 esac
 
 passes=${CO_PYTHON_TESTS_PASSES:-vcan udp}

@@ -1,5 +1,6 @@
-"""Tests of the installed canopen_emu package against the real canopen-emu on vcan0/vcan1 (and, marked netns, on
-udp_multicast inside a network namespace of their own).
+"""Tests of the installed canopen_emu package against the real canopen-emu, on the bus the plugin's auto chooses:
+run-tests.sh runs those marked vcan (several SocketCAN interfaces, SocketCAN's own messages) on vcan0/vcan1, and all
+others on udp_multicast inside a network namespace of their own (only lo), where auto takes a group of the session's.
 
 python/run-tests.sh runs them in a fresh venv where ./python was pip-installed as a user installs it: the
 canopen_emu imported here is the installed one, and the plugin's fixtures (canopen_emu, canopen_emu_factory...)
@@ -7,7 +8,7 @@ come from its pytest11 entry point; nothing here imports the plugin. The program
 (for include/co/co_version.h) is $CO_SOURCE_DIR."""
 import os
 from pathlib import Path
-from typing import Callable, Iterator, List
+from typing import Callable, Iterator, List, Optional
 
 import can
 import canopen
@@ -17,8 +18,9 @@ pytest_plugins = ("pytester",)
 
 
 def pytest_configure(config):
-    # run-tests.sh's second pass runs these alone, inside tests/udp/netns-run (a network namespace whose only
-    # interface is lo); its first pass, on vcan, leaves them out
+    # run-tests.sh's vcan pass runs the tests marked vcan only; its udp pass, inside tests/udp/netns-run (a network
+    # namespace whose only interface is lo), all others (netns: those that need to be there)
+    config.addinivalue_line("markers", "vcan: needs SocketCAN interfaces (vcan0, vcan1): run in the vcan pass")
     config.addinivalue_line("markers", "netns: runs on udp_multicast inside a network namespace of its own (only lo)")
 
 SOURCE_DIR = Path(os.environ.get("CO_SOURCE_DIR") or Path(__file__).resolve().parents[2])
@@ -27,12 +29,14 @@ EDS = {"pro-ionizer": SOURCE_DIR / "od/pro-ionizer.eds", "sds": SOURCE_DIR / "od
 
 
 @pytest.fixture
-def can_bus() -> Iterator[Callable[[str], can.BusABC]]:
-    """can_bus("vcan1"): a python-can socket on that interface, shut at the end of the test."""
+def can_bus(canopen_emu_bus) -> Iterator[Callable[..., can.BusABC]]:
+    """can_bus(): a python-can bus on the session's bus (the plugin's choice); can_bus("vcan1"): on that SocketCAN
+    interface. Shut at the end of the test."""
     opened: List[can.BusABC] = []
 
-    def open_bus(channel: str = "vcan0") -> can.BusABC:
-        bus = can.Bus(channel=channel, interface="socketcan", receive_own_messages=False)
+    def open_bus(channel: Optional[str] = None) -> can.BusABC:
+        bus = (can.Bus(**canopen_emu_bus.can_kwargs()) if channel is None else
+               can.Bus(channel=channel, interface="socketcan", receive_own_messages=False))
         opened.append(bus)
         return bus
 
@@ -42,10 +46,9 @@ def can_bus() -> Iterator[Callable[[str], can.BusABC]]:
 
 
 @pytest.fixture
-def network() -> Iterator[canopen.Network]:
-    """python-canopen as the master on vcan0."""
-    net = canopen.Network()
-    net.connect(interface="socketcan", channel="vcan0")
+def network(canopen_emu_bus) -> Iterator[canopen.Network]:
+    """python-canopen as the master on the session's bus."""
+    net = canopen_emu_bus.network()
     yield net
     net.disconnect()
 

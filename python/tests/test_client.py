@@ -133,17 +133,18 @@ def test_commands_return_lines_and_refusals_carry_them(canopen_emu):
         c.command(16, "load", "two words")  # refused before it is sent: args are words
 
 
-def test_hello_nodes_and_show(canopen_emu):
+def test_hello_nodes_and_show(canopen_emu, canopen_emu_bus):
     c = canopen_emu.client
     hello = c.hello()
+    bus, kind = canopen_emu_bus.name, canopen_emu_bus.kind
     assert (hello.program, hello.version, hello.protocol, hello.buses, hello.bus_kinds) == (
-        "canopen-emu", PACKAGE_VERSION, 1, ("vcan0",), {"vcan0": "socketcan"})
+        "canopen-emu", PACKAGE_VERSION, 1, (bus,), {bus: kind})
     assert hello.events == EVENT_KINDS
     assert c.server == hello  # connect() asked it already
     assert abs(hello.clock_unix_us / 1e6 - time.time()) < 5 and hello.clock_time_us > 0
-    expected = [NodeInfo(16, "sds", "N", 16, "PRE-OPERATIONAL", "vcan0", "socketcan"),
-                NodeInfo(17, "buerkert", None, 17, "PRE-OPERATIONAL", "vcan0", "socketcan"),
-                NodeInfo(0x20, "pro-ionizer", "full", 0x20, "PRE-OPERATIONAL", "vcan0", "socketcan")]
+    expected = [NodeInfo(16, "sds", "N", 16, "PRE-OPERATIONAL", bus, kind),
+                NodeInfo(17, "buerkert", None, 17, "PRE-OPERATIONAL", bus, kind),
+                NodeInfo(0x20, "pro-ionizer", "full", 0x20, "PRE-OPERATIONAL", bus, kind)]
     assert c.nodes() == expected
     assert c.list() == expected
     shown = c.show(17)
@@ -151,17 +152,17 @@ def test_hello_nodes_and_show(canopen_emu):
     assert (shown[0].node, shown[0].error_register, shown[0].errors, shown[0].tx_dropped) == (17, 0, (), 0)
     assert shown[0].tx_frames >= 1  # its boot-up at least
     assert [s.node for s in c.show()] == [16, 17, 0x20]
-    assert shown[0].bus_kind == "socketcan"
+    assert shown[0].bus_kind == kind
     sds = c.show(16)[0]
     # od/sds.eds: device type 0x191 (CiA 401), heartbeat 5000 ms; its boot-up counts as its last heartbeat
     assert (sds.device_type, sds.heartbeat_ms, sds.faults, sds.last_emcy) == (0x191, 5000, (), None)
     assert sds.last_heartbeat_us is not None
 
 
-def test_heard_lists_the_other_nodes_on_the_bus(canopen_emu, can_bus):
+def test_heard_lists_the_other_nodes_on_the_bus(canopen_emu, can_bus, canopen_emu_bus):
     c = canopen_emu.client
     assert c.heard() == []
-    bus = can_bus("vcan0")
+    bus = can_bus()
     bus.send(can.Message(arbitration_id=0x705, data=b"\x05", is_extended_id=False))  # another device: Operational
     deadline = time.monotonic() + 5.0
     heard = c.heard()
@@ -169,9 +170,9 @@ def test_heard_lists_the_other_nodes_on_the_bus(canopen_emu, can_bus):
         time.sleep(0.05)
         heard = c.heard()
     assert [(h.node, h.bus, h.bus_kind, h.state, h.boot_up) for h in heard] == [
-        (5, "vcan0", "socketcan", "OPERATIONAL", False)]
+        (5, canopen_emu_bus.name, canopen_emu_bus.kind, "OPERATIONAL", False)]
     assert 0 < heard[0].last_heartbeat_us
-    assert c.heard("vcan0") == heard
+    assert c.heard(canopen_emu_bus.name) == heard
 
 
 def test_show_tells_the_faults_in_force_and_when_the_last_heartbeat_went(canopen_emu):
@@ -215,13 +216,13 @@ def test_emcy_show_and_emcy_clear(canopen_emu):
         c.emcy(17, 0x3210, info=[1, 2, 3, 4, 5])  # the bytes need the register before them
 
 
-def test_power_cycle_boots_the_node_again(canopen_emu):
+def test_power_cycle_boots_the_node_again(canopen_emu, canopen_emu_bus):
     c = canopen_emu.client
     c.set(17, "0x2540:01", 30.0)
     c.subscribe(["boot-up"], nodes=[17])
     assert c.power_cycle(17) == ["node 17: power cycled"]
     boot = c.wait_for("boot-up", node=17)
-    assert (boot["device"], boot["bus"], boot["text"]) == ("buerkert", "vcan0", "boot-up")
+    assert (boot["device"], boot["bus"], boot["text"]) == ("buerkert", canopen_emu_bus.name, "boot-up")
     assert c.get(17, "0x2540:01") == 0.0  # the model restarted (the set-point is not a stored parameter)
 
 

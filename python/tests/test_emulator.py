@@ -17,9 +17,9 @@ from conftest import remote
 EMU = os.environ["CANOPEN_EMU"]
 
 
-def test_the_launcher_returns_once_every_node_has_booted(can_bus):
-    bus = can_bus("vcan0")  # open before the start: it sees the boot-ups
-    with Emulator(nodes=["sds:16", "buerkert:17", "pro-ionizer:0x20"]) as emu:
+def test_the_launcher_returns_once_every_node_has_booted(can_bus, canopen_emu_bus):
+    bus = can_bus()  # open before the start: it sees the boot-ups
+    with Emulator(interface=canopen_emu_bus, nodes=["sds:16", "buerkert:17", "pro-ionizer:0x20"]) as emu:
         assert [(n.node, n.state) for n in emu.client.nodes()] == [
             (16, "PRE-OPERATIONAL"), (17, "PRE-OPERATIONAL"), (0x20, "PRE-OPERATIONAL")]
         for node, device in ((16, "sds"), (17, "buerkert"), (32, "pro-ionizer")):
@@ -33,12 +33,18 @@ def test_the_launcher_returns_once_every_node_has_booted(can_bus):
                 break
         assert boot_ups == {0x710, 0x711, 0x720}
         assert emu.client.drain_events() == []  # the launcher's own boot events are not left for the test
-        assert emu.executable == EMU and emu.interfaces == ["vcan0"]
+        assert emu.executable == EMU and emu.interfaces == [str(canopen_emu_bus)]
     assert emu.returncode == 0
 
 
-def test_stop_quits_with_status_0_and_cleans_up():
-    emu = Emulator(nodes=["sds:16"])
+@pytest.mark.vcan
+def test_the_default_interface_is_vcan0():
+    with Emulator(nodes=["sds:16"]) as emu:
+        assert emu.interfaces == ["vcan0"] and emu.client.hello().buses == ("vcan0",)
+
+
+def test_stop_quits_with_status_0_and_cleans_up(canopen_emu_bus):
+    emu = Emulator(interface=canopen_emu_bus, nodes=["sds:16"])
     socket_path, workdir = emu.socket_path, emu.workdir
     assert socket_path.exists() and emu.running
     assert emu.stop() == 0
@@ -53,8 +59,8 @@ def test_stop_quits_with_status_0_and_cleans_up():
         emu.client.get(16, "0x1017")
 
 
-def test_stop_without_a_socket_sends_sigterm():
-    emu = Emulator(nodes=["sds:16"])
+def test_stop_without_a_socket_sends_sigterm(canopen_emu_bus):
+    emu = Emulator(interface=canopen_emu_bus, nodes=["sds:16"])
     emu.client.close()
     os.unlink(emu.socket_path)  # quit cannot be asked any more
     start = time.monotonic()
@@ -63,8 +69,8 @@ def test_stop_without_a_socket_sends_sigterm():
     assert emu.log_lines()[-2].endswith("] stopping (signal)")
 
 
-def test_stop_of_a_hung_emulator_ends_with_sigkill():
-    emu = Emulator(nodes=["sds:16"])
+def test_stop_of_a_hung_emulator_ends_with_sigkill(canopen_emu_bus):
+    emu = Emulator(interface=canopen_emu_bus, nodes=["sds:16"])
     os.kill(emu.pid, signal.SIGSTOP)  # answers nothing, and SIGTERM waits for a SIGCONT that never comes
     start = time.monotonic()
     assert emu.stop(timeout=0.3) == -signal.SIGKILL
@@ -74,7 +80,8 @@ def test_stop_of_a_hung_emulator_ends_with_sigkill():
 
 @pytest.mark.parametrize("nodes, interface, status, message", [
     (["nosuch:5"], "vcan0", 2, "canopen-emu: unknown device 'nosuch'; known devices:"),
-    (["sds:16"], "vcan9", 1, "canopen-emu: interface vcan9 does not exist; create a virtual one with:"),
+    pytest.param(["sds:16"], "vcan9", 1, "canopen-emu: interface vcan9 does not exist; create a virtual one with:",
+                 marks=pytest.mark.vcan),
 ])
 def test_a_failed_start_raises_with_the_log(nodes, interface, status, message, monkeypatch, tmp_path):
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # its work directory in a folder of the test's own
@@ -90,14 +97,14 @@ def test_a_failed_start_raises_with_the_log(nodes, interface, status, message, m
     assert not left  # its directory went with it
 
 
-def test_the_program_comes_from_the_argument_the_variable_or_path(monkeypatch, tmp_path):
+def test_the_program_comes_from_the_argument_the_variable_or_path(monkeypatch, tmp_path, canopen_emu_bus):
     assert find_executable() == EMU  # $CANOPEN_EMU
     monkeypatch.delenv("CANOPEN_EMU")
     (tmp_path / "bin").mkdir()
     os.symlink(EMU, tmp_path / "bin" / "canopen-emu")
     monkeypatch.setenv("PATH", str(tmp_path / "bin"))
     assert find_executable() == str(tmp_path / "bin" / "canopen-emu")
-    with Emulator(nodes=["sds:16"]) as emu:
+    with Emulator(interface=canopen_emu_bus, nodes=["sds:16"]) as emu:
         assert emu.executable == str(tmp_path / "bin" / "canopen-emu")
         assert emu.client.get(16, "0x1017") == 5000
     monkeypatch.setenv("PATH", str(tmp_path))
@@ -108,10 +115,11 @@ def test_the_program_comes_from_the_argument_the_variable_or_path(monkeypatch, t
     not_executable = tmp_path / "emu"
     not_executable.write_text("")
     with pytest.raises(EmulatorError) as e:
-        Emulator(nodes=["sds:16"], executable=not_executable)
+        Emulator(interface=canopen_emu_bus, nodes=["sds:16"], executable=not_executable)
     assert str(e.value) == f"{not_executable} is not an executable file"
 
 
+@pytest.mark.vcan
 def test_several_interfaces(canopen_emu_factory, can_bus):
     vcan1 = can_bus("vcan1")
     emu = canopen_emu_factory("sds:16", "sds:16@vcan1", "buerkert:17@vcan1", interface=["vcan0", "vcan1"])
@@ -138,10 +146,10 @@ def test_several_interfaces(canopen_emu_factory, can_bus):
     assert seen == {0x710, 0x711}
 
 
-def test_nvm_dir_keeps_what_was_stored(canopen_emu_factory, network, tmp_path):
+def test_nvm_dir_keeps_what_was_stored(canopen_emu_factory, network, tmp_path, canopen_emu_bus):
     nvm = tmp_path / "nvm"
     first = canopen_emu_factory("sds:16", nvm_dir=nvm)
-    first.wait_log(f"node 16 (sds) on vcan0, NVM {nvm}/sds-16.*")
+    first.wait_log(f"node 16 (sds) on {canopen_emu_bus.name}, NVM {nvm}/sds-16.*")
     node = remote(network, "sds", 16)
     node.sdo.download(0x1017, 0, struct.pack("<H", 1200))
     node.sdo.download(0x1010, 1, b"save")
@@ -153,8 +161,8 @@ def test_nvm_dir_keeps_what_was_stored(canopen_emu_factory, network, tmp_path):
     assert fresh.client.get(18, "0x1017") == 5000
 
 
-def test_the_web_view_is_served_where_web_url_says():
-    with Emulator(nodes=["sds:16"], web="127.0.0.1:0") as emu:
+def test_the_web_view_is_served_where_web_url_says(canopen_emu_bus):
+    with Emulator(interface=canopen_emu_bus, nodes=["sds:16"], web="127.0.0.1:0") as emu:
         url = emu.web_url()
         assert re.fullmatch(r"http://127\.0\.0\.1:\d+/", url), url
         assert url != "http://127.0.0.1:0/"
@@ -162,5 +170,5 @@ def test_the_web_view_is_served_where_web_url_says():
             html = page.read().decode()
         assert page.status == 200 and "<title>canopen-emu</title>" in html
         assert re.search(r'name="canopen-emu-token" content="[0-9a-f]{32}"', html), html[:500]
-    with Emulator(nodes=["sds:16"]) as plain, pytest.raises(ValueError, match="without the web view"):
+    with Emulator(interface=canopen_emu_bus, nodes=["sds:16"]) as plain, pytest.raises(ValueError, match="without the web view"):
         plain.web_url()

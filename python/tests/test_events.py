@@ -23,13 +23,13 @@ def log_time(emu, text):
     return float(match.group(1))
 
 
-def test_nmt_events_with_the_emulators_time(canopen_emu, can_bus):
+def test_nmt_events_with_the_emulators_time(canopen_emu, can_bus, canopen_emu_bus):
     c = canopen_emu.client
     assert c.subscribe(["nmt", "boot-up"]) == ["nmt", "boot-up"]
-    can_bus("vcan0").send(can.Message(arbitration_id=0x000, data=[0x01, 0x00], is_extended_id=False))  # start all
+    can_bus().send(can.Message(arbitration_id=0x000, data=[0x01, 0x00], is_extended_id=False))  # start all
     sds = c.wait_for("nmt", node=16, to="OPERATIONAL")
     assert {k: sds[k] for k in ("event", "node", "device", "bus", "from", "to", "text")} == {
-        "event": "nmt", "node": 16, "device": "sds", "bus": "vcan0", "from": "PRE-OPERATIONAL",
+        "event": "nmt", "node": 16, "device": "sds", "bus": canopen_emu_bus.name, "from": "PRE-OPERATIONAL",
         "to": "OPERATIONAL", "text": "NMT PRE-OPERATIONAL -> OPERATIONAL"}
     mfc = c.wait_for("nmt", node=17, from_="PRE-OPERATIONAL")  # from_: 'from' is a Python keyword
     assert mfc["to"] == "OPERATIONAL"
@@ -45,11 +45,11 @@ def test_nmt_events_with_the_emulators_time(canopen_emu, can_bus):
     assert boot["node"] == 17 and boot["time_us"] > mfc["time_us"]
 
 
-def test_frame_events_show_the_heartbeat_period(canopen_emu):
+def test_frame_events_show_the_heartbeat_period(canopen_emu, canopen_emu_bus):
     c = canopen_emu.client
     assert c.subscribe("frame", frames=0x711) == ["frame"]  # the Bürkert node's heartbeat, every 500 ms
     beats = [c.wait_for("frame", timeout=3) for _ in range(4)]
-    assert all((b["dir"], b["node"], b["id"], b["data"], b["bus"]) == ("tx", 17, 0x711, "7F", "vcan0")
+    assert all((b["dir"], b["node"], b["id"], b["data"], b["bus"]) == ("tx", 17, 0x711, "7F", canopen_emu_bus.name)
                for b in beats), beats
     stamps = [b["time_us"] for b in beats]
     # the emulator's clock: what the node did, however late this process read it
@@ -58,7 +58,7 @@ def test_frame_events_show_the_heartbeat_period(canopen_emu):
 
 def test_frame_events_of_several_filters(canopen_emu, can_bus):
     c = canopen_emu.client
-    bus = can_bus("vcan0")
+    bus = can_bus()
     assert c.subscribe("frame", frames=[(0x120, 0x7F0), 0x7FF, "0x711"]) == ["frame"]
     for cob_id in (0x125, 0x135, 0x7FF):
         bus.send(can.Message(arbitration_id=cob_id, data=[1], is_extended_id=False))
@@ -69,7 +69,7 @@ def test_frame_events_of_several_filters(canopen_emu, can_bus):
 
 def test_extended_frames_say_eff_and_only_extended_filters_take_them(canopen_emu, can_bus):
     c = canopen_emu.client
-    bus = can_bus("vcan0")
+    bus = can_bus()
     base = canopen_emu.connect()  # a second client: the 11-bit filter alone
     try:
         assert base.subscribe("frame", frames=0x181) == ["frame"]
@@ -91,9 +91,9 @@ def test_extended_frames_say_eff_and_only_extended_filters_take_them(canopen_emu
     assert str(ExtendedId(0x181)) == "0x00000181x/0x1FFFFFFF"
 
 
-def test_events_that_come_during_requests_are_queued_not_lost(canopen_emu, can_bus):
+def test_events_that_come_during_requests_are_queued_not_lost(canopen_emu, can_bus, canopen_emu_bus):
     c = canopen_emu.client
-    bus = can_bus("vcan0")
+    bus = can_bus()
     c.subscribe(["frame"], frames=(0x123, 0x7FF))
     for i in range(40):
         bus.send(can.Message(arbitration_id=0x123, data=[i], is_extended_id=False))
@@ -102,7 +102,7 @@ def test_events_that_come_during_requests_are_queued_not_lost(canopen_emu, can_b
     last = c.wait_for("frame", data="27")  # the 40th (0x27); the others stay queued, in their order
     rest = c.drain_events()
     assert [int(ev["data"], 16) for ev in rest] == list(range(39))
-    assert all(ev["dir"] == "rx" and ev["id"] == 0x123 and ev["bus"] == "vcan0" for ev in rest + [last])
+    assert all(ev["dir"] == "rx" and ev["id"] == 0x123 and ev["bus"] == canopen_emu_bus.name for ev in rest + [last])
     stamps = [ev["time_us"] for ev in rest + [last]]
     assert stamps == sorted(stamps)
 

@@ -6,6 +6,7 @@ import sysconfig
 from pathlib import Path
 
 import canopen_emu
+import pytest
 from conftest import SOURCE_DIR
 
 EMU = os.environ["CANOPEN_EMU"]
@@ -27,6 +28,7 @@ def test_the_package_is_the_installed_one_and_the_plugin_came_through_its_entry_
     assert dists["canopen-emu"] == canopen_emu.__version__
 
 
+@pytest.mark.vcan
 def test_trace_config_names_it(pytester):
     pytester.makepyfile("def test_nothing(): pass")
     result = run(pytester, "--trace-config")
@@ -63,7 +65,7 @@ def test_a_failed_tests_report_has_the_log_and_the_last_events(pytester):
     result.stdout.fnmatch_lines([
         "*AssertionError: deliberately wrong",
         "*- canopen-emu #1 of 1: log -*",
-        f"{EMU} -i vcan0 --nvm-dir /*/nvm --control-socket /*/ctl.sock sds:16",
+        f"{EMU} -i * --nvm-dir /*/nvm --control-socket /*/ctl.sock sds:16",
         "running; log:",
         "[[]*] node 16 (sds): NMT INITIALISING -> PRE-OPERATIONAL",
         "[[]*] node 16 (sds): EMCY 0x3210, error register 0x05",
@@ -108,8 +110,8 @@ def test_factory_and_session_emulators_are_stopped(pytester):
 
         def test_factory(canopen_emu_factory):
             STARTED.append(canopen_emu_factory("sds:20"))
-            STARTED.append(canopen_emu_factory("buerkert:21", interface="vcan1"))
-            assert STARTED[1].client.hello().buses == ("vcan1",)
+            STARTED.append(canopen_emu_factory("buerkert:21", interface="virtual:second"))
+            assert STARTED[1].client.hello().buses == ("second",)
             assert all(emu.running for emu in STARTED)
 
         def test_after_the_factory():
@@ -132,6 +134,7 @@ def test_canopen_emu_needs_its_marker(pytester):
                                  '@pytest.mark.canopen_emu_nodes("sds:16", ...)*'])
 
 
+@pytest.mark.vcan
 def test_options_choose_the_program_and_the_interface(pytester, monkeypatch):
     monkeypatch.setenv("CANOPEN_EMU", "/nonexistent/canopen-emu")  # the option must win
     pytester.makepyfile(f"""
