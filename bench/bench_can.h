@@ -15,13 +15,27 @@
 #include <stdint.h>
 #include <stdio.h>
 
+typedef enum bench_bus_kind { BENCH_RAW, BENCH_UDP, BENCH_SOCKETCAND } bench_bus_kind_t;
+
 typedef struct bench_can {
     int fd;
     uint32_t drops; /* SO_RXQ_OVFL: frames the kernel dropped because this socket's buffer was full */
+    bench_bus_kind_t kind;
+    bool user_time; /* arrival time = CLOCK_REALTIME after the read returned, not the kernel's time stamp */
+    int tx_fd;      /* udp_multicast: the socket frames are sent from (its own datagrams are skipped) */
+    uint16_t tx_port;
+    uint8_t addr[28]; /* udp_multicast: the group's sockaddr_in */
+    int rcvbuf;       /* the receive buffer the kernel granted (SO_RCVBUF read back) */
+    char in[8192];    /* socketcand: bytes read, not yet parsed */
+    size_t in_len;
 } bench_can_t;
 
-/* Opens a raw CAN socket on ifname with a receive buffer of rcvbuf bytes (0: the default); returns 0 or -1
- * (message on stderr). Frames are read with bench_can_recv. */
+/* Opens the bus ifname with a receive buffer of rcvbuf bytes (0: the default); returns 0 or -1 (message on stderr).
+ * Frames are read with bench_can_recv. ifname is a SocketCAN interface (a raw socket), or
+ *   udp_multicast:GROUP:PORT         python-can's udp_multicast bus (IPv4 group; TTL 0: never leaves the machine;
+ *                                    run it in tests/udp/netns-run), frames as msgpack datagrams
+ *   socketcand:HOST:PORT:BUS         a socketcand server's BUS in rawmode over TCP (HOST an IPv4 address);
+ *                                    arrival time: after the read (TCP has no per-frame kernel time stamp) */
 int bench_can_open(bench_can_t *c, const char *ifname, int rcvbuf);
 void bench_can_close(bench_can_t *c);
 

@@ -126,8 +126,8 @@ int main(int argc, char **argv)
     if (n < 0) {
         return 1;
     }
-    printf("{\"period_us\": %lld, \"seconds\": %lld, \"rx_drops\": %lu, \"groups\": {", period_us, seconds,
-           (unsigned long)can.drops);
+    printf("{\"period_us\": %lld, \"seconds\": %lld, \"rx_drops\": %lu, \"rcvbuf\": %d, \"groups\": {", period_us,
+           seconds, (unsigned long)can.drops, can.rcvbuf);
     for (size_t gi = 0U; gi < n_groups; gi++) {
         group_t *g = &groups[gi];
         unsigned streams = 0U;

@@ -15,6 +15,9 @@
  *   down ID IDX:SUB SIZE VALUE N  N sequential downloads: round trip; every answer must be the confirmation
  *
  * --any-reply: any 8-byte frame on 0x580+ID counts as the answer (for bench-echo, the floor).
+ * --user-time: the answer's arrival time is the clock read after the read returned (as the socketcand client must),
+ * not the kernel's time stamp; to compare a raw socket with a socketcand connection on equal terms.
+ * -i takes a SocketCAN interface, udp_multicast:GROUP:PORT or socketcand:HOST:PORT:BUS (bench_can.h).
  * --gap-ms MS: pause MS after each answer of up/down (callgrind runs: a server that runs slowly would otherwise
  * find the next request already waiting and serve several per wake-up, which changes what one request costs).
  * Round trip = kernel arrival time of the answer (SO_TIMESTAMPNS) - CLOCK_REALTIME just before write().
@@ -41,6 +44,7 @@ static bench_can_t can;
 static unsigned long counts[2048];
 static unsigned long sdo_answers;
 static bool any_reply;
+static bool user_time;
 static int64_t timeout_ns = 2000000000LL;
 static int64_t gap_ns;
 static result_t results[64];
@@ -257,18 +261,21 @@ int main(int argc, char **argv)
             iface = argv[++i];
         } else if (strcmp(argv[i], "--any-reply") == 0) {
             any_reply = true;
+        } else if (strcmp(argv[i], "--user-time") == 0) {
+            user_time = true;
         } else if (strcmp(argv[i], "--gap-ms") == 0 && i + 1 < argc) {
             gap_ns = bench_num(argv[++i], 0, 60000, "gap") * 1000000LL;
         } else if (strcmp(argv[i], "--timeout-ms") == 0 && i + 1 < argc) {
             timeout_ns = bench_num(argv[++i], 1, 600000, "timeout") * 1000000LL;
         } else {
-            fprintf(stderr, "usage: bench-sdo [-i IFACE] [--any-reply] [--gap-ms MS] [--timeout-ms MS] COMMAND ARGS...\n");
+            fprintf(stderr, "usage: bench-sdo [-i IFACE] [--any-reply] [--user-time] [--gap-ms MS] [--timeout-ms MS] COMMAND ARGS...\n");
             return 2;
         }
     }
     if (bench_can_open(&can, iface, 4 * 1024 * 1024) != 0) {
         return 1;
     }
+    can.user_time = can.user_time || user_time;
     int status = 0;
     while (i < argc && status == 0) {
         const char *cmd = argv[i];

@@ -4,12 +4,19 @@ JSON file with every figure. Standard library only.
 
     run_bus.py --bin DIR --emu PATH --work DIR --out FILE [--mode full|quick|smoke] [--only SECTION]
     run_bus.py --clients-table LABEL=FILE [LABEL=FILE ...]    (on the host: the `clients` tables, Markdown)
+    run_bus.py --table udp|socketcand FILE                     (on the host: that section's tables, Markdown)
 
 Sections (docs/performance.md explains each): SDO round trip against bench-echo (the floor) and
 canopen-emu; heartbeat/TPDO periods next to the ideal generator; the heartbeat while a control client floods
 the control socket; instructions per SDO request, heartbeat
 and TPDO of canopen-emu under callgrind (difference of runs); 127 nodes: CPU share, period error, highest
 lossless SDO rate. Any program failing (non-zero status, unparsable output) fails the whole run.
+
+The sections `udp` and `socketcand` run only when asked (`--only udp`, `--only socketcand`; tools/bench does not
+run them, docs/performance.md keeps their hand-measured sections): `udp` the 127 nodes' heartbeats at 10 ms on a
+udp_multicast bus, sent against received and where frames were lost; it runs only in a network namespace whose
+only interface is lo (tests/udp/netns-run), never where multicast could leave the machine. `socketcand` the round
+trip of an SDO upload through `--socketcand` against a raw SocketCAN socket's, in one run (inside vcan-run).
 
 The section `clients` runs only when asked (`--only clients`; tools/bench does not show it): the heartbeat at
 100 ms while 64 control clients keep the emulator busy (issue 32, N2), idle and under three loads, one emulator run
@@ -34,11 +41,12 @@ NODE = 1  # the Bürkert flow controller's own default node-ID
 SIZES = {
     "full": dict(rtt_n=5000, period_s=12, cg_n=2000, cg_hold_s=5, scale_window_s=30, scale_rounds=3, rate_step_ms=2000,
                  rates=[250, 500, 1000, 1500, 2000, 3000, 4000, 6000, 8000, 12000],
-                 callgrind=True, clients_s=10),
+                 callgrind=True, clients_s=10, udp_window_s=20, scd_n=2000),
     "quick": dict(rtt_n=500, period_s=3, cg_n=200, cg_hold_s=1, scale_window_s=6, scale_rounds=3, rate_step_ms=500,
-                  rates=[500, 1000, 2000, 4000, 8000, 16000, 32000], callgrind=True, clients_s=5),
+                  rates=[500, 1000, 2000, 4000, 8000, 16000, 32000], callgrind=True, clients_s=5, udp_window_s=5,
+                  scd_n=500),
     "smoke": dict(rtt_n=20, period_s=1, cg_n=0, cg_hold_s=0, scale_window_s=1, scale_rounds=1, rate_step_ms=200,
-                  rates=[100, 200], callgrind=False, clients_s=2),
+                  rates=[100, 200], callgrind=False, clients_s=2, udp_window_s=1, scd_n=20),
 }
 
 
@@ -96,11 +104,11 @@ class Runner:
             raise BenchError(f"{what}: exit {proc.returncode}\n{err}")
         return out, err
 
-    def emu(self, section, specs, valgrind_out=None, extra=()):
+    def emu(self, section, specs, valgrind_out=None, extra=(), iface=IFACE, quiet=True):
         self.emu_runs += 1
         nvm = os.path.join(self.work, f"nvm{self.emu_runs}")
         os.makedirs(nvm, exist_ok=True)
-        argv = [self.emu_path, "-i", IFACE, "--nvm-dir", nvm, "-q"] + list(extra) + specs
+        argv = [self.emu_path, "-i", iface, "--nvm-dir", nvm] + (["-q"] if quiet else []) + list(extra) + specs
         if valgrind_out:
             argv = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={valgrind_out}"] + argv
         show_specs = specs if len(specs) <= 3 else [specs[0], "...", specs[-1]]
@@ -696,7 +704,178 @@ def scale(r, sz):
     return res
 
 
+# ---- udp_multicast: 127 nodes, heartbeats at 10 ms (issue 33, section 5)
+UDP_GROUP = "239.74.163.2"
+UDP_PORT = 43119  # not python-can's default: nothing else in the namespace shares it
+UDP_PERIOD_US = 10000
+
+
+def udp_counters():
+    """The namespace's UDP counters (/proc/net/snmp, per network namespace), by name."""
+    with open("/proc/net/snmp") as f:
+        rows = [line.split() for line in f if line.startswith("Udp:")]
+    return {k: int(v) for k, v in zip(rows[0][1:], rows[1][1:])}
+
+
+def udp_namespace_only():
+    """True where lo is the only network interface: a namespace of tests/udp/netns-run (/proc/net/dev is the
+    namespace's; /sys/class/net would be the host's unless sysfs were mounted again)."""
+    with open("/proc/net/dev") as f:
+        return [line.split(":")[0].strip() for line in f if ":" in line] == ["lo"]
+
+
+def udp(r, sz):
+    """127 Bürkert nodes on a udp_multicast bus with TTL 0, heartbeat 10 ms each (12,700 frames/s). Two receivers
+    (bench-record on the group): one over the emulator's whole life, whose frame count is compared with the
+    emulator's own count of frames sent (its exit summary), and one for the measured window (heartbeats received
+    per node, missing periods). Where a frame is lost: the receivers' own socket overflows (SO_RXQ_OVFL, per
+    socket), the namespace's UDP RcvbufErrors (every socket, the emulator's own receiving socket included: it
+    reads its own datagrams back from the loop and skips them), the emulator's refused sends (its summary)."""
+    if not udp_namespace_only():
+        raise BenchError("udp: run in tests/udp/netns-run (a network namespace with only lo): multicast must not "
+                         "leave the machine")
+    bus = f"udp_multicast:{UDP_GROUP}:{UDP_PORT}"
+    w = sz["udp_window_s"]
+    nodes = range(1, 128)
+    res = {"group": f"{UDP_GROUP}:{UDP_PORT}", "nodes": len(nodes), "period_us": UDP_PERIOD_US, "window_s": w}
+    snmp0 = udp_counters()
+    # The whole-run receiver joins the group before the emulator starts: the boot-ups come at once.
+    whole_d = w + 12  # configuration, the window, the stop, with room: it ends after the emulator
+    whole = r.start("udp", [r.prog("bench-record"), "-i", bus, "-b", "2", "-p", str(UDP_PERIOD_US), "-d", str(whole_d),
+                            "emu=0x080-0x5FF", "nodes=0x700-0x77F"])
+    time.sleep(0.5)
+    t_whole = time.monotonic()
+    # The emulator without -q: its exit summary (frames sent) is always printed then.
+    emu = r.emu("udp", [f"buerkert:{n}" for n in nodes], iface=f"{bus},ttl=0", quiet=False)
+    try:
+        cmds = ["ready", "1-127", "300"]
+        for n in nodes:
+            cmds += ["w", str(n), "0x1017", "2", str(UDP_PERIOD_US // 1000)]
+        cmds += ["sleep", "500"]
+        t0 = time.monotonic()
+        r.run_json("udp", [r.prog("bench-sdo"), "-i", bus] + cmds)
+        res["config_s"] = time.monotonic() - t0
+        snmp1 = udp_counters()
+        tck = os.sysconf("SC_CLK_TCK")
+        rec = r.start("udp", [r.prog("bench-record"), "-i", bus, "-b", "2", "-p", str(UDP_PERIOD_US), "-d", str(w),
+                              "heartbeat=0x701-0x77F"])
+        u0, s0 = cpu_ticks(emu.pid)
+        t0 = time.monotonic()
+        rec_out, rec_err = rec.communicate(timeout=w + 60)
+        u1, s1 = cpu_ticks(emu.pid)
+        dt = time.monotonic() - t0
+        snmp2 = udp_counters()
+        if rec.returncode != 0:
+            raise BenchError(f"bench-record: {rec_err}")
+        res["window"] = {"seconds": dt, "cpu_user": (u1 - u0) / tck / dt, "cpu_sys": (s1 - s0) / tck / dt,
+                         "loadavg": loadavg(), "record": json.loads(rec_out),
+                         "snmp": {k: snmp2[k] - snmp1[k] for k in snmp2}}
+        res["window"]["cpu_share"] = res["window"]["cpu_user"] + res["window"]["cpu_sys"]
+    finally:
+        _, err = r.stop(emu, "canopen-emu (udp_multicast, 127 nodes)")
+    res["emu_life_s"] = time.monotonic() - t_whole
+    summary = [ln for ln in err.splitlines() if "frame(s) sent" in ln]
+    m = re.search(r"(\d+) frame\(s\) sent, (\d+) dropped; (\d+) received frame\(s\) lost", summary[-1] if summary else "")
+    if not m:
+        raise BenchError(f"udp: no exit summary from canopen-emu: {err[-500:]}")
+    res["emu_sent"], res["emu_dropped"], res["emu_rx_lost"] = (int(x) for x in m.groups())
+    res["emu_summary"] = summary[-1].split("] ", 1)[-1]
+    whole_out, whole_err = whole.communicate(timeout=whole_d + 60)
+    if whole.returncode != 0:
+        raise BenchError(f"bench-record (whole run): {whole_err}")
+    res["whole"] = json.loads(whole_out)
+    g = res["whole"]["groups"]
+    res["whole_received"] = g["emu"]["frames"] + g["nodes"]["frames"]
+    res["snmp_run"] = {k: v - snmp0[k] for k, v in udp_counters().items()}
+    return res
+
+
+# ---- socketcand against SocketCAN: the round trip of one SDO upload (issue 33, section 5)
+SCD_PORT = 29536
+SCD_ROUNDS = 10
+
+
+def socketcand(r, sz):
+    """canopen-emu on vcan0 serving it with --socketcand; the same expedited upload (0x1018:01) N times, closed loop,
+    from a raw SocketCAN socket and from a socketcand client (bench-sdo over TCP, rawmode), in alternating rounds in
+    one emulator run. The socketcand client can only take the arrival time after its read returns, so the raw
+    socket is measured that way too (--user-time) for the ratio; its kernel-time-stamp figure is shown beside."""
+    per_round = max(1, sz["scd_n"] // SCD_ROUNDS)
+    emu = r.emu("socketcand", [f"buerkert:{NODE}"], extra=["--socketcand", f"127.0.0.1:{SCD_PORT}"])
+    scd = f"socketcand:127.0.0.1:{SCD_PORT}:{IFACE}"
+    up = ["up", str(NODE), "0x1018:1", str(per_round)]
+    kinds = (("raw_kernel", ["-i", IFACE]), ("raw", ["-i", IFACE, "--user-time"]), ("socketcand", ["-i", scd]))
+    rounds = {k: [] for k, _ in kinds}
+    try:
+        r.run_json("socketcand", [r.prog("bench-sdo"), "-i", IFACE, "ready", str(NODE), "w", str(NODE), "0x1017", "2",
+                                  "0"])
+        for _ in range(SCD_ROUNDS):
+            for k, opts in kinds:
+                # ready first: the server holds a new rawmode client's frames for 100 ms (docs/buses.md)
+                rounds[k].append(r.run_json("socketcand", [r.prog("bench-sdo")] + opts + ["ready", str(NODE), "200"] + up))
+    finally:
+        r.stop(emu, "canopen-emu (socketcand)")
+    res = {k: merge_rounds(v) for k, v in rounds.items()}
+    res["n"] = per_round * SCD_ROUNDS
+    res["rounds"] = SCD_ROUNDS
+    a, b = res["socketcand"]["results"][0]["rtt_us"], res["raw"]["results"][0]["rtt_us"]
+    res["ratio_p50"] = a["p50"] / b["p50"]
+    res["ratio_p99"] = a["p99"] / b["p99"]
+    # Per round (the two clients a few seconds apart): inside User-Mode Linux the idle guest's wake-up drifts
+    # between rounds by more than the difference measured, so the median of the rounds' ratios is the steadier one.
+    res["round_ratios_p50"] = [x["results"][0]["rtt_us"]["p50"] / y["results"][0]["rtt_us"]["p50"]
+                               for x, y in zip(rounds["socketcand"], rounds["raw"])]
+    res["round_ratio_p50"] = statistics.median(res["round_ratios_p50"])
+    return res
+
+
+def udp_table(res):
+    """The udp section's figures, Markdown (the hand-measured section of docs/performance.md)."""
+    win, hb = res["window"], res["window"]["record"]["groups"]["heartbeat"]
+    due = res["nodes"] * win["record"]["seconds"] * 1000000 // res["period_us"]
+    lines = ["| what | count | per second |", "|---|--:|--:|",
+             f"| heartbeats due in the window ({res['nodes']} nodes x {win['record']['seconds']} s / 10 ms) | {due:,} | "
+             f"{due / win['record']['seconds']:,.0f} |",
+             f"| heartbeats received in the window | {hb['frames']:,} | {hb['frames'] / win['seconds']:,.0f} |",
+             f"| intervals over 1.5 periods (a missing heartbeat) | {hb['missing']:,} | |",
+             f"| window receiver's socket drops (SO_RXQ_OVFL) | {win['record']['rx_drops']:,} | |",
+             f"| namespace UDP RcvbufErrors in the window (all sockets) | {win['snmp']['RcvbufErrors']:,} | |",
+             f"| frames canopen-emu sent, whole run (exit summary) | {res['emu_sent']:,} | |",
+             f"| frames the whole-run receiver got from it | {res['whole_received']:,} | |",
+             f"| whole-run receiver's socket drops | {res['whole']['rx_drops']:,} | |",
+             f"| canopen-emu's refused sends (dropped) / its receive socket's losses | {res['emu_dropped']:,} / "
+             f"{res['emu_rx_lost']:,} | |",
+             f"| namespace UDP RcvbufErrors, whole run | {res['snmp_run']['RcvbufErrors']:,} | |"]
+    a = hb["abs_dev_us"]
+    lines += ["", f"canopen-emu CPU share in the window: {win['cpu_share'] * 100:.1f}% (user {win['cpu_user'] * 100:.1f}%, "
+              f"system {win['cpu_sys'] * 100:.1f}%); heartbeat period deviation p50 {a['p50']:,.0f} µs, p99 "
+              f"{a['p99']:,.0f} µs, max {a['max']:,.0f} µs, mean error {hb['mean_error_us']:+.1f} µs; receiver buffer "
+              f"{win['record']['rcvbuf']:,} bytes; load average after the window {win['loadavg']}; configuration "
+              f"{res['config_s']:.1f} s."]
+    return "\n".join(lines)
+
+
+def socketcand_table(res):
+    lines = ["| client | arrival time | p50 µs | p99 µs | max µs | p50 per round (µs) |", "|---|---|--:|--:|--:|---|"]
+    for k, label, when in (("raw_kernel", "SocketCAN raw socket", "kernel time stamp"),
+                           ("raw", "SocketCAN raw socket", "after read()"),
+                           ("socketcand", "socketcand (TCP, rawmode)", "after read()")):
+        st = res[k]["results"][0]["rtt_us"]
+        lines.append(f"| {label} | {when} | {st['p50']:,.0f} | {st['p99']:,.0f} | {st['max']:,.0f} | "
+                     + ", ".join(f"{x:,.0f}" for x in st["rounds_p50"]) + " |")
+    lines += ["", f"socketcand / SocketCAN (both after read()): p50 **{res['ratio_p50']:.2f}**, "
+              f"p99 **{res['ratio_p99']:.2f}** (medians of the rounds' figures); the p50 ratio per round: "
+              + ", ".join(f"{x:.2f}" for x in res["round_ratios_p50"])
+              + f", median **{res['round_ratio_p50']:.2f}**."]
+    return "\n".join(lines)
+
+
 def main():
+    if sys.argv[1:2] == ["--table"]:  # on the host: the udp or socketcand section's table from a JSON file
+        with open(sys.argv[3]) as f:
+            data = json.load(f)
+        print({"udp": udp_table, "socketcand": socketcand_table}[sys.argv[2]](data[sys.argv[2]]))
+        return 0
     if sys.argv[1:2] == ["client-load"]:  # the clients of a `clients` phase, started by clients_phase()
         phase, path, n = sys.argv[2:5]
         return client_load(phase, path, int(n))
@@ -709,8 +888,9 @@ def main():
     ap.add_argument("--work", required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--mode", choices=sorted(SIZES), default="full")
-    ap.add_argument("--only", choices=("rtt", "periods", "flood", "callgrind", "scale", "clients"),
-                    help="run this section alone (tools/bench --emu-instructions: callgrind); clients runs only so")
+    ap.add_argument("--only", choices=("rtt", "periods", "flood", "callgrind", "scale", "clients", "udp", "socketcand"),
+                    help="run this section alone (tools/bench --emu-instructions: callgrind); clients, udp and "
+                         "socketcand run only so")
     args = ap.parse_args()
     args.bin = os.path.abspath(args.bin)
     args.emu = os.path.abspath(args.emu)
@@ -727,6 +907,10 @@ def main():
     steps.append(("scale", scale))
     if args.only == "clients":
         steps.append(("clients", busy_clients))
+    if args.only == "udp":
+        steps.append(("udp", udp))
+    if args.only == "socketcand":
+        steps.append(("socketcand", socketcand))
     if args.only:
         steps = [(name, fn) for name, fn in steps if name == args.only]
     try:
