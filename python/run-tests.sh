@@ -8,7 +8,8 @@
 #         and examples/pytest on vcan0
 #   udp   the rest of python/tests and examples/pytest on udp_multicast, inside tests/udp/netns-run: a network
 #         namespace of their own whose only interface is lo (no datagram reaches this machine's network), where
-#         auto finds no vcan0 and gives the session a udp_multicast group of its own; natively, no User-Mode Linux
+#         auto finds no vcan0 and gives the session a udp_multicast group of its own; natively, no User-Mode Linux;
+#         then examples/pytest once more with --canopen-emu-bus socketcand (the master on python-can's socketcand)
 #
 #   CANOPEN_EMU=/path/to/canopen-emu [CO_SOURCE_DIR=/path/to/source] [CO_PYTHON_TESTS_PASSES="vcan udp"] \
 #     sh python/run-tests.sh BUILD_DIR [PYTEST-ARGS]
@@ -71,7 +72,13 @@ run_suites() {
   echo "== $pass pass: examples/pytest: the test engineer's example suite"
   (cd "$src/examples/pytest" && "$python" -m pytest -p no:cacheprovider -o junit_family=xunit2 \
     --junitxml="$build/examples-pytest$suffix.xml" "$@") || status=1
-  [ "$status" -eq 0 ] && echo "run-tests.sh: $pass pass: both suites passed" ||
+  if [ "$pass" = udp ]; then
+    echo "== $pass pass: examples/pytest again, its master on python-can's socketcand interface" \
+         "(--canopen-emu-bus socketcand: a virtual bus each emulator serves on loopback)"
+    (cd "$src/examples/pytest" && "$python" -m pytest -p no:cacheprovider -o junit_family=xunit2 \
+      --canopen-emu-bus socketcand --junitxml="$build/examples-pytest-socketcand.xml" "$@") || status=1
+  fi
+  [ "$status" -eq 0 ] && echo "run-tests.sh: $pass pass: the suites passed" ||
     echo "run-tests.sh: $pass pass FAILED" >&2
   return "$status"
 }

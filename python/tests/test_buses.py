@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from canopen_emu import Bus, choose_bus, session_udp_bus
+from canopen_emu import Bus, Emulator, choose_bus, session_udp_bus, socketcand_bus
 from canopen_emu.buses import SESSION_PORTS, interface_is_up, port_is_free
 from conftest import EDS
 
@@ -145,3 +145,55 @@ def test_auto_gives_two_sessions_at_once_a_udp_multicast_bus_each(own_namespace,
         assert ", chosen by auto: no vcan0 up, so a group of this session's own, TTL 0 (never leaves the machine)\n" in out, out
     buses = [Bus.parse((tmp_path / d / "bus").read_text()) for d in ("a", "b")]
     assert all(b.kind == "udp_multicast" for b in buses) and buses[0].port != buses[1].port, buses
+
+
+def test_socketcand_is_a_virtual_bus_served_on_loopback():
+    bus = choose_bus("socketcand")
+    assert bus == socketcand_bus() and (bus.spec, bus.kind, bus.name) == ("virtual:canopen-emu", "virtual", "canopen-emu")
+    assert bus.socketcand == "127.0.0.1:0" and str(bus) == "virtual:canopen-emu"
+    assert bus.label == "canopen-emu (virtual, served by socketcand on 127.0.0.1:0)"
+    with pytest.raises(ValueError, match="the port is the emulator's; its network"):
+        bus.can_kwargs()  # the port is each emulator's own: Emulator.network() joins it
+    with pytest.raises(ValueError, match="no python-can master can join it"):
+        Bus.parse("virtual:plant").can_kwargs()
+
+
+def test_an_emulator_serves_a_socketcand_bus_and_its_network_joins_it_with_python_can():
+    with Emulator(interface=socketcand_bus("plant"), nodes=["sds:16"]) as emu:
+        assert "--socketcand" in emu.args and emu.args[emu.args.index("--socketcand") + 1] == "127.0.0.1:0"
+        host, port = emu.socketcand_address()
+        assert host == "127.0.0.1" and port > 0
+        assert emu.client.hello().bus_kinds == {"plant": "virtual"}
+        net = emu.network()
+        assert net.bus.__class__.__name__ == "SocketCanDaemonBus"  # python-can's own socketcand interface
+        node = net.add_node(16, str(EDS["sds"]))
+        node.sdo.RESPONSE_TIMEOUT = 5.0
+        node.sdo.download(0x1017, 0, (1200).to_bytes(2, "little"))
+        assert emu.client.get(16, "0x1017") == 1200
+        assert node.sdo.upload(0x1018, 1) == emu.client.get(16, "0x1018:01").to_bytes(4, "little")
+    assert net.bus is None  # stop() disconnected it
+    with pytest.raises(ValueError, match="one address"):
+        Emulator(interface=socketcand_bus("a"), socketcand="127.0.0.1:1", nodes=["sds:16"])
+
+
+def test_the_plugins_socketcand_bus_hands_each_test_a_network_on_its_emulator(pytester):
+    pytester.makepyfile(f"""
+        import pytest
+
+        @pytest.mark.canopen_emu_nodes("sds:16")
+        def test_master(canopen_emu_network, canopen_emu):
+            node = canopen_emu_network.add_node(16, {str(EDS["sds"])!r})
+            node.sdo.RESPONSE_TIMEOUT = 5.0
+            node.sdo.download(0x1017, 0, (1300).to_bytes(2, "little"))
+            assert canopen_emu.client.get(16, "0x1017") == 1300
+
+        def test_factory_only(canopen_emu_factory, canopen_emu_network):
+            pass
+    """)
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "--canopen-emu-bus", "socketcand", timeout=300)
+    result.assert_outcomes(passed=1, errors=1)
+    result.stdout.fnmatch_lines([
+        "canopen-emu plugin *: * on canopen-emu (virtual, served by socketcand on 127.0.0.1:0)",
+        "*canopen_emu_network: canopen-emu (virtual, served by socketcand on 127.0.0.1:0) is inside each emulator: a "
+        "test that starts its own with canopen_emu_factory joins it with emulator.network()",
+    ])

@@ -11,7 +11,7 @@
   --canopen-emu-bus, and the emulator's log in a failed test's report.
 """
 from ._version import __version__
-from .buses import BUS_KINDS, Bus, choose_bus, session_udp_bus
+from .buses import BUS_KINDS, Bus, choose_bus, session_udp_bus, socketcand_bus
 from .client import (PROTOCOL_VERSION, ActiveError, Address, Client, Entry, Event, ExtendedId, FrameFilter,
                      HeardNode, LastEmcy, NodeInfo, NodeRef, NodeStatus, ObjectInfo, ObjectRef, Reading, ServerInfo,
                      Value, connect, decode_value, encode_value)
@@ -26,7 +26,7 @@ FAULT_KINDS = ("sdo-ignore", "sdo-delay", "sdo-abort", "heartbeat-stop", "heartb
 __all__ = [
     "__version__", "PROTOCOL_VERSION", "FAULT_KINDS", "DEFAULT_NODES",
     "connect", "Client", "Emulator", "find_executable", "decode_value", "encode_value",
-    "Bus", "BUS_KINDS", "choose_bus", "session_udp_bus",
+    "Bus", "BUS_KINDS", "choose_bus", "session_udp_bus", "socketcand_bus",
     "ServerInfo", "NodeInfo", "NodeStatus", "HeardNode", "ActiveError", "LastEmcy", "Entry", "ObjectInfo", "Reading",
     "Address", "NodeRef", "ObjectRef", "Value", "Event", "ExtendedId", "FrameFilter",
     "CanopenEmuError", "ControlError", "ProtocolError", "ControlTimeout", "ConnectionClosed", "EmulatorError",

@@ -2,7 +2,9 @@
 ``Bus.parse("vcan0")``, ``Bus.parse("udp_multicast:239.74.163.2:43113")``, ``choose_bus("auto")``.
 
 ``auto`` is vcan0 where it exists and is up, else a udp_multicast group and port of this process's own
-(session_udp_bus()): no root, no kernel module, and two test sessions on one machine never share a bus."""
+(session_udp_bus()): no root, no kernel module, and two test sessions on one machine never share a bus.
+``socketcand`` is a virtual bus inside each emulator, served over TCP on loopback by its ``--socketcand``
+(socketcand_bus()): the master reaches it with python-can's stock ``socketcand`` interface."""
 from __future__ import annotations
 
 import fcntl
@@ -30,7 +32,8 @@ class Bus:
     """One bus: ``spec``, the text given to canopen-emu's ``-i``; ``kind`` (``"socketcan"``, ``"udp_multicast"``,
     ``"virtual"``); ``name``, the emulator's name of it (``"vcan0"``, ``"udp_multicast:239.74.163.2:43113"``,
     ``"plant"``: what ``NODE@BUS``, list's ``bus`` and the log show); for udp_multicast its ``group``, ``port``,
-    ``ttl`` and ``iface`` (None: the route's)."""
+    ``ttl`` and ``iface`` (None: the route's); ``socketcand``: the ``HOST:PORT`` the emulator serves its buses at
+    (canopen-emu's ``--socketcand``; port 0: a free one, told by its log), None when it does not."""
     spec: str
     kind: str
     name: str
@@ -38,6 +41,7 @@ class Bus:
     port: Optional[int] = None
     ttl: int = 1
     iface: Optional[str] = None
+    socketcand: Optional[str] = None
 
     @classmethod
     def parse(cls, text: str) -> "Bus":
@@ -60,6 +64,8 @@ class Bus:
     def label(self) -> str:
         """The name with the kind where the name does not say it: ``"vcan0 (socketcan)"``, ``"plant (virtual)"``,
         ``"udp_multicast:239.74.163.2:43113"``."""
+        if self.socketcand is not None:
+            return f"{self.name} ({self.kind}, served by socketcand on {self.socketcand})"
         return self.name if self.name.startswith(self.kind + ":") else f"{self.name} ({self.kind})"
 
     def can_kwargs(self) -> Dict[str, Any]:
@@ -72,8 +78,11 @@ class Bus:
         if self.kind == "udp_multicast":
             # python-can joins on the interface of the route to the group: with iface= the emulator may be elsewhere
             return {"interface": "udp_multicast", "channel": self.group, "port": self.port, "hop_limit": self.ttl}
+        if self.socketcand is not None:
+            raise ValueError(f"{self.label}: the port is the emulator's; its network() joins the bus (python-can's "
+                             "socketcand interface)")
         raise ValueError(f"{self.label} is inside the emulator: no python-can master can join it (use a socketcan or "
-                         "udp_multicast bus)")
+                         "udp_multicast bus, or serve it with socketcand)")
 
     def network(self) -> Any:
         """A python-canopen ``Network`` connected to this bus (``network.disconnect()`` when done). Needs the
@@ -177,9 +186,20 @@ def session_udp_bus(pid: Optional[int] = None, *, probe: bool = True) -> Bus:
     return Bus.parse(f"udp_multicast:239.74.{x}.{y}:{port},ttl=0")
 
 
+def socketcand_bus(name: str = "canopen-emu", address: str = "127.0.0.1:0") -> Bus:
+    """A virtual bus NAME that the emulator serves with ``--socketcand ADDRESS`` (default loopback and a free port
+    of each emulator's own, so that emulators of parallel tests never share one): a master joins it with python-can's
+    ``socketcand`` interface (``Emulator.network()``), as it would join a SocketCAN interface of another machine."""
+    bus = Bus.parse(f"virtual:{name}")
+    return Bus(bus.spec, bus.kind, bus.name, socketcand=address)
+
+
 def choose_bus(choice: str = "auto", is_up: Callable[[str], bool] = interface_is_up) -> Bus:
     """The bus ``--canopen-emu-bus`` names: ``auto`` is vcan0 where it exists and is up (``is_up``), else
-    session_udp_bus(); anything else is parsed as canopen-emu's ``-i`` (Bus.parse)."""
+    session_udp_bus(); ``socketcand`` is socketcand_bus(); anything else is parsed as canopen-emu's ``-i``
+    (Bus.parse)."""
     if choice == "auto":
         return Bus.parse("vcan0") if is_up("vcan0") else session_udp_bus()
+    if choice == "socketcand":
+        return socketcand_bus()
     return Bus.parse(choice)

@@ -9,7 +9,7 @@ import tempfile
 import time
 import weakref
 from pathlib import Path
-from typing import Any, List, Optional, Sequence, Union
+from typing import Any, List, Optional, Sequence, Tuple, Union
 
 from .buses import Bus
 from .client import Client, Event, connect
@@ -61,7 +61,8 @@ class Emulator:
     by stop()). ``executable``: default ``$CANOPEN_EMU``, else ``canopen-emu`` on PATH. ``extra_args``: more options
     (``["-v"]``). ``web``:
     ``HOST:PORT`` of the live view in the browser (``--web``; ``"127.0.0.1:0"`` takes a free port), its address then
-    from ``web_url()``.
+    from ``web_url()``. ``socketcand``: ``HOST:PORT`` where it serves its buses over socketcand (``--socketcand``;
+    port 0: a free one, from ``socketcand_address()``); a Bus of socketcand_bus() asks for it too.
 
     The constructor returns once the control socket answers ``hello`` with protocol 1 and ``list`` shows every node
     out of INITIALISING (the boot-up sent); it raises EmulatorError, with the log, when that does not happen
@@ -71,10 +72,16 @@ class Emulator:
                  nodes: Sequence[str] = DEFAULT_NODES,
                  nvm_dir: Optional[PathLike] = None, executable: Optional[PathLike] = None,
                  extra_args: Sequence[str] = (), *, start_timeout: float = 10.0, client_timeout: float = 5.0,
-                 wait_boot: bool = True, web: Optional[str] = None) -> None:
+                 wait_boot: bool = True, web: Optional[str] = None, socketcand: Optional[str] = None) -> None:
+        given = [interface] if isinstance(interface, (str, Bus)) else list(interface)
         # canopen-emu's -i texts: a Bus (choose_bus()) gives its spec
-        self.interfaces: List[str] = [str(i) for i in ([interface] if isinstance(interface, (str, Bus))
-                                                       else interface)]
+        self.interfaces: List[str] = [str(i) for i in given]
+        self._given_buses = {str(i): i for i in given if isinstance(i, Bus)}
+        served = {b.socketcand for b in self._given_buses.values() if b.socketcand is not None} | (
+            {socketcand} if socketcand is not None else set())
+        if len(served) > 1:
+            raise ValueError(f"an emulator serves socketcand at one address, not at {', '.join(sorted(served))}")
+        self.socketcand: Optional[str] = served.pop() if served else None
         self.node_args: List[str] = [nodes] if isinstance(nodes, str) else list(nodes)
         if not self.interfaces:
             raise ValueError("an emulator needs at least one interface")
@@ -92,7 +99,9 @@ class Emulator:
         for name in self.interfaces:
             self.args += ["-i", name]
         self.args += ["--nvm-dir", str(self.nvm_dir), "--control-socket", str(self.socket_path),
-                      *(["--web", web] if web is not None else []), *extra_args, *self.node_args]
+                      *(["--web", web] if web is not None else []),
+                      *(["--socketcand", self.socketcand] if self.socketcand is not None else []),
+                      *extra_args, *self.node_args]
         self.stop_requested = False  # stop() was called (by the test, not found dead at the end)
         self._clients: List[Client] = []
         self._networks: List[Any] = []  # python-canopen Networks of network(), disconnected by stop()
@@ -199,13 +208,14 @@ class Emulator:
     @property
     def buses(self) -> List[Bus]:
         """The buses as given (``interface``), each with its kind and the emulator's name of it (canopen_emu.Bus)."""
-        return [Bus.parse(name) for name in self.interfaces]
+        return [self._given_buses.get(name) or Bus.parse(name) for name in self.interfaces]
 
     def network(self, bus: Union[None, str, Bus] = None) -> Any:
         """A python-canopen ``Network`` connected to a bus of this emulator (default: its first; or one of
         ``buses`` by its name or ``-i`` text), disconnected by stop(): the master's side of the test, on whatever
-        kind of bus the emulator runs (``Bus.can_kwargs()``). Needs the ``canopen`` package, and for udp_multicast
-        ``msgpack`` (``pip install canopen-emu[udp]``)."""
+        kind of bus the emulator runs (``Bus.can_kwargs()``); a virtual bus through the emulator's socketcand server
+        (python-can's ``socketcand`` interface). Needs the ``canopen`` package, and for udp_multicast ``msgpack``
+        (``pip install canopen-emu[udp]``)."""
         buses = self.buses
         if bus is None:
             chosen = buses[0]
@@ -215,9 +225,28 @@ class Emulator:
             if not found:
                 raise ValueError(f"{wanted!r} is not a bus of this emulator ({', '.join(b.name for b in buses)})")
             chosen = found[0]
-        net = chosen.network()
+        if chosen.kind == "virtual" and self.socketcand is not None:
+            try:
+                import canopen  # not a dependency of this package: only a test with a master needs it
+            except ImportError as e:
+                raise ImportError("a python-canopen Network needs the canopen package: pip install canopen") from e
+            host, port = self.socketcand_address()
+            net = canopen.Network()
+            net.connect(interface="socketcand", channel=chosen.name, host=host, port=port)
+        else:
+            net = chosen.network()
         self._networks.append(net)
         return net
+
+    def socketcand_address(self, timeout: float = 5.0) -> Tuple[str, int]:
+        """(host, port) of its socketcand server as the log says it (``socketcand=``; port 0 replaced by the port
+        it got)."""
+        if self.socketcand is None:
+            raise ValueError("this emulator was started without socketcand (socketcand=\"127.0.0.1:0\")")
+        line = self.wait_log("socketcand: listening on ", timeout)
+        address = line.split("socketcand: listening on ", 1)[1].split(": ", 1)[0].strip()
+        host, port = address.rsplit(":", 1)
+        return host.strip("[]"), int(port)
 
     def log_text(self) -> str:
         """The log (stderr) so far, or all of it after stop()."""

@@ -8,7 +8,9 @@ Options (command line, or the ini file):
 - ``--canopen-emu-bus BUS`` (repeatable) / ini ``canopen_emu_bus``: the bus(es) of the emulators, as canopen-emu's
   ``-i`` names them (``vcan0``, ``socketcan:can1``, ``udp_multicast:239.74.163.2:43113``, docs/buses.md), or ``auto``
   (the default): vcan0 where it exists and is up, else a udp_multicast group and port of this session's own, TTL 0
-  (canopen_emu.buses.session_udp_bus: two sessions on one machine, pytest-xdist's workers too, never share it);
+  (canopen_emu.buses.session_udp_bus: two sessions on one machine, pytest-xdist's workers too, never share it),
+  or ``socketcand``: a virtual bus in each emulator, served on a loopback port of its own by its ``--socketcand``,
+  which the master joins with python-can's ``socketcand`` interface (canopen_emu.buses.socketcand_bus);
   ``--canopen-emu-interface`` / ini ``canopen_emu_interface`` are its older names;
 - ``--canopen-emu-web HOST:PORT`` / ini ``canopen_emu_web``: every emulator the fixtures start serves the live view
   in the browser there (``127.0.0.1:0``: a free port each); its address is written to the terminal and into a
@@ -63,8 +65,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     group.addoption("--canopen-emu-bus", dest="canopen_emu_bus", metavar="auto|BUS", action="append",
                     default=None, help="bus of the emulators, as canopen-emu's -i names it (vcan0, "
                                        "udp_multicast:GROUP:PORT, ...), or auto: vcan0 when it is up, else a "
-                                       "udp_multicast group of this session's own (default: ini canopen_emu_bus, "
-                                       "else auto); give it again for more buses")
+                                       "udp_multicast group of this session's own, or socketcand: a virtual bus "
+                                       "served by each emulator's socketcand server on loopback (default: ini "
+                                       "canopen_emu_bus, else auto); give it again for more buses")
     group.addoption("--canopen-emu-interface", dest="canopen_emu_interface", metavar="IFACE", action="append",
                     default=None, help="the older name of --canopen-emu-bus")
     group.addoption("--canopen-emu-web", dest="canopen_emu_web", metavar="HOST:PORT", default=None,
@@ -210,13 +213,22 @@ def canopen_emu_bus(pytestconfig: pytest.Config) -> Bus:
 
 
 @pytest.fixture
-def canopen_emu_network(canopen_emu_bus: Bus) -> Iterator[Any]:
+def canopen_emu_network(request: pytest.FixtureRequest, canopen_emu_bus: Bus) -> Iterator[Any]:
     """A python-canopen ``Network`` connected to the emulators' bus, whatever its kind (vcan0, the session's
     udp_multicast group...), disconnected at the end of the test: hand it to the master under test. Needs the
-    ``canopen`` package (and ``msgpack`` for udp_multicast: ``pip install canopen-emu[udp]``)."""
+    ``canopen`` package (and ``msgpack`` for udp_multicast: ``pip install canopen-emu[udp]``). A bus served by
+    socketcand is inside one emulator: the test's ``canopen_emu`` (else ``canopen_emu_session``), started first."""
     try:
-        net = canopen_emu_bus.network()
-    except (ImportError, ValueError) as e:
+        if canopen_emu_bus.socketcand is not None:
+            emulator = next((request.getfixturevalue(name) for name in ("canopen_emu", "canopen_emu_session")
+                             if name in request.fixturenames), None)
+            if emulator is None:
+                raise ValueError(f"{canopen_emu_bus.label} is inside each emulator: a test that starts its own with "
+                                 "canopen_emu_factory joins it with emulator.network()")
+            net = emulator.network()
+        else:
+            net = canopen_emu_bus.network()
+    except (ImportError, ValueError, OSError) as e:
         pytest.fail(f"canopen_emu_network: {e}", pytrace=False)
     yield net
     net.disconnect()
