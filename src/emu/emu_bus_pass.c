@@ -118,10 +118,10 @@ static inline __attribute__((always_inline)) co_time_us_t bus_receive(emu_bus_t 
 {
     co_frame_t f;
     for (unsigned k = 0U; k < 1024U && can_channel_read(&b->can, &f, now) == 1; k++) {
-        frame_in(b, &f, now);
-        if (b->socketcand_readers > 0U) {
+        if (b->socketcand_readers > 0U) { /* before the nodes' answers to it, which frame_in may send */
             socketcand_publish(&b->emu->socketcand, b, &f, now, NULL);
         }
+        frame_in(b, &f, now);
         /* Clients that send a request as soon as an answer is out keep the socket from running dry: without this a
          * flood could hold every heartbeat back until 1024 frames were read (a 350 ms gap failed test_bus_faults'
          * flood test in a loaded run). Looked at once a read-ahead batch is used up, where stopping loses nothing;

@@ -293,10 +293,12 @@ static void send_frame(emu_socketcand_t *s, socketcand_client_t *c, const co_fra
         log_limited(&s->troubles, now, "socketcand: %s: a frame of %s did not reach the bus's medium (%lu so far)",
                     b->can.name, c->name, s->medium_refused);
     }
-    bus_frame_in(b, f, now);
+    /* to the other clients first: a node answers inside bus_frame_in, and a watching client must see the request
+     * before its answer, as on the wire */
     if (b->socketcand_readers > 0U) {
         socketcand_publish(s, b, f, now, c);
     }
+    bus_frame_in(b, f, now);
 }
 
 static void run_command(emu_t *emu, emu_socketcand_t *s, socketcand_client_t *c, co_time_us_t now)

@@ -85,9 +85,11 @@ void socketcan_close(socketcan_t *c);
  *  returned n (errno set when it failed) and is not a plain success on an interface known to be up. */
 co_status_t socketcan_send_slow(socketcan_t *c, const struct can_frame *cf, ssize_t n);
 
-/* CO_FRAME_RTR (bit 0) moved to CAN_RTR_FLAG (bit 30) and back with a shift: no branch per frame. */
+/* CO_FRAME_RTR (bit 0) moved to CAN_RTR_FLAG (bit 30) and back with a shift: no branch per frame; CO_FRAME_EFF
+ * (bit 1) to CAN_EFF_FLAG (bit 31) with the same shift. */
 #define SOCKETCAN_RTR_SHIFT 30U
 typedef char socketcan_rtr_flags_line_up[(CO_FRAME_RTR << SOCKETCAN_RTR_SHIFT) == CAN_RTR_FLAG ? 1 : -1];
+typedef char socketcan_eff_flags_line_up[((canid_t)CO_FRAME_EFF << SOCKETCAN_RTR_SHIFT) == CAN_EFF_FLAG ? 1 : -1];
 
 /** co_port_t.send for this channel (ctx = socketcan_t *). Inline, the write and its plain success: every frame a
  *  node sends comes this way, and a layer of call for it cost as much as the rest of the success path. */
@@ -96,7 +98,9 @@ static inline co_status_t socketcan_send(void *ctx, const co_frame_t *frame)
     socketcan_t *c = (socketcan_t *)ctx;
     struct can_frame cf;
     memset(&cf, 0, sizeof cf);
-    cf.can_id = (frame->id & CAN_SFF_MASK) | ((canid_t)(frame->flags & CO_FRAME_RTR) << SOCKETCAN_RTR_SHIFT);
+    /* the nodes send 11-bit frames only, but a socketcand client's 29-bit frame comes this way too: it stays one */
+    const canid_t flags = (canid_t)(frame->flags & (CO_FRAME_RTR | CO_FRAME_EFF)) << SOCKETCAN_RTR_SHIFT;
+    cf.can_id = (frame->id & ((flags & CAN_EFF_FLAG) != 0U ? CAN_EFF_MASK : CAN_SFF_MASK)) | flags;
     cf.can_dlc = frame->len;
     memcpy(cf.data, frame->data, sizeof cf.data); /* all 8: bytes past len are zero on transmit (co_frame_t) */
     ssize_t n = -1;
