@@ -5,20 +5,14 @@ import sys
 import time
 
 import can
-import pytest
 
-from udp_support import GROUP, SRC, Emulator, require_own_namespace
+from udp_support import GROUP, SRC, Emulator
 
 sys.path.insert(0, str(SRC / "tests/support"))
 from control_schema import check_schema  # noqa: E402
 
 PORT = 43121  # apart from the other udp tests' port: a heartbeat sent here reaches this emulator only
 UDP_BUS = f"udp_multicast:{GROUP}:{PORT}"
-
-
-@pytest.fixture(autouse=True)
-def own_namespace():
-    require_own_namespace()
 
 
 def test_hello_list_and_show_name_each_bus_and_its_kind(tmp_path):

@@ -13,35 +13,13 @@ import can
 import canopen
 import pytest
 
-from udp_support import GROUP, PORT, SRC, Emulator, require_own_namespace
+from udp_support import GROUP, PORT, SRC, Emulator
 
 HOST = "127.0.0.1"
 SCD_PORT = 29537
 SERVE = f"{HOST}:{SCD_PORT}"
 BUERKERT = SRC / "od/buerkert-flow-controller.eds"
 ALL_TYPES = SRC / "tests/eds/files/all-types.eds"
-
-
-@pytest.fixture(autouse=True)
-def own_namespace():
-    require_own_namespace()
-
-
-@pytest.fixture
-def emulators():
-    started = []
-    yield started
-    for emu in started:
-        emu.kill()
-
-
-@pytest.fixture
-def buses():
-    """python-can socketcand Buses a test opens; shut down at its end."""
-    opened = []
-    yield opened
-    for bus in opened:
-        bus.shutdown()
 
 
 @pytest.fixture

@@ -9,14 +9,12 @@ import msgpack
 import pytest
 from can.interfaces.udp_multicast.utils import pack_message, unpack_message
 
-from udp_support import require_own_namespace
 
 TOOL = os.environ.get("CO_UDP_DATAGRAM_TOOL", "")
 
 
 @pytest.fixture(autouse=True)
-def own_namespace():
-    require_own_namespace()
+def datagram_tool_given():
     if not TOOL:
         pytest.fail("CO_UDP_DATAGRAM_TOOL is not set (run by ctest: tests/udp/CMakeLists.txt)", pytrace=False)
 

@@ -13,26 +13,12 @@ import msgpack
 import pytest
 from can.interfaces.udp_multicast.utils import pack_message
 
-from udp_support import GROUP, GROUP6, PORT, SRC, Emulator, require_own_namespace
+from udp_support import GROUP, GROUP6, PORT, SRC, Emulator
 
 BUS = f"udp_multicast:{GROUP}:{PORT}"
 PYTHON_CAN_KEYS = ["timestamp", "arbitration_id", "is_extended_id", "is_remote_frame", "is_error_frame", "channel",
                    "dlc", "data", "is_fd", "bitrate_switch", "error_state_indicator"]
 EVERY_FRAME = ["0x000/0x000", "0x00000000x/0x0"]
-
-
-@pytest.fixture(autouse=True)
-def own_namespace():
-    require_own_namespace()
-
-
-@pytest.fixture
-def emulators():
-    """Emulators a test starts; killed if the test did not stop them."""
-    started = []
-    yield started
-    for emu in started:
-        emu.kill()
 
 
 def start(emulators, tmp_path, *args, name="emu"):

@@ -1,14 +1,7 @@
 """Virtual buses (-i virtual:NAME, docs/buses.md): no medium, the nodes of one bus hear each other and nothing else;
 two virtual buses are apart. A heartbeat consumer (the Buerkert's 0x1016) shows it: it starts watching a producer
 when it first hears its heartbeat, and reports the heartbeat missing once the producer stops."""
-import pytest
-
-from udp_support import Emulator, require_own_namespace
-
-
-@pytest.fixture(autouse=True)
-def own_namespace():
-    require_own_namespace()
+from udp_support import Emulator
 
 
 def consumer_watches_producer(emu):
