@@ -361,6 +361,33 @@ def test_at_most_16_clients(tmp_path, emulators):
     assert "refused: 16 are connected already" in emu.stop()
 
 
+def test_half_open_connections_run_nothing_and_free_their_place(tmp_path, emulators):
+    """A client that vanishes in the middle of a command, and one that closes its sending half: the cut command is
+    not run, and each connection is closed and its place freed (16 connect after them)."""
+    emu = start(emulators, tmp_path, "-i", "virtual:plant", "sds:16")
+    watcher = Raw()
+    watcher.open_raw()
+    cut = Raw()
+    cut.open_raw()
+    cut.send("< send 000 2 01 00 >< send 123 1 AA")  # NMT start all, then a command without its end
+    cut.close()
+    half = Raw()
+    half.open_raw()
+    half.send("< send 124 1 BB >")
+    half.sock.shutdown(socket.SHUT_WR)  # nothing more comes: the server ends the connection
+    assert half.closed(), "a client that closed its sending half was left open"
+    seen = [i.split()[2] for i in watcher.items_for(0.5)]
+    assert [i for i in seen if i in ("000", "123", "124")] == ["000", "124"], seen  # NMT and 124; the cut 123 never
+    assert [n["state"] for n in emu.control.request("list")["nodes"]] == ["OPERATIONAL"]
+    watcher.close()
+    time.sleep(0.2)
+    clients = [Raw() for _ in range(16)]  # every place was freed
+    for c in clients:
+        assert c.item() == "< hi >"
+    log = emu.stop()
+    assert "refused" not in log and "closed:" not in log, log  # an ordinary end both times, nobody refused
+
+
 def test_the_address_is_loopback_unless_named(tmp_path):
     from udp_support import EMU
     import subprocess
