@@ -185,6 +185,11 @@ def open_bus(receive_own_messages=False):
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "socketcan: tests SocketCAN itself (the kernel interface): run on vcan0 only")
+    names = [name for _, name in socket.if_nameindex()]
+    if BUS_KIND == "udp_multicast" and names != ["lo"]:
+        # multicast of a test must never reach a real network
+        raise pytest.UsageError(f"CO_TEST_BUS=udp_multicast runs only inside a network namespace of its own "
+                                f"(tests/udp/netns-run), not with interfaces {names}")
 
 
 @pytest.fixture
