@@ -11,7 +11,7 @@ import weakref
 from pathlib import Path
 from typing import Any, List, Optional, Sequence, Tuple, Union
 
-from .buses import Bus
+from .buses import NOTIFIER_CYCLE_S, Bus
 from .client import Client, Event, connect
 from .errors import CanopenEmuError, ConnectionClosed, ControlTimeout, EmulatorError
 
@@ -232,6 +232,7 @@ class Emulator:
                 raise ImportError("a python-canopen Network needs the canopen package: pip install canopen") from e
             host, port = self.socketcand_address()
             net = canopen.Network()
+            net.NOTIFIER_CYCLE = NOTIFIER_CYCLE_S
             net.connect(interface="socketcand", channel=chosen.name, host=host, port=port)
         else:
             net = chosen.network()
