@@ -18,7 +18,7 @@
 # the directory it installs from, which must not be the source tree) and the JUnit reports (python-tests.xml,
 # examples-pytest.xml; the udp pass's python-tests-udp.xml, examples-pytest-udp.xml). CO_SOURCE_DIR defaults to the
 # directory above this script; PYTHON (default python3) makes the venv; CO_PYTHON_TESTS_PASSES names the passes to
-# run (default both). The pinned versions of canopen, python-can, pytest and msgpack are tests/requirements.txt's.
+# run (default both; "venv": only make the venv); CO_PYTHON_TESTS_VENV=reuse takes the venv a run made before. The pinned versions of canopen, python-can, pytest and msgpack are tests/requirements.txt's.
 #
 # Where it runs: pip needs the package index, and tools/vcan-run's User-Mode Linux has no network. So the venv is
 # made here, and the tests then run at once if vcan0 exists (a kernel with vcan, a CI runner after
@@ -96,7 +96,8 @@ esac
 
 passes=${CO_PYTHON_TESTS_PASSES:-vcan udp}
 for pass in $passes; do
-  case $pass in vcan|udp) ;; *) echo "run-tests.sh: CO_PYTHON_TESTS_PASSES takes vcan and udp, not $pass" >&2; exit 2 ;;
+  case $pass in vcan|udp|venv) ;;
+    *) echo "run-tests.sh: CO_PYTHON_TESTS_PASSES takes vcan, udp and venv, not $pass" >&2; exit 2 ;;
   esac
 done
 
@@ -105,6 +106,11 @@ pins=$(grep -E '^(canopen|python-can|pytest|msgpack)==' "$src/tests/requirements
   echo "run-tests.sh: tests/requirements.txt must pin canopen, python-can, pytest and msgpack (found: $pins)" >&2
   exit 2; }
 
+# venv alone: make the venv and stop; a pass alone with CO_PYTHON_TESTS_VENV=reuse: use the venv made so (ctest makes
+# it once, in a test of its own, for both passes: tests/integration/CMakeLists.txt)
+if [ "${CO_PYTHON_TESTS_VENV:-}" = reuse ] && [ -x "$venv/bin/python" ]; then
+  echo "== the venv $venv made before"
+else
 echo "== fresh venv $venv, pip install ./python[udp]" $pins
 rm -rf "$venv" "$build/python-src"
 cp -R "$src/python" "$build/python-src"
@@ -116,6 +122,8 @@ if ! "$venv/bin/python" -m pip install -q --disable-pip-version-check "$build/py
        "network: run this script outside it, it starts tools/vcan-run itself when vcan0 is missing)" >&2
   exit 1
 fi
+fi
+[ "$passes" != venv ] || exit 0
 
 failed=0 ran=0
 for pass in $passes; do
