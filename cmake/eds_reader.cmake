@@ -13,7 +13,14 @@ if(NOT CMAKE_CROSSCOMPILING)
   set(CO_EDS_TOOL $<TARGET_FILE:canopen-eds>)
   set(CO_EDS_TOOL_TARGET canopen-eds)
 else()
-  # Cross build: the generator runs on the build machine, so the reader is built there with its C compiler.
+  # Cross build: the generator runs on the build machine, so the reader is built there with its C compiler, unless
+  # one is given (tools/size-report builds it once for its 64 cross builds).
+  set(CO_HOST_EDS_TOOL "" CACHE FILEPATH "A canopen-eds built for the build machine (cross builds only; empty: build one)")
+endif()
+if(CMAKE_CROSSCOMPILING AND CO_HOST_EDS_TOOL)
+  set(CO_EDS_TOOL ${CO_HOST_EDS_TOOL})
+  set(CO_EDS_TOOL_TARGET "")
+elseif(CMAKE_CROSSCOMPILING)
   include(ExternalProject)
   set(CO_HOST_C_COMPILER cc CACHE STRING "The build machine's C compiler (for canopen-eds in cross builds)")
   set(host_dir ${PROJECT_BINARY_DIR}/host-eds)

@@ -21,7 +21,7 @@ need_files() {
 }
 
 need_cross_arm() {
-  need_tools "cmake:cmake make:make python3:python3 arm-none-eabi-gcc:gcc-arm-none-eabi" &&
+  need_tools "cmake:cmake make:make ninja:ninja-build python3:python3 arm-none-eabi-gcc:gcc-arm-none-eabi" &&
     need_files "/usr/lib/picolibc/arm-none-eabi/picolibc.specs:picolibc-arm-none-eabi"
 }
 
