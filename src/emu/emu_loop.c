@@ -134,6 +134,9 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
         if (emu->web.daemon != NULL) { /* without --web a pass pays for neither call */
             nfds += web_poll_fds(&emu->web, &pfd[web_index], now, &next);
         }
+        if (emu->quit || *stop != 0) {
+            break; /* a quit this pass took (stdin, a session, a script) ends the run now, not after the next sleep */
+        }
         struct timespec ts;
         /* work left for the sessions: no sleep, the next pass goes on with it after the nodes' turn */
         const int ready = ppoll(pfd, nfds, emu_poll_timeout(sessions_pending ? now : next, now, &ts), NULL);

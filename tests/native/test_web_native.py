@@ -524,6 +524,24 @@ def test_a_session_without_exchange_for_10_s_is_removed(emu):
     assert emu.exchange(kept, '{"id":2,"cmd":"hello"}').lines()[0]["id"] == 2
 
 
+def test_quit_on_stdin_ends_the_program_at_once_on_a_quiet_bus(tmp_path):
+    """A node whose heartbeat is off and a web session open: the loop's next deadline is the session's expiry, 10 s
+    away. quit on stdin ended the program only then (the loop went back to sleep after taking the command); it must
+    end it at once."""
+    emu = WebEmulator(tmp_path, nodes=("buerkert:18",))
+    emu.proc.stdin.write("set 18 0x1017 0\n")
+    emu.proc.stdin.flush()
+    end = time.monotonic() + 10.0
+    while not any("0x1017" in line for line in list(emu.out_lines)):  # its answer: no heartbeat from now on
+        assert time.monotonic() < end, emu.out_lines
+        time.sleep(0.02)
+    emu.open_session()
+    time.sleep(0.5)  # the loop asleep, no frame or timer due before the session's expiry
+    start = time.monotonic()
+    assert emu.quit() == 0, emu.log()[-3000:]
+    assert time.monotonic() - start < 3.0, emu.log()[-3000:]  # 10 s before the fix; a few ms after it
+
+
 # ---- addresses ---------------------------------------------------------------------------------------------------
 
 def test_loopback_is_not_warned_about(emu):
