@@ -305,6 +305,9 @@ def emulator(request, tmp_path):
 @pytest.fixture
 def network():
     net = canopen.Network(open_bus())
+    # Its receive thread waits this long for a frame between looks at whether to stop: 1 s by default, which every
+    # test paid again at its end (disconnect joins the thread). The plugin does the same (NOTIFIER_CYCLE_S).
+    net.NOTIFIER_CYCLE = 0.05
     net.connect()
     deep_receive_buffer(net.bus)
     yield net
