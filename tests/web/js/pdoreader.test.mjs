@@ -36,7 +36,7 @@ function values(node, bits = 8) {
     {object: "0x1A00:01", value: 0x60000500 + bits, type: "UNSIGNED32"}];
 }
 
-const LIST = {nodes: [17, 18, 19, 20, 21, 22].map((node) => ({node, device: "sds", variant: "N", bus: "vcan0"}))};
+const LIST = {nodes: Array.from({length: PARALLEL + 2}, (_, k) => ({node: 17 + k, device: "sds", variant: "N", bus: "vcan0"}))};
 
 test("a node's mapping: list, objects once per device, get of its PDO objects; then its PDOs decode", async () => {
   const maps = new PdoMaps();
@@ -72,7 +72,9 @@ test("a node's mapping: list, objects once per device, get of its PDO objects; t
 test(`at most ${PARALLEL} nodes are read at once`, async () => {
   const reader = new PdoReader(new PdoMaps());
   const session = new StubSession();
-  for (const node of [17, 18, 19, 20, 21, 22]) {
+  const nodes = Array.from({length: PARALLEL + 2}, (_, k) => 17 + k);
+  const named = (list) => list.map((node) => `${node}@vcan0`);
+  for (const node of nodes) {
     reader.want("vcan0", node);
   }
   reader.tick(session);
@@ -83,7 +85,7 @@ test(`at most ${PARALLEL} nodes are read at once`, async () => {
   session.take();
   session.pending[0].resolve({objects: OBJECTS});
   await settle();
-  assert.deepEqual(session.take().map(([, f]) => f.node), ["17@vcan0", "18@vcan0", "19@vcan0", "20@vcan0"]);
+  assert.deepEqual(session.take().map(([, f]) => f.node), named(nodes.slice(0, PARALLEL)));
   const gets = session.pending;
   reader.tick(session);
   await settle();
@@ -94,7 +96,7 @@ test(`at most ${PARALLEL} nodes are read at once`, async () => {
   await settle();
   reader.tick(session);
   await settle();
-  assert.deepEqual(session.take().map(([, f]) => f.node), ["21@vcan0", "22@vcan0"]); // the dictionary is known
+  assert.deepEqual(session.take().map(([, f]) => f.node), named(nodes.slice(PARALLEL))); // the dictionary is known
 });
 
 test("a node the emulator does not have is not read; stale() looks for it again", async () => {
