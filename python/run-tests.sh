@@ -118,7 +118,7 @@ rm -rf "$build/python-src/build" "$build/python-src"/src/*.egg-info
 # A venv without a pip of its own, filled by the pip of the Python that makes it (pip 22.3 and later installs into
 # another environment: --python), where that pip can: ensurepip's copy of pip into the new venv was 6 of its 15 s.
 # (PYTHON may itself be a venv without pip: python3's pip then)
-maker=${PYTHON:-python3}
+maker=$(command -v "${PYTHON:-python3}" || echo "${PYTHON:-python3}")  # pip's --python takes a path
 runner=""
 for candidate in "$maker" python3; do
   if "$candidate" -m pip --python "$maker" --version >/dev/null 2>&1; then

@@ -37,7 +37,7 @@ make_venv() {
     echo "== python venv ($1)"
     # Without a pip of its own where python3's pip can fill it (pip 22.3 and later: --python): ensurepip's copy of
     # pip into the venv is 6 s. The venv's pip is not used later (python/run-tests.sh brings its own).
-    if python3 -m pip --python python3 --version >/dev/null 2>&1; then
+    if python3 -m pip --python "$(command -v python3)" --version >/dev/null 2>&1; then
       python3 -m venv --without-pip "$1" &&
         python3 -m pip --python "$1/bin/python" install -q --disable-pip-version-check -r tests/requirements.txt
     else
