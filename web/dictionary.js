@@ -1,7 +1,8 @@
 // The node view's object dictionary as a tree (docs/web.md "The node view"): the `objects` answer grouped by index,
 // the values' texts, what a user typed made into the value a `set` takes. No DOM: tested with node --test.
 
-import {chunks} from "./objects.js";
+import {hex} from "./format.js";
+import {chunks, parseObject} from "./objects.js";
 
 /**
  * The entries of an `objects` answer ([{object: "0x1018:01", name, object_name, type, access, unit, low, high}], in
@@ -45,15 +46,47 @@ export function limits(entry) {
   return high === null ? "" : `≤ ${high}`;
 }
 
-/** A value as `get` gives it (docs/control-protocol.md "Typed values") as the text of its cell. */
-export function valueText(value) {
+const COB_ID_NAME = /\bCOB[- ]?ID\b/i;
+
+/**
+ * Whether an entry is a COB-ID, shown in hex: an UNSIGNED32 that is 0x1005 (SYNC), 0x1012 (TIME), 0x1014 (EMCY),
+ * sub 1 or 2 of an SDO parameter (0x1200-0x12FF), sub 1 of a PDO's communication parameter (0x1400-0x15FF,
+ * 0x1800-0x19FF), or whose name says so ("COB-ID", "COB ID": a device's own).
+ */
+export function isCobId(entry) {
+  const at = parseObject(entry.object);
+  if (entry.type !== "UNSIGNED32" || at === null) {
+    return false;
+  }
+  const {index, sub} = at;
+  return index === 0x1005 || index === 0x1012 || index === 0x1014 ||
+    (index >= 0x1200 && index <= 0x12FF && (sub === 1 || sub === 2)) ||
+    (((index >= 0x1400 && index <= 0x15FF) || (index >= 0x1800 && index <= 0x19FF)) && sub === 1) ||
+    COB_ID_NAME.test(entry.name ?? entry.object_name ?? "");
+}
+
+/** A value as `get` gives it (docs/control-protocol.md "Typed values") as the text of its cell; the value of a
+ * COB-ID (isCobId(entry)) in hex of 8 digits, as the page writes 32-bit values: "0x00000080". */
+export function valueText(value, entry = null) {
   if (value === undefined || value === null) {
     return "";
+  }
+  if (entry !== null && isCobId(entry) && Number.isSafeInteger(value) && value >= 0) {
+    return hex(value, 8);
   }
   return typeof value === "string" ? value : String(value);
 }
 
-/** A hint beside an unsigned integer's decimal text (identities, COB-IDs and bit fields read better in hex):
+/** The tooltip of a value's cell: the other form of an unsigned integer, its decimal for a COB-ID (shown in hex:
+ * "128"), else its hex (hexHint); "" for anything else. */
+export function valueHint(value, entry) {
+  if (isCobId(entry) && Number.isSafeInteger(value) && value >= 0) {
+    return String(value);
+  }
+  return hexHint(value, entry.type);
+}
+
+/** A hint beside an unsigned integer's decimal text (identities and bit fields read better in hex):
  * "0x0000024E"; "" for anything else. */
 export function hexHint(value, type) {
   const digits = {UNSIGNED8: 2, UNSIGNED16: 4, UNSIGNED24: 6, UNSIGNED32: 8}[type];

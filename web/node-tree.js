@@ -114,12 +114,12 @@ export class DictionaryTree {
   #drawValue({cells, entry}) {
     const read = this.#values.get(entry.object);
     const cell = cells.value;
-    const text = read === undefined ? "" : read.error ?? dictionary.valueText(read.value);
+    const text = read === undefined ? "" : read.error ?? dictionary.valueText(read.value, entry);
     if (cell.textContent !== text || cell.firstElementChild !== null) {
       cell.textContent = text; // text, never markup
     }
     cell.classList.toggle("unreadable", read?.error !== undefined);
-    cell.title = read?.error === undefined ? dictionary.hexHint(read?.value, entry.type) : "";
+    cell.title = read?.error === undefined ? dictionary.valueHint(read?.value, entry) : "";
   }
 
   #groupRow(group) {
@@ -224,7 +224,8 @@ export class DictionaryTree {
     input.className = "editor";
     input.setAttribute("aria-label", `new value of ${object}`);
     const read = this.#values.get(object);
-    input.value = read === undefined || read.error !== undefined ? "" : dictionary.valueText(read.value);
+    // as shown (a COB-ID in hex, which `set` reads as typed: parseInput)
+    input.value = read === undefined || read.error !== undefined ? "" : dictionary.valueText(read.value, entry);
     const editing = {object, input, sending: false};
     this.#editing = editing;
     input.addEventListener("keydown", (e) => {

@@ -203,6 +203,43 @@ def test_the_heartbeat_period_edited_in_place_reaches_the_bus_and_a_refusal_show
     assert not any(r["editor"] for r in view(driver)["rows"].values())
 
 
+def test_cob_ids_show_in_hex_and_are_edited_in_hex_or_decimal(page, start_emulator):
+    """COB-IDs (0x1005, 0x1014, 0x1200:01/02, 0x1400:01, 0x1800:01 ...) in hex of 8 digits, their decimal the tooltip;
+    the editor starts with the hex shown and takes hex or decimal, and the node's SDO server then answers the value."""
+    emu = start_emulator(*NODES)
+    driver = open_node(page, emu, 18)
+    expand(driver, "0x1200")
+    expand(driver, "0x1800")
+    cob_ids = {"0x1005:00": "0x00000080", "0x1014:00": "0x00000092", "0x1200:01": "0x00000612",
+               "0x1200:02": "0x00000592", "0x1800:01": "0x00000192"}
+    for obj in (*cob_ids, "0x1200:03", "0x1800:02"):  # only the rows in sight are read: each brought into it
+        css(driver, f'tr[data-object="{obj}"]')
+        shown = wait_for(driver, f"{obj} read", lambda v: v["rows"][obj]["value"] != "", 5.0)
+    assert {o: shown["rows"][o]["value"] for o in cob_ids} == cob_ids
+    assert shown["rows"]["0x1200:03"]["value"] == "0"  # the SDO client's node-ID: no COB-ID, decimal
+    assert shown["rows"]["0x1800:02"]["value"] == "254"  # its transmission type: decimal
+    title = 'return document.querySelector(`tr[data-object="${arguments[0]}"] td[data-field="value"]`).title'
+    assert driver.execute_script(title, "0x1005:00") == "128"
+    assert driver.execute_script(title, "0x1800:02") == "0xFE"  # other unsigned values: their hex
+    css(driver, 'tr[data-object="0x1005:00"] td[data-field="value"]').click()
+    editor = css(driver, 'tr[data-object="0x1005:00"] input.editor')
+    assert editor.get_attribute("value") == "0x00000080"  # as shown
+    editor.send_keys(Keys.ESCAPE)
+    edit(driver, "0x1005:00", "0x00000081")
+    wait_for(driver, "0x81 written in hex", lambda v: v["rows"]["0x1005:00"]["value"] == "0x00000081" and
+             not v["rows"]["0x1005:00"]["editor"] and v["rows"]["0x1005:00"]["note"] == "", 5.0)
+    edit(driver, "0x1005:00", "130")
+    wait_for(driver, "130 written in decimal", lambda v: v["rows"]["0x1005:00"]["value"] == "0x00000082" and
+             not v["rows"]["0x1005:00"]["editor"] and v["rows"]["0x1005:00"]["note"] == "", 5.0)
+    network = canopen.Network(bus=FakeCanBus(emu.bus))
+    network.connect()
+    try:
+        node = network.add_node(18, canopen.ObjectDictionary())
+        assert node.sdo.upload(0x1005, 0x00) == (0x82).to_bytes(4, "little")
+    finally:
+        network.disconnect()
+
+
 def test_a_value_written_in_the_page_is_read_by_a_python_canopen_master(page, start_emulator):
     emu = start_emulator(*NODES)
     driver = open_node(page, emu, 16)

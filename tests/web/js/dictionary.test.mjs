@@ -50,7 +50,7 @@ test("limits: both, one, none", () => {
 
 test("valueText and hexHint", () => {
   assert.deepEqual([590, -3, 24.5, true, false, "ES61", "0A1B", "nan", "18446744073709551615", null, undefined]
-    .map(dictionary.valueText), ["590", "-3", "24.5", "true", "false", "ES61", "0A1B", "nan", "18446744073709551615", "",
+    .map((v) => dictionary.valueText(v)), ["590", "-3", "24.5", "true", "false", "ES61", "0A1B", "nan", "18446744073709551615", "",
     ""]);
   assert.equal(dictionary.hexHint(590, "UNSIGNED32"), "0x0000024E");
   assert.equal(dictionary.hexHint(5, "UNSIGNED8"), "0x05");
@@ -59,6 +59,56 @@ test("valueText and hexHint", () => {
   assert.equal(dictionary.hexHint(24.5, "REAL32"), "");
   assert.equal(dictionary.hexHint("ES61", "VISIBLE_STRING"), "");
   assert.equal(dictionary.hexHint("18446744073709551615", "UNSIGNED64"), "");
+});
+
+// As `objects` lists them: the PRO IONIZER's (names with "COB-ID") and the Bürkert's ("COB ID").
+const cob = (object, name, type = "UNSIGNED32", objectName = name) =>
+  ({object, name, object_name: objectName, type, access: "rw"});
+
+test("isCobId: the communication objects' COB-IDs by index and sub, and any UNSIGNED32 named so", () => {
+  const yes = [
+    cob("0x1005:00", "COB ID SYNC"), cob("0x1012:00", "COB-ID time stamp object"), cob("0x1014:00", "COB-ID EMCY"),
+    cob("0x1200:01", "COB-ID Client -> Server (rx)"), cob("0x1200:02", "COB-ID Server -> Client (tx)"),
+    cob("0x1280:01", "COB-ID client to server"), cob("0x12FF:02", "COB-ID server to client"),
+    cob("0x1400:01", "COB-ID used by PDO"), cob("0x15FF:01", "COB ID"), cob("0x1800:01", "COB ID"),
+    cob("0x19FF:01", "COB-ID used by PDO"),
+    cob("0x1005:00", null), // by its index, whatever its name
+    cob("0x2100:03", "Heartbeat COB-ID"), cob("0x2101:00", "cobid of the gateway"), cob("0x2102:01", "COB ID"),
+    cob("0x2103:01", null, "UNSIGNED32", "COB-ID list"), // a sub without a name: its object's
+  ];
+  for (const entry of yes) {
+    assert.equal(dictionary.isCobId(entry), true, `${entry.object} ${entry.name}`);
+  }
+  const no = [
+    cob("0x1200:03", "Node ID of the SDO Client", "UNSIGNED8"), cob("0x1200:00", "Number Of Entries", "UNSIGNED8"),
+    cob("0x1400:02", "Transmission type", "UNSIGNED8"), cob("0x1800:05", "Event timer", "UNSIGNED16"),
+    cob("0x1600:01", "PDO Mapping Entry 1"), cob("0x1A00:01", "1. mapped Object"), cob("0x1000:00", "Device type"),
+    cob("0x1018:01", "Vendor-ID"), cob("0x1017:00", "Producer heartbeat time", "UNSIGNED16"),
+    cob("0x2100:01", "COB-ID", "UNSIGNED16"), // a COB-ID is 32 bits: another type is something else
+    cob("0x1005:00", "COB ID SYNC", "UNSIGNED16"), cob("0x2104:00", "Jacobide"),
+  ];
+  for (const entry of no) {
+    assert.equal(dictionary.isCobId(entry), false, `${entry.object} ${entry.name}`);
+  }
+});
+
+test("a COB-ID's value in hex of 8 digits (its decimal the tooltip), other values as they are", () => {
+  const sync = cob("0x1005:00", "COB ID SYNC");
+  const tpdo = cob("0x1800:01", "COB-ID used by PDO");
+  assert.equal(dictionary.valueText(128, sync), "0x00000080");
+  assert.equal(dictionary.valueText(0x80000190 + 2, tpdo), "0x80000192"); // bit 31: the PDO is not valid
+  assert.equal(dictionary.valueText(0, sync), "0x00000000");
+  assert.equal(dictionary.valueHint(128, sync), "128");
+  assert.equal(dictionary.valueHint(0x80000192, tpdo), "2147484050");
+  assert.equal(dictionary.valueText(undefined, sync), "");
+  assert.equal(dictionary.valueText("0x80", sync), "0x80"); // not a number: as given
+  const vendor = cob("0x1018:01", "Vendor-ID");
+  assert.equal(dictionary.valueText(590, vendor), "590");
+  assert.equal(dictionary.valueHint(590, vendor), "0x0000024E");
+  assert.equal(dictionary.valueHint("ES61", cob("0x1008:00", "Name", "VISIBLE_STRING")), "");
+  // What the editor starts with (valueText) is taken back as typed: hex as the emulator reads it, decimal a number
+  assert.deepEqual(dictionary.parseInput(dictionary.valueText(129, sync), "UNSIGNED32"), {value: "0x00000081"});
+  assert.deepEqual(dictionary.parseInput("130", "UNSIGNED32"), {value: 130});
 });
 
 test("parseInput: numbers as numbers, strings for VISIBLE_STRING and what the emulator must read", () => {
