@@ -141,6 +141,7 @@ class NodePanel {
         dd.textContent = text;
       }
     }
+    this.#summary.get("heartbeat-age").classList.toggle("overdue", row?.overdue === true);
     if (row !== undefined) {
       this.#summary.get("state").dataset.state = row.state;
       this.#label(row);

@@ -57,6 +57,21 @@ export function busLabel(name, kind) {
   return !kind || name.startsWith(`${kind}:`) ? name : `${name} (${kind})`;
 }
 
+/** A heartbeat is overdue once it is this many times its producer time (0x1017) old (docs/web.md). */
+export const HEARTBEAT_OVERDUE = 1.5;
+
+/**
+ * Whether a node's heartbeat is overdue: it sends one (0x1017 not 0), it was heard once (as a heartbeat consumer,
+ * CiA 301, watches only after the first), and at the last `show` the last one was more than HEARTBEAT_OVERDUE times
+ * its period old. Judged at the show, where both times are the emulator's own: the age the page counts on between
+ * two shows would mark a running heartbeat whose next one the page cannot know of yet (it learns of heartbeats only
+ * from a show). A boot-up event since (a heartbeat after the show) ends it at once.
+ */
+export function heartbeatOverdue(n) {
+  return n.heartbeat_ms > 0 && n.last_heartbeat_us !== null && n.shown_us !== undefined &&
+    n.shown_us - n.last_heartbeat_us > HEARTBEAT_OVERDUE * n.heartbeat_ms * 1000;
+}
+
 export class NodeTable {
   #nodes = new Map(); // key -> the node as `show` gives it, changed in place by events
   #buses = new Map(); // bus name -> its kind (null: not given), in the order of the last show
@@ -75,7 +90,8 @@ export class NodeTable {
     const all = [...answer.nodes, ...heard];
     const buses = [...new Set(all.map((n) => n.bus))];
     const sorted = all.sort((a, b) => buses.indexOf(a.bus) - buses.indexOf(b.bus) || a.node - b.node);
-    this.#nodes = new Map(sorted.map((n) => [nodeKey(n.bus, n.node), {...n, faults: [...n.faults]}]));
+    this.#nodes = new Map(sorted.map((n) => [nodeKey(n.bus, n.node),
+      {...n, faults: [...n.faults], shown_us: answer.time_us}]));
     this.#buses = new Map(buses.map((bus) => [bus, all.find((n) => n.bus === bus).bus_kind ?? null]));
   }
 
@@ -119,13 +135,20 @@ export class NodeTable {
     }
   }
 
-  /** The rows to show at `ms`: {key, state, heard, cells: {field: text}}, in the order of show(). */
+  /** The rows to show at `ms`: {key, state, heard, overdue (heartbeatOverdue), cells: {field: text}}, in the order
+   * of show(). */
   rows(ms) {
     const now = this.clock.now(ms);
-    return [...this.#nodes.entries()].map(([key, n]) => n.heard ? heardRow(key, n, now) : ({
+    return [...this.#nodes.entries()].map(([key, n]) => n.heard ? heardRow(key, n, now) : this.#row(key, n, now));
+  }
+
+  #row(key, n, now) {
+    const overdue = heartbeatOverdue(n);
+    return {
       key,
       state: n.state,
       heard: false,
+      overdue,
       cells: {
         "node": String(n.node),
         "bus": n.bus,
@@ -133,13 +156,14 @@ export class NodeTable {
         "state": n.state,
         "device-type": format.hex(n.device_type, 8),
         "heartbeat": format.heartbeatPeriod(n.heartbeat_ms),
-        "heartbeat-age": n.last_heartbeat_us === null ? "never" : format.ago(n.last_heartbeat_us, now),
+        "heartbeat-age": n.last_heartbeat_us === null ? "never" :
+          format.ago(n.last_heartbeat_us, now) + (overdue ? " (overdue)" : ""),
         "error-register": format.hex(n.error_register, 2),
         "faults": n.faults.join(", "),
         "emcy": n.last_emcy === null ? "" : format.emcy(n.last_emcy),
         "emcy-age": n.last_emcy === null ? "" : format.ago(n.last_emcy.time_us, now),
       },
-    }));
+    };
   }
 }
 
@@ -150,6 +174,7 @@ function heardRow(key, n, now) {
     key,
     state: n.state,
     heard: true,
+    overdue: false, // its period is not known here
     cells: {
       ...cells,
       "node": String(n.node),

@@ -43,6 +43,10 @@ export class Overview {
           cells[field].textContent = text; // text, never markup: nothing the emulator says becomes HTML
         }
       }
+      const age = cells["heartbeat-age"];
+      if (age.classList.contains("overdue") !== row.overdue) {
+        age.classList.toggle("overdue", row.overdue); // style.css: in red
+      }
       const busTitle = busLabel(row.cells.bus, kinds.get(row.cells.bus)); // the kind on hovering over the bus
       if (cells.bus.title !== busTitle) {
         cells.bus.title = busTitle;

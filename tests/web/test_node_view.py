@@ -312,6 +312,10 @@ def test_a_protocol_fault_raised_from_the_page_stops_the_heartbeats_until_cleare
     assert shown["forms"]["fault heartbeat-stop"]["answer"] == \
         "node 18: fault heartbeat-stop: no heartbeat (nor node-guarding answer)"
     assert shown["summary"]["faults"] == "heartbeat-stop"
+    overdue = "return document.querySelector('#view-node dd[data-field=\"heartbeat-age\"]').classList.contains('overdue')"
+    shown = wait_for(driver, "the heartbeat marked overdue in the summary",
+                     lambda v: v["summary"]["heartbeat-age"].endswith(" s ago (overdue)"), 5.0)
+    assert driver.execute_script(overdue) is True
     assert [s["state"] for k, s in shown["forms"].items() if k.startswith("fault ") and k != "fault heartbeat-stop"] \
         == [""] * 12
     # the overview has it too
@@ -327,6 +331,9 @@ def test_a_protocol_fault_raised_from_the_page_stops_the_heartbeats_until_cleare
     css(driver, f"{fault} button.clear").click()
     wait_for(driver, "the fault cleared", lambda v: v["forms"]["fault heartbeat-stop"]["state"] == "" and
              v["summary"]["faults"] == "", 5.0)
+    wait_for(driver, "the heartbeat no longer overdue", lambda v: v["summary"]["heartbeat-age"].endswith(" s ago") and
+             not v["summary"]["heartbeat-age"].endswith("(overdue)"), 5.0)
+    assert driver.execute_script(overdue) is False
     gaps = heartbeat_gaps(emu.bus, 18, 3, 5.0)
     assert all(0.4 <= g <= 0.65 for g in gaps), gaps
 

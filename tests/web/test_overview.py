@@ -14,19 +14,20 @@ FIELDS = ("node", "bus", "device", "state", "device-type", "heartbeat", "heartbe
           "emcy", "emcy-age")
 TITLES = ["node", "bus", "device", "NMT state", "device type", "heartbeat", "last heartbeat", "error register",
           "faults", "last EMCY", "EMCY sent"]
-AGE = re.compile(r"(\d+\.\d) s ago")
+AGE = re.compile(r"(\d+\.\d) s ago( \(overdue\))?")
 
 # The page at one moment (one script: nothing changes between two reads): rows {node-ID: {field: text}}, the
-# node-IDs in the rows' order, the status line.
+# node-IDs in the rows' order, those whose heartbeat is marked overdue (its age's cell in red), the status line.
 SNAPSHOT = """
-const rows = {}, order = [];
+const rows = {}, order = [], overdue = [];
 for (const tr of document.querySelectorAll("#nodes tbody tr")) {
   const cells = {};
   for (const td of tr.cells) { cells[td.dataset.field] = td.textContent; }
   rows[cells.node] = cells;
   order.push(Number(cells.node));
+  if (tr.querySelector('td[data-field="heartbeat-age"].overdue') !== null) { overdue.push(Number(cells.node)); }
 }
-return {rows, order, status: document.getElementById("status").textContent};
+return {rows, order, overdue, status: document.getElementById("status").textContent};
 """
 
 
@@ -69,6 +70,7 @@ def test_the_page_lists_the_nodes_with_their_devices_and_states(page, start_emul
                                                                  for r in s["rows"].values()), 5.0)
     assert shot["status"] == "fakecan0 (socketcan): 3 nodes"
     assert shot["order"] == [16, 17, 18]
+    assert shot["overdue"] == []
     columns = driver.execute_script(
         "return [...document.querySelectorAll('#nodes tbody tr')].map((tr) => [...tr.cells].map((td) => td.dataset.field))")
     assert columns == [list(FIELDS)] * 3
@@ -120,8 +122,8 @@ def test_an_emcy_shows_in_its_nodes_row(page, start_emulator):
 
 
 def test_a_protocol_fault_shows_and_the_heartbeat_age_grows(page, start_emulator):
-    """Node 18 (500 ms heartbeat) stops its heartbeat: the fault shows, and its last heartbeat falls behind while
-    node 16's (1000 ms) stays recent; cleared, both show again."""
+    """Node 18 (500 ms heartbeat) stops its heartbeat: the fault shows, and its last heartbeat falls behind, marked
+    overdue, while node 16's (1000 ms) stays recent; cleared, both show again, unmarked."""
     emu = start_emulator(*NODES)
     driver = loaded(page, emu, 3)
     command(emu, "fault 18 heartbeat-stop")
@@ -132,12 +134,17 @@ def test_a_protocol_fault_shows_and_the_heartbeat_age_grows(page, start_emulator
     shot = wait_for(driver, "node 18's last heartbeat 4 s ago", lambda s: age(s["rows"]["18"]["heartbeat-age"]) >= 4.0,
                     10.0)
     assert age(shot["rows"]["16"]["heartbeat-age"]) < 3.0, shot["rows"]["16"]
+    # more than 1.5 periods old at a show (web/nodes.js heartbeatOverdue): marked, in words and in red
+    assert shot["rows"]["18"]["heartbeat-age"].endswith(" s ago (overdue)"), shot["rows"]["18"]
+    assert shot["overdue"] == [18], shot
     late = [t - in_force for t, i, _ in drain(emu.bus) if i == 0x712 and t > in_force]
     assert late == [], late  # the bus agrees: nothing from node 18 since the fault
     command(emu, "fault-clear 18 heartbeat-stop")
     shot = wait_for(driver, "node 18's heartbeat back",
-                    lambda s: s["rows"]["18"]["faults"] == "" and age(s["rows"]["18"]["heartbeat-age"]) < 2.0, 5.0)
+                    lambda s: s["rows"]["18"]["faults"] == "" and age(s["rows"]["18"]["heartbeat-age"]) < 2.0 and
+                    s["overdue"] == [], 5.0)
     assert shot["rows"]["18"]["state"] == "PRE-OPERATIONAL"
+    assert not shot["rows"]["18"]["heartbeat-age"].endswith("(overdue)"), shot["rows"]["18"]
 
 
 def drain(bus):

@@ -2,7 +2,8 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {COLUMNS, EmuClock, NodeTable, busLabel, nodeCount, withBusHeadings} from "../../../web/nodes.js";
+import {COLUMNS, EmuClock, HEARTBEAT_OVERDUE, NodeTable, busLabel, heartbeatOverdue, nodeCount, withBusHeadings}
+  from "../../../web/nodes.js";
 
 // As show answers them (docs/control-protocol.md), the three devices of the README's example.
 function shown(node, device, variant, extra = {}) {
@@ -62,6 +63,36 @@ test("rows: every column, ordered by node-ID, ages against the clock", () => {
   assert.equal(table.rows(3_000)[1].cells["heartbeat-age"], "3.5 s ago"); // it grows as time goes on
 });
 
+test("heartbeatOverdue: more than 1.5 periods old at the last show, a period of 0 or no heartbeat yet never", () => {
+  assert.equal(HEARTBEAT_OVERDUE, 1.5);
+  const n = (heartbeat_ms, last_heartbeat_us, shown_us = 10_000_000) => ({heartbeat_ms, last_heartbeat_us, shown_us});
+  assert.equal(heartbeatOverdue(n(500, 9_250_000)), false); // 750 ms: 1.5 periods, not more
+  assert.equal(heartbeatOverdue(n(500, 9_249_999)), true);
+  assert.equal(heartbeatOverdue(n(1000, 8_600_000)), false);
+  assert.equal(heartbeatOverdue(n(1000, 8_400_000)), true);
+  assert.equal(heartbeatOverdue(n(0, 1_000_000)), false); // 0x1017 = 0: it sends none
+  assert.equal(heartbeatOverdue(n(500, null)), false); // never heard: not watched yet
+  assert.equal(heartbeatOverdue(n(500, 10_400_000)), false); // a boot-up after the show
+
+  const table = new NodeTable();
+  const answer = (timeUs, lastUs) => ({time_us: timeUs, nodes: [
+    shown(18, "buerkert", null, {heartbeat_ms: 500, last_heartbeat_us: lastUs}),
+    shown(16, "pro-ionizer", "full", {heartbeat_ms: 0, last_heartbeat_us: 1_000_000}),
+    shown(17, "sds", "N", {heartbeat_ms: 1000, last_heartbeat_us: null})]});
+  table.show(answer(2_000_000, 1_600_000), 0); // 0.4 s old at the show
+  const seen = (ms) => table.rows(ms).map((r) => [r.key, r.overdue, r.cells["heartbeat-age"]]);
+  // Between two shows the age grows on the page's clock, but the mark waits for a show: a running heartbeat is
+  // only known from one, so 1.4 s counted here is no stopped heartbeat yet.
+  assert.deepEqual(seen(1_000), [
+    ["vcan0/16", false, "2.0 s ago"], ["vcan0/17", false, "never"], ["vcan0/18", false, "1.4 s ago"]]);
+  table.show(answer(3_000_000, 1_600_000), 1_000); // no heartbeat of 18 since: 1.4 s old at this show
+  assert.deepEqual(seen(1_250)[2], ["vcan0/18", true, "1.6 s ago (overdue)"]);
+  table.event(event("boot-up", 18, 3_100_000), 1_300); // it is back
+  assert.deepEqual(seen(1_300)[2], ["vcan0/18", false, "0.2 s ago"]);
+  table.show(answer(4_000_000, 3_600_000), 2_000);
+  assert.deepEqual(seen(2_000)[2], ["vcan0/18", false, "0.4 s ago"]);
+});
+
 test("nodes of several buses: by bus in the emulator's order, then node-ID; an ID on two buses is two rows", () => {
   const table = new NodeTable();
   table.show({time_us: 0, nodes: [shown(20, "sds", "N", {bus: "vcan1"}), shown(5, "sds", "N"),
@@ -95,7 +126,9 @@ test("events change their node's row until the next show says otherwise", () => 
   assert.equal(rows[1].cells["heartbeat-age"], "0.0 s ago");
   table.show({time_us: 3_000_000, nodes: [shown(17, "sds", "N")]}, 1_000); // node 16 and 18 gone: their rows too
   rows = table.rows(1_000);
-  assert.deepEqual(rows.map((r) => [r.key, r.cells["faults"], r.cells["heartbeat-age"]]), [["vcan0/17", "", "2.0 s ago"]]);
+  // its 1000 ms heartbeat 2.0 s old at this show: overdue (heartbeatOverdue)
+  assert.deepEqual(rows.map((r) => [r.key, r.cells["faults"], r.cells["heartbeat-age"], r.overdue]),
+    [["vcan0/17", "", "2.0 s ago (overdue)", true]]);
 });
 
 test("a show's lists are the table's own: changing them later changes no row", () => {
@@ -115,7 +148,7 @@ test("nodes heard on the bus get rows of their own, in node-ID order among the e
   const rows = table.rows(0);
   assert.deepEqual(rows.map((r) => r.key), ["vcan0/5", "vcan0/16", "vcan0/17", "vcan0/18", "vcan0/20"]);
   const blank = Object.fromEntries(COLUMNS.map(({field}) => [field, ""]));
-  assert.deepEqual(rows[0], {key: "vcan0/5", state: "OPERATIONAL", heard: true, cells: {
+  assert.deepEqual(rows[0], {key: "vcan0/5", state: "OPERATIONAL", heard: true, overdue: false, cells: {
     ...blank, "node": "5", "bus": "vcan0", "device": "heard on the bus", "state": "OPERATIONAL",
     "heartbeat-age": "0.3 s ago"}});
   assert.equal(rows[4].cells.device, "heard on the bus (boot-up)");
