@@ -149,9 +149,8 @@ for pass in $passes; do
     if [ -e /sys/class/net/vcan0 ]; then
       CO_PYTHON_TESTS_STAGE=run sh "$here/run-tests.sh" "$build" "$@" || status=$?
     else
-      # CO_* variables pass into tools/vcan-run; CANOPEN_EMU must be named
-      CO_PYTHON_TESTS_STAGE=run VCAN_RUN_PASS_ENV="${VCAN_RUN_PASS_ENV:-} CANOPEN_EMU" \
-        "$src/tools/vcan-run" sh "$here/run-tests.sh" "$build" "$@" || status=$?
+      # CO_* and CANOPEN_EMU pass into tools/vcan-run by themselves
+      CO_PYTHON_TESTS_STAGE=run "$src/tools/vcan-run" sh "$here/run-tests.sh" "$build" "$@" || status=$?
     fi
   elif ! unshare -rn true 2>/dev/null; then
     echo "run-tests.sh: udp pass skipped: unshare -rn fails here (user namespaces not allowed)" >&2
