@@ -1,5 +1,5 @@
 /* The benchmarks' buses without kernel CAN: python-can's udp_multicast (datagrams coded by the emulator's own
- * src/linux/udp_datagram.c) and a socketcand server's channel in rawmode over TCP. See bench_can.h. */
+ * ports/linux/udp_datagram.c) and a socketcand server's channel in rawmode over TCP. See bench_can.h. */
 #define _GNU_SOURCE
 #include "bench_can.h"
 #include "bench_can_net.h"

@@ -275,7 +275,7 @@ def control_flood(r, sz):
 
 
 # ---- 64 busy control clients (issue 32, N2)
-CLIENTS = 64  # the control socket's most clients at once (MAX_CLIENTS, src/emu/emu_socket.h)
+CLIENTS = 64  # the control socket's most clients at once (MAX_CLIENTS, emu/control/emu_socket.h)
 CLIENTS_PERIOD_US = 100000
 CLIENT_REQUESTS = {"objects": b'{"cmd":"objects","node":1,"values":true}\n', "hello": b'{"cmd":"hello"}\n'}
 CLIENT_IN_FLIGHT = (2, 4)  # a reading client asks again when only 2 answers are due, up to 4 again

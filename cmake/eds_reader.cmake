@@ -1,13 +1,13 @@
-# The EDS/DCF reader: library co_eds and the host program canopen-eds (src/eds/, docs/eds.md).
+# The EDS/DCF reader: library co_eds and the host program canopen-eds (eds/, docs/eds.md).
 # Sets CO_EDS_TOOL (the canopen-eds the build runs) and CO_EDS_TOOL_TARGET (what generation depends on).
-set(CO_EDS_SOURCES src/eds/eds.c src/eds/eds_ini.c src/eds/eds_value.c src/eds/eds_objects.c src/eds/eds_pdo.c
-                   src/eds/eds_write.c)
+set(CO_EDS_SOURCES eds/eds.c eds/eds_ini.c eds/eds_value.c eds/eds_objects.c eds/eds_pdo.c
+                   eds/eds_write.c)
 if(NOT CMAKE_CROSSCOMPILING)
   add_library(co_eds STATIC ${CO_EDS_SOURCES})
-  target_include_directories(co_eds PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src/eds>)
+  target_include_directories(co_eds PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/eds>)
   target_compile_options(co_eds PRIVATE ${CO_WARNINGS})
   target_link_libraries(co_eds PRIVATE m)
-  add_executable(canopen-eds src/eds/canopen_eds.c)
+  add_executable(canopen-eds eds/canopen_eds.c)
   target_link_libraries(canopen-eds PRIVATE co_eds)
   target_compile_options(canopen-eds PRIVATE ${CO_WARNINGS})
   set(CO_EDS_TOOL $<TARGET_FILE:canopen-eds>)
@@ -25,7 +25,7 @@ elseif(CMAKE_CROSSCOMPILING)
   set(CO_HOST_C_COMPILER cc CACHE STRING "The build machine's C compiler (for canopen-eds in cross builds)")
   set(host_dir ${PROJECT_BINARY_DIR}/host-eds)
   ExternalProject_Add(co_eds_host
-    SOURCE_DIR ${PROJECT_SOURCE_DIR}/src/eds
+    SOURCE_DIR ${PROJECT_SOURCE_DIR}/eds
     BINARY_DIR ${host_dir}
     CMAKE_ARGS -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPILER=${CO_HOST_C_COMPILER}
     BUILD_BYPRODUCTS ${host_dir}/canopen-eds

@@ -1,9 +1,9 @@
 # Embeds files in the program as C arrays at build time (cmake -P), so that the running program serves them from
-# memory: the web view's static files (web/, served by src/emu/emu_web.c), with no file system access and no path
+# memory: the web view's static files (web/, served by emu/web/emu_web.c), with no file system access and no path
 # joining at run time. No xxd, no Python: file(READ ... HEX).
 #   cmake -DSOURCE_DIR=<dir> -DFILES=<name,name,...> -DOUT=<file.c> -P cmake/embed_files.cmake
 # Each name (relative to SOURCE_DIR; letters, digits, '.', '_', '-', '/') becomes an entry of web_files[]
-# (src/emu/emu_web_files.h): path "/<name>", a MIME type by its extension (an unknown extension is an error), its
+# (emu/web/emu_web_files.h): path "/<name>", a MIME type by its extension (an unknown extension is an error), its
 # bytes followed by a NUL, its size, and an ETag of 16 hex digits of its SHA-256.
 foreach(var SOURCE_DIR FILES OUT)
   if(NOT DEFINED ${var})

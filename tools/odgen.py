@@ -9,7 +9,7 @@ the defaults image, the limits), <c_name>_od_names.c (the rows' names and units)
 (the core's switches for services the dictionary has no objects for, off). All say they are generated. The
 output depends only on the inputs (no dates, no paths), so a rebuild gives the same bytes.
 
-The EDS is read by the project's one EDS/DCF reader (src/eds/, docs/eds.md), through `canopen-eds json
+The EDS is read by the project's one EDS/DCF reader (eds/, docs/eds.md), through `canopen-eds json
 --strict`: the emulator reads files with the same code, so a generated table and an emulated device never
 disagree about a file. The project's own files must be clean: any warning of the reader is an error here.
 

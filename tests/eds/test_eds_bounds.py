@@ -1,4 +1,4 @@
-"""What the EDS/DCF reader (src/eds/, through canopen-eds) takes of time and memory, and what it says about a DCF
+"""What the EDS/DCF reader (eds/, through canopen-eds) takes of time and memory, and what it says about a DCF
 that is not as written: time and memory grow with the file's size and no faster, up to the largest file it reads
 (16 MiB); a section defined twice and a NodeID outside 1..127 are told; the writer refuses a file name a line cannot
 hold (the refusal of such values is tests/eds/test_eds_write.c)."""

@@ -1,4 +1,4 @@
-"""The EDS/DCF reader (src/eds/) through canopen-eds: each feature file of tests/eds/files/ gives exactly the
+"""The EDS/DCF reader (eds/) through canopen-eds: each feature file of tests/eds/files/ gives exactly the
 diagnostics and values expected, bad input gets a clear error with exit status 2, and a file written back
 (EDS or DCF) reads as the same model; python-canopen loads the DCF with the same values."""
 import json

@@ -1,4 +1,4 @@
-/* The DCF writer (src/eds/eds_write.c) with current values as canopen-emu's export-dcf gives them (any bytes an SDO
+/* The DCF writer (eds/eds_write.c) with current values as canopen-emu's export-dcf gives them (any bytes an SDO
  * master wrote): a value a line of a CiA 306 file cannot hold is refused with the entry named and nothing written
  * (a line break in a string wrote sections and keys of the writer's choosing); what a line can hold is written
  * whole and reads back as the same bytes. */

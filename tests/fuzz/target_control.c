@@ -1,8 +1,8 @@
 /*
  * Fuzz target "control": control lines on canopen-emu's stdin, through the program's own code: control_start /
- * control_read (src/emu/emu_control.c), the session (src/emu/emu_session.c: text or JSON framing, subscriptions),
- * the line reader (src/emu/emu_lines.c), the JSON requests (src/emu/emu_json.c), the events (src/emu/emu_events.c)
- * and the command language (src/emu/emu_commands.c, device_command of devices/device.c and the models), driving
+ * control_read (emu/control/emu_control.c), the session (emu/control/emu_session.c: text or JSON framing, subscriptions),
+ * the line reader (emu/control/emu_lines.c), the JSON requests (emu/control/emu_json.c), the events (emu/runtime/emu_events.c)
+ * and the command language (emu/control/emu_commands.c, device_command of devices/device.c and the models), driving
  * six emulated nodes, two of each device class, on fake ports (tests/support/fake_port.c: no socket; NVM in memory)
  * and two named buses.
  *
@@ -52,14 +52,14 @@
 #include <jansson.h>
 
 #include "fuzz_abort.h"
-#include "emu.h"
-#include "emu_commands.h"
-#include "emu_control.h"
-#include "emu_bus.h"
-#include "emu_events.h"
-#include "emu_faults.h"
-#include "emu_output.h"
-#include "emu_session.h"
+#include "runtime/emu.h"
+#include "control/emu_commands.h"
+#include "control/emu_control.h"
+#include "runtime/emu_bus.h"
+#include "runtime/emu_events.h"
+#include "faults/emu_faults.h"
+#include "runtime/emu_output.h"
+#include "control/emu_session.h"
 #include "fake_port.h"
 
 #define DOC_LINE_MAX 2047U

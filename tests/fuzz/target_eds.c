@@ -1,5 +1,5 @@
 /*
- * Fuzz target "eds": the EDS/DCF reader (src/eds/) on any bytes, as canopen-eds and canopen-emu read a file.
+ * Fuzz target "eds": the EDS/DCF reader (eds/) on any bytes, as canopen-eds and canopen-emu read a file.
  *
  * Input: the file's bytes; or, when the first byte is 0x01, a size case: 0x01, K, HEAD, 0x02, UNIT, 0x02, TAIL
  * (a missing 0x02 ends a part) is the file HEAD, UNIT written 2^(K % 17) times with each '@' in it replaced by the

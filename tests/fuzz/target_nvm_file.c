@@ -1,5 +1,5 @@
 /*
- * Fuzz target "nvm_file": the NVM files of src/linux/nvm_file.c as a crash, a user or another program may leave
+ * Fuzz target "nvm_file": the NVM files of ports/linux/nvm_file.c as a crash, a user or another program may leave
  * them, loaded by a device of a registered class (devices/registry.c) through the nvm_file port functions, as
  * canopen-emu runs it: nvm_file_open (which recovers an interrupted store), device_init (the core loads the LSS
  * and parameter areas, the model its device area), SDO writes, a 0x1010 save, a power cycle or a restart.

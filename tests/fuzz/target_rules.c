@@ -1,5 +1,5 @@
 /*
- * Fuzz target "rules": rules files (--rules, src/emu/emu_rules.c, libyaml) for the device of tests/eds/files/drive.eds
+ * Fuzz target "rules": rules files (--rules, emu/eds_devices/emu_rules.c, libyaml) for the device of tests/eds/files/drive.eds
  * (a CiA 402 drive with process values), then the device running them, as canopen-emu runs a device read from an EDS.
  *
  * Input: the rules file's text up to the first NUL byte (all of it when there is none), then records until the input
@@ -28,8 +28,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "emu_eds_class.h"
-#include "emu_rules.h"
+#include "eds_devices/emu_eds_class.h"
+#include "eds_devices/emu_rules.h"
 #include "fake_port.h"
 #include "fuzz_abort.h"
 

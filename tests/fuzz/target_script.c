@@ -1,6 +1,6 @@
 /*
- * Fuzz target "script": the --script loader of canopen-emu (src/emu/emu_script.c through script_read, with the
- * line reader of src/emu/emu_lines.c), checked against a reference reading of docs/emulator.md "Scripts".
+ * Fuzz target "script": the --script loader of canopen-emu (emu/scripts/emu_script.c through script_read, with the
+ * line reader of emu/control/emu_lines.c), checked against a reference reading of docs/emulator.md "Scripts".
  *
  * Input: the script file's bytes. The harness puts in front of them one or two comment lines of 0-4094 bytes
  * (the length is a hash of the input), so that the loader's 4096-byte reads end at varying places inside the
@@ -27,8 +27,8 @@
 #include <unistd.h>
 
 #include "fuzz_abort.h"
-#include "emu_lines.h"
-#include "emu_script.h"
+#include "control/emu_lines.h"
+#include "scripts/emu_script.h"
 
 /* The documented limit (docs/emulator.md: "at most 1,000,000,000 ms"), written here again so that a changed
  * constant in the code is caught rather than trusted. */

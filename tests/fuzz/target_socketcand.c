@@ -1,5 +1,5 @@
 /*
- * Fuzz target "socketcand": the protocol of canopen-emu's --socketcand server (src/emu/socketcand_proto.c), as the
+ * Fuzz target "socketcand": the protocol of canopen-emu's --socketcand server (emu/socketcand/socketcand_proto.c), as the
  * server takes whatever a TCP client sends: the bytes cut into items by the reader, in pieces whose sizes the input
  * chooses (a client's bytes arrive in any split), each command read, each frame it sends written back as the
  * server writes frames.
@@ -24,7 +24,7 @@
 #include <string.h>
 
 #include "fuzz_abort.h"
-#include "socketcand_proto.h"
+#include "socketcand/socketcand_proto.h"
 
 #if defined(__GNUC__)
 __attribute__((noreturn, format(printf, 1, 2)))

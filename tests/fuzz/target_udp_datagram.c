@@ -1,5 +1,5 @@
 /*
- * Fuzz target "udp_datagram": the decoder of python-can's udp_multicast datagrams (src/linux/udp_datagram.c, on
+ * Fuzz target "udp_datagram": the decoder of python-can's udp_multicast datagrams (ports/linux/udp_datagram.c, on
  * msgpack-c), as canopen-emu's udp_multicast buses read whatever arrives on their group (docs/buses.md).
  *
  * Input: one datagram's bytes (run_fuzz.cmake's -max_len 4096: the longest datagram read). Invariants (a violation prints

@@ -230,9 +230,9 @@ def command_synopses(help_text):
 
 def emulator_help_commands(source_dir):
     """The common commands as the running emulator's 'help' prints them (help_text of emu_commands.c)."""
-    source = (source_dir / "src/emu/emu_commands.c").read_text(encoding="utf-8")
+    source = (source_dir / "emu/control/emu_commands.c").read_text(encoding="utf-8")
     m = re.search(r"^static const char help_text\[\] =\n(.*?);$", source, re.S | re.M)
-    assert m, "src/emu/emu_commands.c has no 'static const char help_text[]' any more: update this test"
+    assert m, "emu/control/emu_commands.c has no 'static const char help_text[]' any more: update this test"
     text = c_string_literals(m.group(1))
     body = text.split("\n", 1)[1]  # the first line is the heading "commands (NODE = ...):"
     synopses = command_synopses(body)
@@ -380,7 +380,7 @@ def test_every_command_of_the_emulator_help_is_documented(page, source_dir):
     tags = {normalized(tag) for tag, _ in tp_entries(section(page, "CONTROL COMMANDS"))}
     commands = emulator_help_commands(source_dir)
     missing = [c for c in commands if c not in tags]
-    assert not missing, (f"commands of help() in src/emu/emu_commands.c missing from CONTROL COMMANDS of {PAGE} "
+    assert not missing, (f"commands of help() in emu/control/emu_commands.c missing from CONTROL COMMANDS of {PAGE} "
                          f"(the .TP tag must be the synopsis as help prints it): {missing}")
 
 
@@ -402,9 +402,9 @@ def test_every_device_command_is_documented_under_its_device(page, source_dir):
 def test_exit_status_section_gives_each_exit_code_of_main(page, source_dir):
     """A script that runs the emulator branches on its exit status: each code main() returns is documented, and
     no other."""
-    source = (source_dir / "src/emu/canopen_emu.c").read_text(encoding="utf-8")
+    source = (source_dir / "emu/runtime/canopen_emu.c").read_text(encoding="utf-8")
     m = re.search(r"^int main\(.*?\)\n\{\n(.*?)^\}", source, re.S | re.M)
-    assert m, "src/emu/canopen_emu.c has no 'int main(...)' function at the top level: update this test"
+    assert m, "emu/runtime/canopen_emu.c has no 'int main(...)' function at the top level: update this test"
     returned = set(re.findall(r"\breturn (\d+);", m.group(1))) | set(re.findall(r"\bexit\((\d+)\)", source))
     assert returned, "main() returns no literal exit code: update this test"
     documented = {tag for tag, _ in tp_entries(section(page, "EXIT STATUS"))}

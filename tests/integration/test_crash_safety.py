@@ -171,7 +171,7 @@ NODES = {PI: "pro-ionizer", SDS: "sds", BK: "buerkert"}
 
 def pi_params(k):
     # 0x2002:07 (bit timing): a 0x1010 save of an Eltex device writes it to the .lss file besides the .params and
-    # .device files (rule E2): one transaction of three files (src/linux/nvm_file.c, the journal).
+    # .device files (rule E2): one transaction of three files (ports/linux/nvm_file.c, the journal).
     return {(0x1017, 0): (100 * (11 + k % 580), 2),        # heartbeat: 100 ms steps (rule E5), default 1000
             (0x2002, 0x07): (2 + k % 2, 1),               # bit timing 50/20 kbit/s, default 4 (125 kbit/s)
             (0x2002, 0x01): (1000 + 10 * (k % 5000), 2),  # TPDO cycle, default 500

@@ -1,5 +1,5 @@
 /*
- * A test double of src/linux/socketcan.c for running canopen-emu where there is no CAN (and under ASan, which
+ * A test double of ports/linux/socketcan.c for running canopen-emu where there is no CAN (and under ASan, which
  * cannot run inside User-Mode Linux): the same API (socketcan.h), with the bus replaced by an AF_UNIX
  * SOCK_SEQPACKET connection to a test, one struct can_frame (16 bytes) per packet in each direction. The test
  * listens on the path in CO_FAKECAN_SOCKET; the interface name of -i is only kept for the log lines.
@@ -19,7 +19,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../../src/linux/socketcan.h"
+#include "../../ports/linux/socketcan.h"
 
 int socketcan_open(socketcan_t *c, const char *ifname, socketcan_log_fn log, void *log_ctx, char *err, size_t errlen)
 {

@@ -1,5 +1,5 @@
 /*
- * The udp_multicast datagram codec (src/linux/udp_datagram.c) from the command line, for test_udp_datagram.py to
+ * The udp_multicast datagram codec (ports/linux/udp_datagram.c) from the command line, for test_udp_datagram.py to
  * compare with python-can's own packing and unpacking:
  *   datagram_tool encode ID FLAGS DLC HEXDATA TIMESTAMP   prints the datagram in hex (FLAGS: r = RTR, x = 29-bit, - none)
  *   datagram_tool decode HEX                               prints "frame ID FLAGS DLC HEXDATA", "fd", "error" or

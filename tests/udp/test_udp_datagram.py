@@ -1,4 +1,4 @@
-"""The udp_multicast datagram codec (src/linux/udp_datagram.c) against python-can's own pack_message and
+"""The udp_multicast datagram codec (ports/linux/udp_datagram.c) against python-can's own pack_message and
 unpack_message: every kind of classic frame (standard and extended identifiers, remote requests, DLC 0..8) is byte
 for byte what python-can packs, and the decoder takes exactly what a python-can receiver takes."""
 import os

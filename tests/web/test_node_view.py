@@ -279,7 +279,7 @@ def test_a_device_command_from_the_page_makes_the_node_send_its_emcy(page, start
     _, _, frame = emu.bus.expect(lambda i, d: i == 0x091, 5.0, "the EMCY of node 17")
     assert frame == bytes([0x20, 0x23, 0x03, 0x01, 0x01, 0x00, 0x00, 0x00])  # 0x2320, register 0x03, error 1
     shown = wait_for(driver, "the answer and the EMCY in the summary",
-                     lambda v: v["summary"]["emcy"] == "0x2320 reg 0x03 info 0101000000", 5.0)
+                     lambda v: v["summary"]["emcy"] == "0x2320 current, device output side, reg 0x03 info 0101000000", 5.0)
     assert shown["forms"]["error"] == {"answer": "node 17: sds: error 1 raised: HV short circuit / arcing",
                                        "refused": False, "state": None}
     assert shown["summary"]["error-register"] == "0x03"

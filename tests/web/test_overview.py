@@ -111,14 +111,14 @@ def test_an_emcy_shows_in_its_nodes_row(page, start_emulator):
     _, _, frame = emu.bus.expect(lambda i, d: i == 0x091, 5.0, "the EMCY of node 17")
     assert frame == bytes([0x00, 0x50, 0x01, 0xA1, 0xB2, 0xC3, 0xD4, 0xE5])
     shot = wait_for(driver, "the EMCY in node 17's row",
-                    lambda s: s["rows"]["17"]["emcy"] == "0x5000 reg 0x01 info A1B2C3D4E5", 2.0)
+                    lambda s: s["rows"]["17"]["emcy"] == "0x5000 device hardware, reg 0x01 info A1B2C3D4E5", 2.0)
     assert shot["rows"]["17"]["error-register"] == "0x01"
     assert age(shot["rows"]["17"]["emcy-age"]) < 2.0
     assert [(shot["rows"][n]["emcy"], shot["rows"][n]["error-register"]) for n in ("16", "18")] == [("", "0x00")] * 2
     # The time since it keeps going (the emulator's clock from each show, the page's in between).
     first = age(shot["rows"]["17"]["emcy-age"])
     shot = wait_for(driver, "the EMCY's age a second on", lambda s: age(s["rows"]["17"]["emcy-age"]) >= first + 1.0, 5.0)
-    assert shot["rows"]["17"]["emcy"] == "0x5000 reg 0x01 info A1B2C3D4E5"
+    assert shot["rows"]["17"]["emcy"] == "0x5000 device hardware, reg 0x01 info A1B2C3D4E5"
 
 
 def test_a_protocol_fault_shows_and_the_heartbeat_age_grows(page, start_emulator):
@@ -210,7 +210,7 @@ def test_the_page_comes_back_after_its_session_expired(page, start_emulator):
                     lambda s: [r["state"] for r in s["rows"].values()] == ["OPERATIONAL"] * 3, 5.0)
     assert shot["status"] == "fakecan0 (socketcan): 3 nodes"
     command(emu, "emcy 16 0x3210 0x05")  # and its events come again
-    wait_for(driver, "the EMCY of node 16", lambda s: s["rows"]["16"]["emcy"] == "0x3210 reg 0x05 info 0000000000", 2.0)
+    wait_for(driver, "the EMCY of node 16", lambda s: s["rows"]["16"]["emcy"] == "0x3210 voltage inside the device, reg 0x05 info 0000000000", 2.0)
 
 
 def test_nodes_heard_on_the_bus_get_a_row_that_does_not_open(page, start_emulator):

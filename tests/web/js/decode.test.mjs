@@ -2,7 +2,7 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {ABORT_TEXTS, EMCY_CLASSES, KINDS, bytesOf, decode, emcyClass, errorRegister} from "../../../web/decode.js";
+import {ABORT_TEXTS, EMCY_CLASSES, KINDS, bytesOf, decode, emcyClass, emcyCode, errorRegister} from "../../../web/decode.js";
 
 /** decode() of a frame from the bus (rx) or, with {dir: "tx", node}, of a node. */
 function d(id, data, extra = {}) {
@@ -69,6 +69,8 @@ test("EMCY classes: a code not listed takes its class; codes below 0x1000 but 0 
     assert.equal(emcyClass(code), name, code.toString(16));
   }
   assert.equal(text(0x085, "1200000000000000"), "EMCY 0x0012 unknown code, register 0x00, info 0000000000");
+  assert.equal(emcyCode(0x8130), "0x8130 life guard error or heartbeat error"); // the overview's too (format.js)
+  assert.equal(emcyCode(0xA000), "0xA000 unknown code");
   assert.equal(EMCY_CLASSES.size, 35);
   assert.equal(errorRegister(0x80), "0x80 (manufacturer)");
 });

@@ -36,5 +36,17 @@ test("device with its variant, heartbeat period, EMCY", () => {
   assert.equal(format.device({device: "buerkert", variant: null}), "buerkert");
   assert.equal(format.heartbeatPeriod(500), "500 ms");
   assert.equal(format.heartbeatPeriod(0), "off");
-  assert.equal(format.emcy({code: 0x5000, register: 1, info: "A1B2C3D4E5"}), "0x5000 reg 0x01 info A1B2C3D4E5");
+  // the code with its class as the trace words it (decode.js EMCY_CLASSES: one table)
+  assert.equal(format.emcy({code: 0x5000, register: 1, info: "A1B2C3D4E5"}),
+    "0x5000 device hardware, reg 0x01 info A1B2C3D4E5");
+  assert.equal(format.emcy({code: 0x8130, register: 0x11, info: "0000000000"}),
+    "0x8130 life guard error or heartbeat error, reg 0x11 info 0000000000");
+  assert.equal(format.emcy({code: 0x3210, register: 5, info: "0000000000"}), // not listed: the class of 0x3200
+    "0x3210 voltage inside the device, reg 0x05 info 0000000000");
+  assert.equal(format.emcy({code: 0xFF42, register: 0x80, info: "0102030405"}),
+    "0xFF42 device specific, reg 0x80 info 0102030405");
+  assert.equal(format.emcy({code: 0x0000, register: 0, info: "0000000000"}),
+    "0x0000 error reset or no error, reg 0x00 info 0000000000");
+  assert.equal(format.emcy({code: 0x0012, register: 1, info: "0000000000"}),
+    "0x0012 unknown code, reg 0x01 info 0000000000");
 });
