@@ -136,6 +136,12 @@ export function emcyClass(code) {
     EMCY_CLASSES.get(code & 0xFF00) ?? EMCY_CLASSES.get(code & 0xF000) ?? null);
 }
 
+/** An emergency error code with its class: "0x8130 life guard error or heartbeat error", "0x0012 unknown code". The
+ * trace's EMCY text and the overview's last EMCY (web/format.js) both. */
+export function emcyCode(code) {
+  return `${hex(code, 4)} ${emcyClass(code) ?? "unknown code"}`;
+}
+
 /** "0x11 (generic, communication)", "0x00". */
 export function errorRegister(value) {
   const bits = REGISTER_BITS.map((name, bit) => ((value >> bit) & 1 ? name ?? `bit ${bit}` : null))
@@ -168,9 +174,7 @@ function emcy(bytes) {
   if (bytes.length < 3) {
     return lengthProblem("EMCY", "8 bytes", bytes.length);
   }
-  const code = le(bytes, 0, 2);
-  const name = emcyClass(code) ?? "unknown code";
-  return `EMCY ${hex(code, 4)} ${name}, register ${errorRegister(bytes[2])}, info ${hexBytes(bytes.subarray(3))}`;
+  return `EMCY ${emcyCode(le(bytes, 0, 2))}, register ${errorRegister(bytes[2])}, info ${hexBytes(bytes.subarray(3))}`;
 }
 
 /** TIME: ms after midnight (28 bits) and days since 1984-01-01 (CiA 301 TIME_OF_DAY), in UTC. */

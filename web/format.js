@@ -1,5 +1,7 @@
 // The texts of the overview's cells (docs/web.md): pure functions, no DOM, tested with node --test (tests/web/js).
 
+import {emcyCode} from "./decode.js";
+
 /** 0x-prefixed upper-case hex with at least `digits` digits: hex(0x191, 8) is "0x00000191". */
 export function hex(value, digits) {
   return "0x" + value.toString(16).toUpperCase().padStart(digits, "0");
@@ -36,7 +38,8 @@ export function heartbeatPeriod(ms) {
   return ms === 0 ? "off" : `${ms} ms`;
 }
 
-/** An EMCY as the protocol gives it ({code, register, info}): code, error register, the five manufacturer bytes. */
+/** An EMCY as the protocol gives it ({code, register, info}): code and its class (decode.js, as the trace has it),
+ * error register, the five manufacturer bytes: "0x5000 device hardware, reg 0x01 info A1B2C3D4E5". */
 export function emcy(e) {
-  return `${hex(e.code, 4)} reg ${hex(e.register, 2)} info ${e.info}`;
+  return `${emcyCode(e.code)}, reg ${hex(e.register, 2)} info ${e.info}`;
 }

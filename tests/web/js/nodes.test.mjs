@@ -55,7 +55,7 @@ test("rows: every column, ordered by node-ID, ages against the clock", () => {
   assert.deepEqual(rows[1].cells, {
     "node": "17", "bus": "vcan0", "device": "sds (N)", "state": "PRE-OPERATIONAL", "device-type": "0x00000191",
     "heartbeat": "5000 ms", "heartbeat-age": "1.0 s ago", "error-register": "0x05", "faults": "sdo-delay",
-    "emcy": "0x3210 reg 0x05 info 0000000000", "emcy-age": "1.8 s ago",
+    "emcy": "0x3210 voltage inside the device, reg 0x05 info 0000000000", "emcy-age": "1.8 s ago",
   });
   assert.equal(rows[2].cells["device"], "buerkert");
   assert.equal(rows[2].cells["device-type"], "0x00000000");
@@ -115,7 +115,7 @@ test("events change their node's row until the next show says otherwise", () => 
   assert.equal(rows[1].cells["state"], "OPERATIONAL");
   assert.equal(rows[0].cells["faults"], "heartbeat-stop, tpdo-freeze");
   assert.equal(rows[1].cells["faults"], "");
-  assert.equal(rows[2].cells["emcy"], "0x5000 reg 0x01 info A1B2C3D4E5");
+  assert.equal(rows[2].cells["emcy"], "0x5000 device hardware, reg 0x01 info A1B2C3D4E5");
   assert.equal(rows[2].cells["error-register"], "0x01");
   assert.equal(rows[2].cells["emcy-age"], "0.0 s ago"); // the clock moved to the event's time
   table.event(event("fault", 16, 1_800_000, {fault: "heartbeat-stop", action: "ended"}), 300);
