@@ -338,6 +338,126 @@ def test_a_protocol_fault_raised_from_the_page_stops_the_heartbeats_until_cleare
     assert all(0.4 <= g <= 0.65 for g in gaps), gaps
 
 
+BOOLEANS_EDS = """[FileInfo]
+FileName=booleans.eds
+FileVersion=1
+EDSVersion=4.0
+[DeviceInfo]
+VendorName=Test Vendor
+VendorNumber=0x00000ABC
+ProductName=Valve
+ProductNumber=0x00000003
+RevisionNumber=0x00010000
+BaudRate_125=1
+Granularity=8
+NrOfRXPDO=0
+NrOfTXPDO=0
+LSS_Supported=0
+[MandatoryObjects]
+SupportedObjects=3
+1=0x1000
+2=0x1001
+3=0x1018
+[1000]
+ParameterName=Device type
+ObjectType=0x7
+DataType=0x0007
+AccessType=ro
+DefaultValue=0
+[1001]
+ParameterName=Error register
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+DefaultValue=0
+[1018]
+ParameterName=Identity object
+ObjectType=0x9
+SubNumber=2
+[1018sub0]
+ParameterName=Highest sub-index supported
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+DefaultValue=1
+[1018sub1]
+ParameterName=Vendor-ID
+ObjectType=0x7
+DataType=0x0007
+AccessType=ro
+DefaultValue=0x00000ABC
+[ManufacturerObjects]
+SupportedObjects=4
+1=0x2000
+2=0x2001
+3=0x2002
+4=0x2003
+[2000]
+ParameterName=Valve Open
+ObjectType=0x7
+DataType=0x0001
+AccessType=rw
+DefaultValue=1
+[2001]
+ParameterName=Reset Request
+ObjectType=0x7
+DataType=0x0001
+AccessType=wo
+DefaultValue=0
+[2002]
+ParameterName=Valve Name
+ObjectType=0x7
+DataType=0x0009
+AccessType=ro
+DefaultValue=V1
+[2003]
+ParameterName=Switch Count
+ObjectType=0x7
+DataType=0x0005
+AccessType=ro
+DefaultValue=3
+"""
+
+PLOT_BUTTONS = """
+return [...document.querySelectorAll('#view-node table.dictionary tr.entry')]
+  .filter((tr) => tr.querySelector('button.plot') !== null && getComputedStyle(tr.querySelector('button.plot')).display
+          !== 'none')
+  .map((tr) => tr.dataset.object);
+"""
+
+
+def test_a_boolean_row_has_a_plot_button_as_the_plots_picker_offers_it(page, start_emulator, tmp_path):
+    """The node view's plot buttons and the plots view's picker offer the same objects (objects.js plottableRow):
+    a BOOLEAN that can be read too (plotted as 0/1), not a write-only one nor a string. The button plots it."""
+    from test_plots import plots, show_plots, wait_plots
+    eds = tmp_path / "booleans.eds"
+    eds.write_text(BOOLEANS_EDS)
+    emu = start_emulator(f"{eds}:5")
+    driver = open_node(page, emu, 5)
+    shown = wait_for(driver, "the valve's objects", lambda v: "0x2003:00" in v["rows"], 5.0)
+    assert {o: (r["type"], r["access"]) for o, r in shown["rows"].items() if o.startswith("0x20")} == {
+        "0x2000:00": ("BOOLEAN", "rw"), "0x2001:00": ("BOOLEAN", "wo"), "0x2002:00": ("VISIBLE_STRING", "ro"),
+        "0x2003:00": ("UNSIGNED8", "ro")}
+    expand(driver, "0x1018")  # every row shown: the whole dictionary
+    wait_for(driver, "0x1018 expanded", lambda v: "0x1018:01" in v["rows"], 5.0)
+    buttons = driver.execute_script(PLOT_BUTTONS)
+    assert buttons == ["0x1000:00", "0x1001:00", "0x1018:00", "0x1018:01", "0x2000:00", "0x2003:00"]
+    # the plots view's picker offers exactly these
+    show_plots(driver)
+    Select(driver.find_element(By.CSS_SELECTOR, "#view-plots select[name=node]")).select_by_value("fakecan0/5")
+    objects = driver.find_element(By.CSS_SELECTOR, "#view-plots select[name=object]")
+    WebDriverWait(driver, 5.0, poll_frequency=0.05).until(lambda d: objects.is_enabled())
+    assert [o.get_attribute("value") for o in Select(objects).options if o.get_attribute("value")] == buttons
+    # the BOOLEAN's button plots it: its series in the plots view, sampled
+    css(driver, "#tab-node").click()
+    css(driver, 'tr[data-object="0x2000:00"] button.plot').click()
+    show_plots(driver)
+    view = wait_plots(driver, "the BOOLEAN plotted and sampled", lambda v: any(
+        "0x2000:00 Valve Open" in c["legend"] and c["points"] >= 2 for c in v["charts"].values()), 5.0)
+    assert "fakecan0/5 0x2000:00" in view["series"]
+    assert plots(driver)["problem"] is False
+
+
 def test_a_device_of_12000_entries_is_shown_whole(page, start_emulator, tmp_path):
     """Its `objects` answer is some 2.5 MB: more than a web session may hold (1 MiB), so before issue 32 the session
     was dropped and the page never showed the dictionary. The answer now comes over several exchanges, and the page
