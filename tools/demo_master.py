@@ -10,6 +10,7 @@ shows its EMCY (and the confirmation when it is cleared), stops the nodes and en
 """
 import argparse
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -17,6 +18,7 @@ import tempfile
 import threading
 import time
 import tomllib
+from decimal import Decimal
 from pathlib import Path
 
 import canopen
@@ -170,12 +172,25 @@ def run(network, nodes, emu, booted):
         say(f"{device}: NMT state from its heartbeat: {node.nmt.state}")
 
 
+SCALED_UNIT = re.compile(r"(\d+(?:\.\d+)?) (\S.*)")
+
+
+def with_unit(raw, unit):
+    """A PDO value with its unit as a person reads it. A unit with a factor ("0.1 W": the object counts tenths of a
+    watt, od/<device>.toml [units]) scales it: 15 with "0.1 W" is "1.5 W", with the factor's decimals."""
+    scaled = SCALED_UNIT.fullmatch(unit or "")
+    if scaled is not None and isinstance(raw, int) and not isinstance(raw, bool):
+        factor = Decimal(scaled.group(1))
+        return f"{Decimal(raw) * factor:.{max(0, -factor.as_tuple().exponent)}f} {scaled.group(2)}"
+    value = f"{raw:.2f}" if isinstance(raw, float) else str(raw)
+    return f"{value} {unit or ''}".rstrip()
+
+
 def show_values(latest):
     for key in sorted(latest):
         device, index, sub = key
         name, raw = latest[key]
-        value = f"{raw:.2f}" if isinstance(raw, float) else str(raw)
-        say(f"{device}: 0x{index:04X}:{sub:02X} {name} = {value} {UNITS.get(key, '')}".rstrip())
+        say(f"{device}: 0x{index:04X}:{sub:02X} {name} = {with_unit(raw, UNITS.get(key))}")
 
 
 def show_emcy(device, entry):

@@ -1,4 +1,5 @@
 """Interface trouble (down/up, gone/back), --script timing, and the README's demo session."""
+import re
 import subprocess
 import sys
 import time
@@ -128,6 +129,24 @@ def test_readme_demo_session_runs(tmp_path):
                  "EMCY 0x3210", "EMCY 0x0000 (error reset)", "NMT state from its heartbeat: STOPPED",
                  "web: listening on http://127.0.0.1:", "http://127.0.0.1:8080/"):
         assert text in out, f"{text!r} missing from the demo output"
+    # A unit with a factor (od/pro-ionizer.toml: 0x6401:04 in "0.1 W") is applied: the power in watts, never "15 0.1 W"
+    assert re.search(r"pro-ionizer: 0x6401:04 \S.*Read Power Discharging = \d+\.\d W$", out, re.M), out
+    assert "0.1 W" not in out
+
+
+def test_readme_demo_scales_a_value_by_its_units_factor():
+    """tools/demo_master.py's values with their units (od/<device>.toml [units]): a factor in the unit scales the
+    value, with the factor's decimals; other units are written after the value as they are."""
+    sys.path.insert(0, str(SRC / "tools"))
+    try:
+        import demo_master
+    finally:
+        sys.path.pop(0)
+    assert demo_master.UNITS[("pro-ionizer", 0x6401, 4)] == "0.1 W"
+    cases = [(15, "0.1 W", "1.5 W"), (10, "0.1 W", "1.0 W"), (0, "0.1 W", "0.0 W"), (1234, "0.01 A", "12.34 A"),
+             (5, "10 ms", "50 ms"), (7, "%", "7 %"), (50, "% (50 = balanced)", "50 % (50 = balanced)"),
+             (12.5, "l/min", "12.50 l/min"), (3, None, "3")]
+    assert [demo_master.with_unit(raw, unit) for raw, unit, _ in cases] == [text for _, _, text in cases]
 
 
 def run_script(tmp_path, content, node="sds:0x64", timeout=10):
