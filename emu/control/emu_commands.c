@@ -4,7 +4,7 @@
 
 #include <string.h>
 
-#include "eds_devices/emu_eds_class.h"
+#include "eds_class/eds_class.h"
 #include "runtime/emu_output.h"
 
 /* The words of a line into argv; -1 when there are more than MAX_ARGS (the rest was ignored and the command then
@@ -146,7 +146,7 @@ int select_nodes_any_bus(emu_t *emu, char *word, emu_node_t **out, size_t max)
     return select_on(emu, word, out, max, true);
 }
 
-/* export-dcf NODE FILE: one node's current values as a DCF (emu_eds_class.h). */
+/* export-dcf NODE FILE: one node's current values as a DCF (eds_class.h). */
 static command_result_t export_dcf(int argc, char **argv, emu_node_t **nodes, int n_sel)
 {
     if (argc != 3 || n_sel != 1) {

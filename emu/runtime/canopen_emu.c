@@ -15,7 +15,7 @@
 
 #include "runtime/emu.h"
 #include "runtime/emu_cmdline.h"
-#include "eds_devices/emu_eds_class.h"
+#include "eds_class/eds_class.h"
 #include "runtime/emu_output.h"
 #include "runtime/emu_runtime.h"
 #include "scripts/emu_script.h"

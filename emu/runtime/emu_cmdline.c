@@ -5,7 +5,7 @@
 #include <limits.h>
 #include <stdlib.h>
 
-#include "eds_devices/emu_eds_class.h"
+#include "eds_class/eds_class.h"
 #include <string.h>
 
 void usage(FILE *out)

@@ -20,7 +20,7 @@ void list_devices(FILE *out);
 
 /** DEVICE[/VARIANT][:NODE-ID][@BUS]: the class, the variant ("" for the default), the node-ID (the class's default
  *  when none is given) and the interface ("" for the first). DEVICE may be an EDS or DCF file (FILE.eds, FILE.dcf):
- *  its class is built once (emu_eds_class.h); the reader's warnings go to stderr unless quiet. false, with a
+ *  its class is built once (eds_class.h); the reader's warnings go to stderr unless quiet. false, with a
  *  message, when the argument is not one or the file cannot be emulated. */
 bool parse_spec(const char *arg, node_spec_t *spec, bool quiet);
 

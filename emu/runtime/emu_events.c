@@ -11,7 +11,7 @@
 #include "runtime/emu_bus.h"
 #include "control/emu_json_request.h" /* hex_string: the events write bytes as the answers do */
 #include "runtime/emu_output.h"
-#include "runtime/emu_text.h"
+#include "text_escape.h"
 
 void events_add_session(emu_t *emu, emu_session_t *s)
 {
@@ -87,7 +87,7 @@ static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const em
         } else {
             if (text_len == 0U) {
                 /* The device's name (an EDS file's) and the text (a model's message) are shown escaped, as the
-                 * log shows them (emu_text.h): one line, nothing a terminal acts on. */
+                 * log shows them (text_escape.h): one line, nothing a terminal acts on. */
                 char raw[sizeof text_line];
                 int w;
                 if (n != NULL) {

@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include "socketcan.h"
-#include "runtime/emu_text.h"
+#include "text_escape.h"
 
 /* Longest line (the log's time prefix and text, or a multi-line reply) with its newline: one write of at most
  * PIPE_BUF bytes takes it whole. */
@@ -172,7 +172,7 @@ static void append(int stream, const char *line, size_t n)
     ring_put(s, line, n);
 }
 
-/* Formats "prefix" + fmt (escaped: emu_text.h) + newline and appends it; a line cut to LINE_BYTES still ends with
+/* Formats "prefix" + fmt (escaped: text_escape.h) + newline and appends it; a line cut to LINE_BYTES still ends with
  * its newline. */
 static void append_formatted(int stream, const char *prefix, text_lines_t lines, const char *fmt, va_list ap)
 {

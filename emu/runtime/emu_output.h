@@ -35,14 +35,14 @@ enum { LOG_QUIET = 0, LOG_NORMAL = 1, LOG_VERBOSE = 2 };
  *  exit what is buffered (registered with atexit). Before it, and for messages about the command line, stdio. */
 void output_init(co_time_us_t start, int log_level);
 
-/** One log line of the given level (no newline in fmt; escaped as emu_text.h says, line breaks too). */
+/** One log line of the given level (no newline in fmt; escaped as text_escape.h says, line breaks too). */
 void logline(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /** A fatal message, "canopen-emu: ..." on the log stream whatever the log level (no newline in fmt). */
 void output_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 /** One reply line on stdout (no newline in fmt; a multi-line reply is one line with newlines inside), escaped as
- *  emu_text.h says (its line breaks kept), also when a reply sink takes it. */
+ *  text_escape.h says (its line breaks kept), also when a reply sink takes it. */
 void reply(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 /** Where reply() lines go instead of stdout while a control session runs a command (emu_session.h): each reply

@@ -991,7 +991,7 @@ def rules_seeds():
                               b'hysteresis: 1, emcy: 0x2310}\n\0' + write(0, 0x410000) + wait(400),
         "bad-yaml": b"objects: [\n",
         "bad-keys": b'profile: cia402\nobjects:\n  "0x6064": {sine: {amplitude: x}}\n',
-        # what the YAML reader refuses as it reads (emu/eds_devices/emu_rules_yaml.c): anchors and aliases, nesting past 16
+        # what the YAML reader refuses as it reads (devices/eds_class/rules_yaml.c): anchors and aliases, nesting past 16
         # levels (flow and block), a key twice, a second document, a NUL in a value; and one object spelled twice
         "anchor-alias": b'objects:\n  "0x2000": &w {sine: {amplitude: 5, period_ms: 100}}\n  "0x2003": *w\n\0'
                         + wait(100),

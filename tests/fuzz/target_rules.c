@@ -1,5 +1,5 @@
 /*
- * Fuzz target "rules": rules files (--rules, emu/eds_devices/emu_rules.c, libyaml) for the device of tests/eds/files/drive.eds
+ * Fuzz target "rules": rules files (--rules, devices/eds_class/rules.c, libyaml) for the device of tests/eds/files/drive.eds
  * (a CiA 402 drive with process values), then the device running them, as canopen-emu runs a device read from an EDS.
  *
  * Input: the rules file's text up to the first NUL byte (all of it when there is none), then records until the input
@@ -14,7 +14,7 @@
  * Invariants (a violation prints "==fuzz== INVARIANT VIOLATION [rules]" and aborts):
  *  - a rules file is either loaded or refused with at least one "FILE:LINE:COLUMN: error:" line, never both or
  *    neither, and with at most 21 lines (20 errors and one that says more were found);
- *  - what the YAML reader refuses (emu_rules_yaml.h: anchors, aliases, nesting past 16 levels, more than 65,536
+ *  - what the YAML reader refuses (rules_yaml.h: anchors, aliases, nesting past 16 levels, more than 65,536
  *    values, duplicate keys, a second document) is refused as it comes: libFuzzer's timeout and RSS limit hold it;
  *  - a step returns a deadline after now (or CO_NEVER), never one in the past (a loop would spin);
  *  - the same input runs the same way twice: every object of the device holds the same value after both runs
@@ -28,8 +28,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "eds_devices/emu_eds_class.h"
-#include "eds_devices/emu_rules.h"
+#include "eds_class/eds_class.h"
+#include "eds_class/rules.h"
 #include "fake_port.h"
 #include "fuzz_abort.h"
 

@@ -189,7 +189,7 @@ def test_a_nul_in_a_value_is_refused(tmp_path):
 
 def test_an_error_quoting_the_files_words_stays_one_line_and_escaped(tmp_path):
     """A message quotes a key or a value of the file: one with line breaks and ESC[2J made several lines of the log
-    and reached the terminal raw (found by the rules fuzz target). Escaped as the log is (emu_text.h)."""
+    and reached the terminal raw (found by the rules fuzz target). Escaped as the log is (text_escape.h)."""
     err = refuse(tmp_path, 'objects:\n  "0x20\\n\\n\\e[2J05": {constant: 1}\n')
     assert "'0x20\\x0a\\x0a\\x1b[2J05' is not an object" in err and "\x1b" not in err, err
     assert len(err.splitlines()) == 1, err

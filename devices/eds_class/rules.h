@@ -1,12 +1,12 @@
 /*
  * Behaviour rules of a device read from its EDS (docs/eds.md "Rules"): a YAML file says how values move
  * (constant, ramp, sine, random walk, steps, counter, follow with a first-order lag), which limits raise an EMCY
- * and 0x1001 bits, and whether the CiA 402 drive profile runs (emu_cia402.h). Parsed once per file (libyaml, with
- * the bounds of emu_rules_yaml.h), resolved against the device's object dictionary; each node keeps its own state in
+ * and 0x1001 bits, and whether the CiA 402 drive profile runs (cia402.h). Parsed once per file (libyaml, with
+ * the bounds of rules_yaml.h), resolved against the device's object dictionary; each node keeps its own state in
  * its model block.
  */
-#ifndef EMU_RULES_H
-#define EMU_RULES_H
+#ifndef EDS_CLASS_RULES_H
+#define EDS_CLASS_RULES_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -40,4 +40,4 @@ double rules_get(co_node_t *node, const co_od_entry_t *row);
 /** Writes a number to a numeric row as the device would (rounded, held to the type's range). */
 void rules_set(co_node_t *node, const co_od_entry_t *row, double value);
 
-#endif /* EMU_RULES_H */
+#endif /* EDS_CLASS_RULES_H */

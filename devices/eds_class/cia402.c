@@ -1,10 +1,10 @@
-/* The CiA 402 drive profile: see emu_cia402.h. State machine and statusword encoding per CiA 402-2 (IEC 61800-7-201). */
-#include "eds_devices/emu_cia402.h"
+/* The CiA 402 drive profile: see cia402.h. State machine and statusword encoding per CiA 402-2 (IEC 61800-7-201). */
+#include "eds_class/cia402.h"
 
 #include <math.h>
 #include <stdio.h>
 
-#include "eds_devices/emu_rules.h"
+#include "eds_class/rules.h"
 
 enum cia402_state_id {
     NOT_READY = 0, SWITCH_ON_DISABLED, READY_TO_SWITCH_ON, SWITCHED_ON, OPERATION_ENABLED, QUICK_STOP_ACTIVE,

@@ -1,6 +1,6 @@
-/* A device class from an EDS/DCF: see emu_eds_class.h and docs/eds.md ("How a file becomes a device"). */
+/* A device class from an EDS/DCF: see eds_class.h and docs/eds.md ("How a file becomes a device"). */
 #define _GNU_SOURCE
-#include "eds_devices/emu_eds_class.h"
+#include "eds_class/eds_class.h"
 
 #include <errno.h>
 #include <stdlib.h>
@@ -9,7 +9,7 @@
 #include <unistd.h>
 
 #include "eds.h"
-#include "eds_devices/emu_rules.h"
+#include "eds_class/rules.h"
 
 #if CO_CONFIG_OD_COMPACT
 #error "canopen-emu builds dictionaries of any size at run time: build it with CO_CONFIG_OD_COMPACT 0"

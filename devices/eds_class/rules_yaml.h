@@ -1,5 +1,5 @@
 /*
- * The YAML side of a rules file (emu_rules.c, docs/eds.md "Rules"): the file read event by event (libyaml's parser,
+ * The YAML side of a rules file (rules.c, docs/eds.md "Rules"): the file read event by event (libyaml's parser,
  * not its loader) into a libyaml document, refusing as the events come, before anything is built from them, what a
  * rules file never needs and what would let a small file cost much time or memory: aliases and anchors (an alias
  * repeats a whole subtree: a 1.65 MB file once became gigabytes of rules), nesting deeper than RULES_YAML_MAX_DEPTH
@@ -7,8 +7,8 @@
  * values, a file larger than RULES_YAML_MAX_BYTES, a duplicate key in a mapping (which value would count?), a key
  * that is a list or a mapping, a value with a NUL character, and a second document in the file.
  */
-#ifndef EMU_RULES_YAML_H
-#define EMU_RULES_YAML_H
+#ifndef EDS_CLASS_RULES_YAML_H
+#define EDS_CLASS_RULES_YAML_H
 
 #include <stdbool.h>
 #include <stdio.h>
@@ -28,4 +28,4 @@
  */
 bool rules_yaml_read(const char *path, FILE *log, yaml_document_t *doc);
 
-#endif /* EMU_RULES_YAML_H */
+#endif /* EDS_CLASS_RULES_YAML_H */

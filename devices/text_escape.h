@@ -15,8 +15,8 @@
  * Inline in this header: the fuzz target of the control path (tests/fuzz/target_control.c) links emu_events.c but
  * replaces emu_output.c, and needs the escaping all the same.
  */
-#ifndef EMU_TEXT_H
-#define EMU_TEXT_H
+#ifndef TEXT_ESCAPE_H
+#define TEXT_ESCAPE_H
 
 #include <stddef.h>
 #include <string.h>
@@ -105,4 +105,4 @@ static inline size_t text_escape(char *out, size_t cap, const char *in, size_t l
     return w;
 }
 
-#endif /* EMU_TEXT_H */
+#endif /* TEXT_ESCAPE_H */

@@ -4,8 +4,8 @@
  * targets: profile position (0x607A at 0x6081), profile/cyclic velocity (0x60FF -> 0x606C, position integrating
  * it), cyclic synchronous position (0x607A at once), homing (to 0x607C). Objects the file lacks are left out.
  */
-#ifndef EMU_CIA402_H
-#define EMU_CIA402_H
+#ifndef EDS_CLASS_CIA402_H
+#define EDS_CLASS_CIA402_H
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -35,4 +35,4 @@ void cia402_control(const cia402_objects_t *o, cia402_state_t *s, device_t *dev,
 /** The axis moves to now; returns when it next needs a step (CO_NEVER when at rest). */
 co_time_us_t cia402_step(const cia402_objects_t *o, cia402_state_t *s, device_t *dev, co_time_us_t now);
 
-#endif /* EMU_CIA402_H */
+#endif /* EDS_CLASS_CIA402_H */

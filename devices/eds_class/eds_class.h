@@ -3,8 +3,8 @@
  * core serves (rows, limits, defaults, names) in memory allocated here, once per file, shared by every node of it.
  * How a file becomes a device (capacities, storage, a DCF's values and commissioning): docs/eds.md.
  */
-#ifndef EMU_EDS_CLASS_H
-#define EMU_EDS_CLASS_H
+#ifndef EDS_CLASS_H
+#define EDS_CLASS_H
 
 #include <stdbool.h>
 #include <stdio.h>
@@ -36,4 +36,4 @@ bool eds_class_attach_rules(const char *path, FILE *log);
 /** Frees every class loaded (at exit, after the nodes are gone). */
 void eds_class_free_all(void);
 
-#endif /* EMU_EDS_CLASS_H */
+#endif /* EDS_CLASS_H */

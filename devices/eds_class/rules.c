@@ -1,7 +1,7 @@
-/* Behaviour rules of an EDS device: see emu_rules.h and docs/eds.md "Rules". YAML by libyaml (Debian libyaml-dev). */
+/* Behaviour rules of an EDS device: see rules.h and docs/eds.md "Rules". YAML by libyaml (Debian libyaml-dev). */
 #define _GNU_SOURCE
-#include "eds_devices/emu_rules.h"
-#include "runtime/emu_text.h"
+#include "eds_class/rules.h"
+#include "text_escape.h"
 
 #include <errno.h>
 #include <math.h>
@@ -9,8 +9,8 @@
 #include <string.h>
 #include <yaml.h>
 
-#include "eds_devices/emu_cia402.h"
-#include "eds_devices/emu_rules_yaml.h"
+#include "eds_class/cia402.h"
+#include "eds_class/rules_yaml.h"
 
 /* Every rule is a write to the dictionary each tick, every alarm a read: these bound the work of a node's tick. */
 #define RULES_MAX_OBJECTS 1024U
@@ -167,7 +167,7 @@ static void fail(parse_t *p, const yaml_node_t *at, const char *fmt, const char 
         fprintf(p->log, "%s: error: ", p->path);
     }
     /* a and b quote the file's own words: escaped, so that an error stays one line and no control byte of the
-     * file reaches the terminal (emu_text.h) */
+     * file reaches the terminal (text_escape.h) */
     char ea[256];
     char eb[256];
     ea[text_escape(ea, sizeof ea - 1U, a != NULL ? a : "", a != NULL ? strlen(a) : 0U, TEXT_ONE_LINE)] = '\0';

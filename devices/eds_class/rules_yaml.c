@@ -1,7 +1,7 @@
-/* A rules file read event by event into a libyaml document, with its bounds: see emu_rules_yaml.h. */
+/* A rules file read event by event into a libyaml document, with its bounds: see rules_yaml.h. */
 #define _GNU_SOURCE
-#include "eds_devices/emu_rules_yaml.h"
-#include "runtime/emu_text.h"
+#include "eds_class/rules_yaml.h"
+#include "text_escape.h"
 
 #include <errno.h>
 #include <stdarg.h>
