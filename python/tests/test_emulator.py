@@ -3,6 +3,7 @@ possible), reports a failed start with the log, finds its program, runs several 
 import os
 import tempfile
 import re
+import shutil
 import signal
 import struct
 import time
@@ -83,18 +84,21 @@ def test_stop_of_a_hung_emulator_ends_with_sigkill(canopen_emu_bus):
     pytest.param(["sds:16"], "vcan9", 1, "canopen-emu: interface vcan9 does not exist; create a virtual one with:",
                  marks=pytest.mark.vcan),
 ])
-def test_a_failed_start_raises_with_the_log(nodes, interface, status, message, monkeypatch, tmp_path):
-    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # its work directory in a folder of the test's own
-    before = set(os.listdir(tmp_path))
-    with pytest.raises(EmulatorError) as e:
-        Emulator(interface=interface, nodes=nodes)
-    assert e.value.returncode == status
-    assert message in e.value.log
-    assert f"canopen-emu exited with status {status} before its control socket answered" in str(e.value)
-    assert message in str(e.value)
-    left = {name for name in set(os.listdir(tmp_path)) - before
-            if name.startswith("canopen-emu-")}
-    assert not left  # its directory went with it
+def test_a_failed_start_raises_with_the_log(nodes, interface, status, message, monkeypatch):
+    # The launcher's work directory in a folder of the test's own, never the shared temporary directory's listing;
+    # a fresh one there rather than tmp_path, which can be too long for the control socket (107 bytes).
+    own = tempfile.mkdtemp(prefix="t")
+    try:
+        monkeypatch.setattr(tempfile, "tempdir", own)
+        with pytest.raises(EmulatorError) as e:
+            Emulator(interface=interface, nodes=nodes)
+        assert e.value.returncode == status
+        assert message in e.value.log
+        assert f"canopen-emu exited with status {status} before its control socket answered" in str(e.value)
+        assert message in str(e.value)
+        assert os.listdir(own) == []  # its directory went with it
+    finally:
+        shutil.rmtree(own)
 
 
 def test_the_program_comes_from_the_argument_the_variable_or_path(monkeypatch, tmp_path, canopen_emu_bus):
