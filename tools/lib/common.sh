@@ -1,4 +1,5 @@
-# Shared by tools/run-tests and tools/demo (sourced, POSIX sh): Debian packages and the Python venv.
+# Shared by tools/run-tests, tools/profile-tests and tools/demo (sourced, POSIX sh): Debian packages, the Python venv,
+# the CMake generator.
 
 # need_tools "cmd:package ..." [APT-OPTION...] installs the packages whose command is missing (as root, with
 # apt-get); an absolute path instead of a command is a file the package gives (a library's header). The options go
@@ -43,5 +44,15 @@ make_venv() {
     else
       python3 -m venv "$1" && "$1/bin/pip" install -q --disable-pip-version-check -r tests/requirements.txt
     fi && cp tests/requirements.txt "$1/requirements.txt" || { echo "pip install failed" >&2; return 1; }
+  fi
+}
+
+# cmake_generator DIR: "-G Ninja" where ninja is installed and DIR is a new build tree or already Ninja's (cmake
+# cannot switch a tree's generator), else nothing (cmake's default, make). Ninja schedules across targets where make
+# recurses per target: the plain build in 32 s instead of 40.
+cmake_generator() {
+  command -v ninja >/dev/null 2>&1 || return 0
+  if [ ! -f "$1/CMakeCache.txt" ] || grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' "$1/CMakeCache.txt"; then
+    echo "-G Ninja"
   fi
 }
