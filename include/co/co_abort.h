@@ -8,6 +8,7 @@
 #ifndef CO_ABORT_H
 #define CO_ABORT_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -39,10 +40,12 @@ extern "C" {
     X(VALUE_HIGH, 0x06090031UL, "value of parameter written too high")                        \
     X(VALUE_LOW, 0x06090032UL, "value of parameter written too low")                          \
     X(MAX_LESS_MIN, 0x06090036UL, "maximum value is less than minimum value")                 \
+    X(SDO_CONNECTION, 0x060A0023UL, "resource not available: SDO connection")                 \
     X(GENERAL, 0x08000000UL, "general error")                                                 \
     X(STORE, 0x08000020UL, "data cannot be transferred or stored to the application")         \
     X(LOCAL_CONTROL, 0x08000021UL, "data cannot be transferred because of local control")     \
     X(DEVICE_STATE, 0x08000022UL, "data cannot be transferred because of the device state")   \
+    X(NO_DICTIONARY, 0x08000023UL, "no object dictionary present or its generation failed")   \
     X(NO_DATA, 0x08000024UL, "no data available")
 
 /* Abort codes as named constants (CO_ABORT_NO_OBJECT, ...), 0 meaning "no abort". Macros, not an enum: the codes
@@ -72,14 +75,26 @@ extern "C" {
 #define CO_ABORT_VALUE_HIGH 0x06090031UL
 #define CO_ABORT_VALUE_LOW 0x06090032UL
 #define CO_ABORT_MAX_LESS_MIN 0x06090036UL
+#define CO_ABORT_SDO_CONNECTION 0x060A0023UL
 #define CO_ABORT_GENERAL 0x08000000UL
 #define CO_ABORT_STORE 0x08000020UL
 #define CO_ABORT_LOCAL_CONTROL 0x08000021UL
 #define CO_ABORT_DEVICE_STATE 0x08000022UL
+#define CO_ABORT_NO_DICTIONARY 0x08000023UL
 #define CO_ABORT_NO_DATA 0x08000024UL
 
 /** Text of an abort code, or "unknown abort code". For logs; never NULL. */
 const char *co_abort_text(uint32_t code);
+
+/** One abort code of CO_ABORT_LIST and its text. */
+typedef struct co_abort_entry {
+    uint32_t code;
+    const char *text;
+} co_abort_entry_t;
+
+/** Every abort code the core names, with its text, in ascending code order: the table co_abort_text() reads
+ *  (read-only, never NULL), for a tool that shows them all (canopen-emu serves it to its web view). */
+const co_abort_entry_t *co_abort_table(size_t *count);
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,6 @@
 /* Expedited SDO server: facts §4 and test vectors #18-#44, every abort path of §4.7 an expedited server has. */
 #include "fixture.h"
+#include <string.h>
 
 void setUp(void)
 {
@@ -324,6 +325,30 @@ static void sdo_abort_is_reported_as_event(void)
     TEST_ASSERT_EQUAL_UINT32(1U, fx.node.stats.sdo_aborts);
 }
 
+/* The table tools list (canopen-emu serves it to its web view) is the one co_abort_text() reads: every code of
+ * CO_ABORT_LIST once, in ascending order, each with its text; a code it lacks has none. */
+static void abort_table_is_the_list_and_the_texts(void)
+{
+    static const uint32_t listed[] = {
+#define CO_ABORT_X_CODE(name, value, text) value,
+        CO_ABORT_LIST(CO_ABORT_X_CODE)
+#undef CO_ABORT_X_CODE
+    };
+    size_t count = 0U;
+    const co_abort_entry_t *table = co_abort_table(&count);
+    TEST_ASSERT_NOT_NULL(table);
+    TEST_ASSERT_EQUAL_UINT32(sizeof listed / sizeof listed[0], (uint32_t)count);
+    for (size_t i = 0U; i < count; i++) {
+        TEST_ASSERT_EQUAL_HEX32(listed[i], table[i].code);
+        TEST_ASSERT_TRUE(i == 0U || table[i - 1U].code < table[i].code);
+        TEST_ASSERT_EQUAL_PTR(table[i].text, co_abort_text(table[i].code));
+        TEST_ASSERT_NOT_EQUAL(0, strcmp(table[i].text, "unknown abort code"));
+    }
+    TEST_ASSERT_EQUAL_STRING("resource not available: SDO connection", co_abort_text(CO_ABORT_SDO_CONNECTION));
+    TEST_ASSERT_EQUAL_STRING("unknown abort code", co_abort_text(0x12345678UL));
+    TEST_ASSERT_EQUAL_STRING("unknown abort code", co_abort_text(CO_ABORT_NONE));
+}
+
 static void sdo_on_new_node_id(void)
 {
     fx_start(0x7FU, 0U);
@@ -379,6 +404,7 @@ int main(void)
     RUN_TEST(read_hook_can_hide_an_entry);
     RUN_TEST(hooks_see_objects_from_their_first_index_only);
     RUN_TEST(sdo_abort_is_reported_as_event);
+    RUN_TEST(abort_table_is_the_list_and_the_texts);
     RUN_TEST(sdo_on_new_node_id);
     RUN_TEST(pdo_parameters_follow_node_id);
     return UNITY_END();
