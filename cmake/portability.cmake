@@ -26,9 +26,9 @@ target_link_libraries(co_footprint_probe PRIVATE od_pro_ionizer od_sds od_buerke
 target_compile_options(co_footprint_probe PRIVATE ${CO_WARNINGS})
 if(CMAKE_CROSSCOMPILING)
   # -ffreestanding for the check's own C library functions only: the core is compiled as for any firmware.
-  set_source_files_properties(${PROJECT_SOURCE_DIR}/cmake/freestanding_check.c PROPERTIES COMPILE_OPTIONS "-ffreestanding;-fno-lto")
+  set_source_files_properties(${PROJECT_SOURCE_DIR}/tests/portability/freestanding_check.c PROPERTIES COMPILE_OPTIONS "-ffreestanding;-fno-lto")
   foreach(dev pro_ionizer sds buerkert_fc)
-    add_executable(co_freestanding_${dev} ${PROJECT_SOURCE_DIR}/cmake/freestanding_check.c)
+    add_executable(co_freestanding_${dev} ${PROJECT_SOURCE_DIR}/tests/portability/freestanding_check.c)
     set_target_properties(co_freestanding_${dev} PROPERTIES SUFFIX .elf)
     target_compile_definitions(co_freestanding_${dev} PRIVATE CO_CHECK_OD=${dev}_od)
     target_compile_options(co_freestanding_${dev} PRIVATE ${CO_WARNINGS})
@@ -44,7 +44,7 @@ if(CMAKE_CROSSCOMPILING)
     endif()
     string(APPEND fitted_text "#include \"${dev}_od_config.h\"\n")
     file(GENERATE OUTPUT ${fitted_header} CONTENT "${fitted_text}")
-    add_executable(co_freestanding_${dev}_fitted ${PROJECT_SOURCE_DIR}/cmake/freestanding_check.c ${CO_CORE_SOURCES}
+    add_executable(co_freestanding_${dev}_fitted ${PROJECT_SOURCE_DIR}/tests/portability/freestanding_check.c ${CO_CORE_SOURCES}
                    ${CO_OD_OUT}/${dev}_od.c)
     set_target_properties(co_freestanding_${dev}_fitted PROPERTIES SUFFIX .elf)
     target_include_directories(co_freestanding_${dev}_fitted PRIVATE ${PROJECT_SOURCE_DIR}/include
