@@ -711,7 +711,7 @@ void json_run(emu_t *emu, emu_session_t *s, const char *line)
             void (*run)(const request_t *q);
         } table[] = {{"hello", cmd_hello}, {"list", cmd_list},           {"show", cmd_show},
                      {"get", cmd_get},     {"set", cmd_set},             {"objects", cmd_objects},             {"subscribe", cmd_subscribe},
-                     {"unsubscribe", cmd_unsubscribe}, {"quit", cmd_quit}, {"exit", cmd_quit}};
+                     {"unsubscribe", cmd_unsubscribe}, {"tables", cmd_tables}, {"quit", cmd_quit}, {"exit", cmd_quit}};
         size_t i = 0U;
         while (i < sizeof table / sizeof table[0] && strcmp(table[i].name, q.cmd) != 0) {
             i++;

@@ -59,4 +59,7 @@ void cmd_get(const request_t *q);
 void cmd_set(const request_t *q);
 void cmd_objects(const request_t *q);
 
+/* The tables clients make forms and texts from: fault kinds, abort texts (emu_json_tables.c). */
+void cmd_tables(const request_t *q);
+
 #endif /* EMU_JSON_REQUEST_H */

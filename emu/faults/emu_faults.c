@@ -11,12 +11,6 @@
 #include "runtime/emu_events.h"
 #include "runtime/emu_output.h"
 
-static const char *const kind_names[FAULT_KIND_COUNT] = {
-    "sdo-ignore", "sdo-delay", "sdo-abort", "heartbeat-stop", "heartbeat-jitter", "heartbeat-state", "tpdo-freeze",
-    "tpdo-drop", "tpdo-length", "emcy-burst", "reboot", "bus-off", "lss-silent"};
-
-const char *fault_kind_name(fault_kind_t kind) { return kind < FAULT_KIND_COUNT ? kind_names[kind] : "?"; }
-
 static uint32_t bit(fault_kind_t k) { return (uint32_t)1U << (unsigned)k; }
 
 void faults_init(node_faults_t *f)
@@ -232,22 +226,38 @@ co_time_us_t faults_run(struct emu_node *n, co_time_us_t now)
 
 /* ---- Commands --------------------------------------------------------------------------------------------- */
 
-static int fault_kind_of(const char *name)
-{
-    for (int k = 0; k < (int)FAULT_KIND_COUNT; k++) {
-        if (strcmp(kind_names[k], name) == 0) {
-            return k;
-        }
-    }
-    return -1;
-}
-
 static unsigned node_id(const struct emu_node *n) { return co_node_id(&n->dev.node); }
 
 static int refuse(const struct emu_node *n, const char *usage)
 {
     reply("node %u: error: usage: %s", node_id(n), usage);
     return 1;
+}
+
+/* "fault NODE sdo-delay MS (1..600000)": a kind's usage in a refusal, from the table the control protocol serves the
+ * web view's forms from (fault_kinds.h). One buffer: the program is one thread, and a refusal is written at once. */
+static const char *usage_of(fault_kind_t k)
+{
+    static char text[256];
+    const fault_kind_info_t *info = fault_kind_info(k);
+    const bool limits = info->limits[0] != '\0';
+    (void)snprintf(text, sizeof text, "fault NODE %s%s%s%s%s%s", info->name, info->args[0] != '\0' ? " " : "",
+                   info->args, limits ? " (" : "", info->limits, limits ? ")" : "");
+    return text;
+}
+
+/* "fault NODE KIND [ARGS] (kinds: sdo-ignore ... lss-silent)": what `fault NODE` answers, the kinds of the table. */
+static const char *kinds_usage(void)
+{
+    static char text[512];
+    size_t used = (size_t)snprintf(text, sizeof text, "fault NODE KIND [ARGS] (kinds:");
+    for (int k = 0; k < (int)FAULT_KIND_COUNT && used < sizeof text; k++) {
+        used += (size_t)snprintf(text + used, sizeof text - used, " %s", fault_kind_name((fault_kind_t)k));
+    }
+    if (used < sizeof text) {
+        (void)snprintf(text + used, sizeof text - used, ")");
+    }
+    return text;
 }
 
 /* "30%", "12.5%" -> parts per million (0 < share <= 100 %). */
@@ -400,8 +410,7 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
 {
     node_faults_t *f = &n->faults;
     if (argc < 2) {
-        return refuse(n, "fault NODE KIND [ARGS] (kinds: sdo-ignore sdo-delay sdo-abort heartbeat-stop heartbeat-jitter "
-                         "heartbeat-state tpdo-freeze tpdo-drop tpdo-length emcy-burst reboot bus-off lss-silent)");
+        return refuse(n, kinds_usage());
     }
     const int k = fault_kind_of(argv[1]);
     long long a = 0, b = 0;
@@ -414,18 +423,18 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
             if (argc > 4 || !parse_share(argv[2], &f->sdo_ignore_ppm) ||
                 (argc == 4 && !device_parse_int(argv[3], 0, INT64_MAX, &b))) {
                 f->sdo_ignore_ppm = 0U;
-                return refuse(n, "fault NODE sdo-ignore [N | P% [SEED]] (N 1..1000000, P 0..100 %)");
+                return refuse(n, usage_of(FAULT_SDO_IGNORE));
             }
             f->rng = (uint64_t)(argc == 4 ? b : 1);
         } else if (argc > 3 || (argc == 3 && !device_parse_int(argv[2], 1, 1000000, &a))) {
-            return refuse(n, "fault NODE sdo-ignore [N | P% [SEED]] (N 1..1000000, P 0..100 %)");
+            return refuse(n, usage_of(FAULT_SDO_IGNORE));
         } else if (argc == 3) {
             f->sdo_ignore_left = (uint32_t)a;
         }
         break;
     case FAULT_SDO_DELAY:
         if (argc != 3 || !device_parse_int(argv[2], 1, 600000, &a)) {
-            return refuse(n, "fault NODE sdo-delay MS (1..600000)");
+            return refuse(n, usage_of(FAULT_SDO_DELAY));
         }
         f->sdo_delay_ms = (uint32_t)a;
         break;
@@ -433,7 +442,7 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
         uint16_t index;
         uint8_t sub;
         if (argc != 4 || !device_parse_address(argv[2], &index, &sub) || !device_parse_int(argv[3], 1, 0xFFFFFFFFLL, &a)) {
-            return refuse(n, "fault NODE sdo-abort INDEX[:SUB] CODE (hex object; CODE 1..0xFFFFFFFF, e.g. 0x08000020)");
+            return refuse(n, usage_of(FAULT_SDO_ABORT));
         }
         f->abort_index = index;
         f->abort_sub = sub;
@@ -444,46 +453,46 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
     case FAULT_HB_STOP:
     case FAULT_LSS_SILENT:
         if (argc != 2) {
-            return refuse(n, k == FAULT_HB_STOP ? "fault NODE heartbeat-stop" : "fault NODE lss-silent");
+            return refuse(n, usage_of((fault_kind_t)k));
         }
         break;
     case FAULT_HB_JITTER:
         if (argc != 3 || !device_parse_int(argv[2], 1, 60000, &a)) {
-            return refuse(n, "fault NODE heartbeat-jitter MS (1..60000)");
+            return refuse(n, usage_of(FAULT_HB_JITTER));
         }
         f->hb_jitter_ms = (uint32_t)a;
         f->rng = f->rng != 0U ? f->rng : 1U;
         break;
     case FAULT_HB_STATE:
         if (argc != 3 || !device_parse_int(argv[2], 0, 0xFF, &a)) {
-            return refuse(n, "fault NODE heartbeat-state BYTE (0..0xFF; 0x05 Operational, 0x7F Pre-operational)");
+            return refuse(n, usage_of(FAULT_HB_STATE));
         }
         f->hb_state = (uint8_t)a;
         break;
     case FAULT_TPDO_FREEZE:
         if (argc != 3 || !tpdo_number(n, argv[2], &t)) {
-            return refuse(n, "fault NODE tpdo-freeze N (a TPDO of the node, from 1)");
+            return refuse(n, usage_of(FAULT_TPDO_FREEZE));
         }
         f->tpdo[t].freeze = true;
         f->tpdo[t].have_frozen = false;
         break;
     case FAULT_TPDO_DROP:
         if (argc != 4 || !tpdo_number(n, argv[2], &t) || !device_parse_int(argv[3], 1, 1000000, &a)) {
-            return refuse(n, "fault NODE tpdo-drop N EVERY (a TPDO of the node, from 1; EVERY 1..1000000)");
+            return refuse(n, usage_of(FAULT_TPDO_DROP));
         }
         f->tpdo[t].drop_every = (uint32_t)a;
         f->tpdo[t].drop_count = 0U;
         break;
     case FAULT_TPDO_LENGTH:
         if (argc != 4 || !tpdo_number(n, argv[2], &t) || !device_parse_int(argv[3], 0, 8, &a)) {
-            return refuse(n, "fault NODE tpdo-length N LEN (a TPDO of the node, from 1; LEN 0..8)");
+            return refuse(n, usage_of(FAULT_TPDO_LENGTH));
         }
         f->tpdo[t].length = (int16_t)a;
         break;
     case FAULT_EMCY_BURST: {
         if (argc < 3 || argc > 4 || !device_parse_int(argv[2], 1, 100, &a) ||
             (argc == 4 && !device_parse_int(argv[3], 0, 0xFFFF, &b))) {
-            return refuse(n, "fault NODE emcy-burst COUNT [CODE] (COUNT 1..100; CODE default 0x1000)");
+            return refuse(n, usage_of(FAULT_EMCY_BURST));
         }
         const uint32_t cob = od_cob(n, 0x1014U, 0U, 0x80U + node_id(n));
         const uint16_t code = (uint16_t)(argc == 4 ? b : 0x1000);
@@ -508,7 +517,7 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
     }
     case FAULT_REBOOT:
         if (argc != 2) {
-            return refuse(n, "fault NODE reboot");
+            return refuse(n, usage_of(FAULT_REBOOT));
         }
         events_fault(n, "reboot", "injected", "silent reboot (brown-out): the node restarts and sends its boot-up");
         if (device_power_cycle(&n->dev, now) != CO_OK) {
@@ -520,7 +529,7 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
         return 0;
     case FAULT_BUS_OFF:
         if (argc != 3 || !device_parse_int(argv[2], 1, 3600000, &a)) {
-            return refuse(n, "fault NODE bus-off MS (1..3600000)");
+            return refuse(n, usage_of(FAULT_BUS_OFF));
         }
         f->bus_off_until = now + (co_time_us_t)a * 1000U;
         node_mark_dirty(n); /* its deadline now includes the recovery */
@@ -556,7 +565,7 @@ int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now)
             if ((k < 0 || k == i) && (n->faults.active & bit((fault_kind_t)i)) != 0U) {
                 clear_kind(&n->faults, (fault_kind_t)i, now);
                 if (i != FAULT_BUS_OFF) {
-                    events_fault(n, kind_names[i], "cleared", "fault cleared");
+                    events_fault(n, fault_kind_name((fault_kind_t)i), "cleared", "fault cleared");
                 }
             }
         }

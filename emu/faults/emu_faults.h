@@ -27,28 +27,9 @@
 #include <stdint.h>
 
 #include "co/co.h"
+#include "faults/fault_kinds.h" /* fault_kind_t; the kinds' names, usages and texts */
 
 struct emu_node;
-
-typedef enum fault_kind {
-    FAULT_SDO_IGNORE = 0,
-    FAULT_SDO_DELAY,
-    FAULT_SDO_ABORT,
-    FAULT_HB_STOP,
-    FAULT_HB_JITTER,
-    FAULT_HB_STATE,
-    FAULT_TPDO_FREEZE,
-    FAULT_TPDO_DROP,
-    FAULT_TPDO_LENGTH,
-    FAULT_EMCY_BURST,
-    FAULT_REBOOT,
-    FAULT_BUS_OFF,
-    FAULT_LSS_SILENT,
-    FAULT_KIND_COUNT
-} fault_kind_t;
-
-/** The name of a fault kind, as the command language and the events give it ("sdo-ignore"). */
-const char *fault_kind_name(fault_kind_t kind);
 
 /** Frames a fault holds back (SDO answers, heartbeats) per node; more are sent without the delay. */
 #define FAULT_DELAYED_MAX 32U

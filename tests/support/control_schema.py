@@ -6,7 +6,7 @@ from pathlib import Path
 import jsonschema
 
 SCHEMA = json.loads((Path(__file__).resolve().parents[2] / "docs/control-protocol.schema.json").read_text())
-KNOWN = ("hello", "list", "show", "get", "set", "objects", "subscribe", "unsubscribe", "quit")
+KNOWN = ("hello", "list", "show", "get", "set", "objects", "tables", "subscribe", "unsubscribe", "quit")
 
 
 def validator(pointer):
