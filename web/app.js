@@ -1,7 +1,8 @@
 // The web view of canopen-emu (docs/web.md). The page is a control-protocol client (docs/control-protocol.md) over
 // one web session: it exchanges every 250 ms, asks `show all` once a second, and takes the events nmt, boot-up, emcy
-// and fault in between, so that a change shows with the next exchange. The network view (the overview) is drawn
-// here; the other views are panels (below), each its own module, sharing the session and the exchange loop.
+// and fault in between, so that a change shows with the next exchange. It asks `tables` once: the kinds of protocol
+// fault and the SDO abort texts, which the page has no copy of. The network view (the overview) is drawn here; the
+// other views are panels (below), each its own module, sharing the session and the exchange loop.
 
 import {Session, poster} from "./api.js";
 import {NodeTable} from "./nodes.js";
@@ -24,6 +25,8 @@ const EVENTS = ["nmt", "boot-up", "emcy", "fault"];
  *   draw(ms)         in the animation frame after each exchange (and after select): update its DOM there
  *   shown(visible)   its view was shown (true) or left (false)
  *   select(key)      the node `key` (nodes.js nodeKey) was picked in the network view
+ *   tables(answer)   the emulator's tables came (the `tables` answer: `faults`, `aborts`; docs/control-protocol.md)
+ *   tablesFailed(error)  they could not be read (asked again with the next session)
  *   view             the name of its view (a tab of index.html), for shown()
  * A panel module exports a function that takes the page (below) and returns its panel.
  */
@@ -37,6 +40,7 @@ let showAsked = false; // a show is on its way: never a second one, however slow
 let lastShow = -Infinity; // performance.now() of the last show asked
 let frame = null; // the animation frame asked for; null: none
 let panels = [];
+let tablesAsked = false; // `tables` was answered or is on its way: it does not change while the emulator runs
 
 function askShow() {
   showAsked = true;
@@ -54,6 +58,16 @@ const session = new Session(poster(token), {
   onOpen: (s) => {
     const events = new Set([...EVENTS, ...panels.flatMap((p) => p.events ?? [])]);
     s.request("subscribe", {events: [...events]}).catch((error) => { requestProblem = `subscribe: ${error.message}`; });
+    if (!tablesAsked) {
+      tablesAsked = true;
+      s.request("tables")
+        .then((answer) => panels.forEach((p) => p.tables?.(answer)))
+        .catch((error) => {
+          tablesAsked = false;
+          panels.forEach((p) => p.tablesFailed?.(error));
+        })
+        .finally(scheduleDraw);
+    }
     lastShow = -Infinity; // a new session: everything anew, at once
     for (const p of panels) {
       p.open?.(s);

@@ -1,5 +1,6 @@
 // The node view's controls (docs/web.md "The node view"): forms made from a command's usage line, the arguments
-// they send, and the commands every node has beside its device's own. No DOM: tested with node --test.
+// they send, the commands every node has beside its device's own, and the protocol faults as the emulator serves
+// them (`tables`). No DOM: tested with node --test.
 
 /*
  * A usage line is what `help NODE` answers in `commands` (docs/control-protocol.md): "load N MW|short",
@@ -9,7 +10,8 @@
  *   choice   literal alternatives ("on|off", "auto|hand|flashing"): a select
  *   input    an argument, a word in upper case ("N", "UA_PER_KV", "D1..D10|A1|A2"), or alternatives of which one is
  *            ("MW|short": a number or the word): a text field; `optional` from "[...]" on
- * " / " separates two commands that share the text ("error CODE / warning CODE").
+ * " / " separates two commands that share the text ("error CODE / warning CODE"). Blanks around a "|" do not count
+ * ("[N | P% [SEED]]" is "[N|P% [SEED]]": an optional N or P%, and an optional SEED).
  */
 
 const ARGUMENT = /^[^a-z]*[A-Z][^a-z]*$/; // upper case and no lower case: "N", "P%", "D1..D10", "B0"
@@ -29,7 +31,7 @@ function word(token, optional) {
 
 /** The commands of one usage line: [{command, usage, words}] (words: above). */
 export function parseUsage(usage) {
-  return usage.split(" / ").map((part) => {
+  return usage.replace(/ *\| */g, "|").split(" / ").map((part) => {
     const [command, ...tokens] = part.trim().split(/\s+/);
     let optional = false;
     const words = tokens.map((token) => {
@@ -85,24 +87,15 @@ export const NODE_COMMANDS = [
 ];
 
 /**
- * The protocol faults (docs/emulator.md "Protocol faults"): `fault NODE KIND [ARGS]`, ended by `fault-clear NODE
- * KIND`. The usage is that of the words after NODE; its first word is the kind.
+ * The forms of the protocol faults (docs/emulator.md "Protocol faults"), `fault NODE KIND [ARGS]`, ended by
+ * `fault-clear NODE KIND`: from the `faults` of the emulator's `tables` answer ([{kind, usage, limits, text}], usage
+ * the words after NODE, its first word the kind), in its order: [{kind, parsed (parseUsage()), text (with the limits
+ * of the arguments)}].
  */
-export const PROTOCOL_FAULTS = [
-  {usage: "sdo-ignore [N|P%] [SEED]", text: "the next N SDO requests (1) or a share P % of them get no answer"},
-  {usage: "sdo-delay MS", text: "every SDO answer leaves MS ms late"},
-  {usage: "sdo-abort INDEX[:SUB] CODE", text: "requests for that object are answered with the abort CODE"},
-  {usage: "heartbeat-stop", text: "no heartbeat (nor node-guarding answer); boot-ups still go out"},
-  {usage: "heartbeat-jitter MS", text: "each heartbeat leaves 0..MS ms late"},
-  {usage: "heartbeat-state BYTE", text: "heartbeats carry this state byte"},
-  {usage: "tpdo-freeze N", text: "TPDO N keeps the data of its first frame"},
-  {usage: "tpdo-drop N EVERY", text: "every EVERY-th frame of TPDO N is dropped"},
-  {usage: "tpdo-length N LEN", text: "TPDO N goes out with LEN data bytes"},
-  {usage: "emcy-burst COUNT [CODE]", text: "COUNT EMCY frames (CODE, default 0x1000) at once"},
-  {usage: "reboot", text: "the node restarts at once, as after a brown-out"},
-  {usage: "bus-off MS", text: "for MS ms nothing goes out or comes in; then EMCY 0x8140"},
-  {usage: "lss-silent", text: "LSS requests are not answered"},
-];
+export function faultForms(faults) {
+  return faults.map(({kind, usage, limits = "", text}) => ({kind, parsed: parseUsage(usage)[0],
+    text: limits === "" ? text : `${text} (${limits})`}));
+}
 
 /** The faults in force as the overview's faults cell has them ("heartbeat-stop, sdo-delay"). */
 export function faultsInForce(text) {

@@ -1,44 +1,20 @@
 // A CAN frame read in CANopen terms (CiA 301, LSS of CiA 305) for the trace: which service it is (its kind), the node
 // it concerns, and a line saying what it says. By the predefined connection set (COB-ID = function + node-ID); a PDO's
-// values need its mapping, which the caller looks up (web/pdomap.js). No DOM: tested with node --test (tests/web/js).
+// values need its mapping, which the caller looks up (web/pdomap.js); so do an SDO's values their object's data type,
+// and its abort codes their texts (the emulator's `tables`). No DOM: tested with node --test (tests/web/js).
+
+import {typeBits, valueText} from "./pdomap.js";
 
 /** The kinds of frame, as the trace's filter offers them. */
 export const KINDS = ["NMT", "SYNC", "EMCY", "TIME", "PDO", "SDO", "heartbeat", "LSS", "extended", "other"];
 
-/** The texts of the SDO abort codes (CiA 301 7.2.4.3.17) as the emulator words them (include/co/co_abort.h). */
-export const ABORT_TEXTS = new Map([
-  [0x05030000, "toggle bit not alternated"],
-  [0x05040000, "SDO protocol timed out"],
-  [0x05040001, "command specifier not valid or unknown"],
-  [0x05040002, "invalid block size"],
-  [0x05040003, "invalid sequence number"],
-  [0x05040004, "CRC error"],
-  [0x05040005, "out of memory"],
-  [0x06010000, "unsupported access to an object"],
-  [0x06010001, "attempt to read a write-only object"],
-  [0x06010002, "attempt to write a read-only object"],
-  [0x06020000, "object does not exist"],
-  [0x06040041, "object cannot be mapped to the PDO"],
-  [0x06040042, "number and length of mapped objects exceed PDO length"],
-  [0x06040043, "general parameter incompatibility"],
-  [0x06040047, "general internal incompatibility in the device"],
-  [0x06060000, "access failed due to a hardware error"],
-  [0x06070010, "data type does not match, length does not match"],
-  [0x06070012, "data type does not match, length too high"],
-  [0x06070013, "data type does not match, length too low"],
-  [0x06090011, "sub-index does not exist"],
-  [0x06090030, "invalid value for parameter"],
-  [0x06090031, "value of parameter written too high"],
-  [0x06090032, "value of parameter written too low"],
-  [0x06090036, "maximum value is less than minimum value"],
-  [0x060A0023, "resource not available: SDO connection"],
-  [0x08000000, "general error"],
-  [0x08000020, "data cannot be transferred or stored to the application"],
-  [0x08000021, "data cannot be transferred because of local control"],
-  [0x08000022, "data cannot be transferred because of the device state"],
-  [0x08000023, "object dictionary generation failed or no object dictionary present"],
-  [0x08000024, "no data available"],
-]);
+/**
+ * The texts of the SDO abort codes by code, from the emulator's `tables` answer (its `aborts`: the core's table,
+ * include/co/co_abort.h, the texts the emulator's own messages use): the page holds no copy of them.
+ */
+export function abortTexts(aborts) {
+  return new Map(aborts.map(({code, text}) => [code, text]));
+}
 
 /** The emergency error codes of CiA 301 (7.2.7.1): a code not listed takes its class (0xFF00, then 0xF000). */
 export const EMCY_CLASSES = new Map([
@@ -149,9 +125,10 @@ export function errorRegister(value) {
   return bits.length === 0 ? hex(value, 2) : `${hex(value, 2)} (${bits.join(", ")})`;
 }
 
-/** The text of an SDO abort code: "0x06020000 object does not exist". */
-export function abortText(code) {
-  return `${hex(code, 8)} ${ABORT_TEXTS.get(code) ?? "unknown abort code"}`;
+/** The text of an SDO abort code by `texts` (abortTexts()): "0x06020000 object does not exist"; the code alone while
+ * the texts have not come (null). */
+export function abortText(code, texts = null) {
+  return texts === null ? hex(code, 8) : `${hex(code, 8)} ${texts.get(code) ?? "unknown abort code"}`;
 }
 
 function nmt(bytes) {
@@ -192,10 +169,24 @@ function objectOf(bytes) {
   return `${hex(le(bytes, 1, 2), 4)}:${bytes[3].toString(16).toUpperCase().padStart(2, "0")}`;
 }
 
-/** An expedited value: "1000 (0x03E8)". */
-function expedited(bytes, size) {
+/**
+ * An expedited value: "1000 (0x03E8)", as an unsigned number; by the object's data type where it is known (null:
+ * not) a VISIBLE_STRING as its text ("\"ES61\""), a signed type as signed ("-5 (0xFFFB)"), a REAL32 as a float
+ * ("1.5 (0x3FC00000)"), a BOOLEAN as true or false ("true (0x01)"). A type the bytes cannot hold: as unsigned.
+ */
+function expedited(bytes, size, type) {
   const value = le(bytes, 4, size);
-  return `${value} (${hex(value, 2 * size)})`;
+  const raw = BigInt(value);
+  const shown = `(${hex(value, 2 * size)})`;
+  if (type === "VISIBLE_STRING") {
+    return valueText(raw, 8 * size, type);
+  }
+  const bits = type === "BOOLEAN" ? 8 : typeBits(type);
+  const fits = bits !== null && bits <= 8 * size;
+  if (fits && (type === "BOOLEAN" || type.startsWith("INTEGER") || (type === "REAL32" && size === 4))) {
+    return `${valueText(raw & ((1n << BigInt(bits)) - 1n), bits, type)} ${shown}`; // "size not indicated": its bytes
+  }
+  return `${value} ${shown}`;
 }
 
 /** Segment data: its byte count, and its text in quotes when every byte is printable ASCII. */
@@ -205,32 +196,36 @@ function segment(bytes, count) {
   return `${count} bytes${printable ? ` "${String.fromCharCode(...data)}"` : ""}`;
 }
 
-function initiate(bytes, service, word) {
+function initiate(bytes, service, word, sdo) {
   const object = objectOf(bytes);
   const e = bytes[0] & 0x02;
   const s = bytes[0] & 0x01;
   if (e) {
     const size = s ? 4 - ((bytes[0] >> 2) & 3) : 4;
     return `SDO ${service} ${word} ${object} expedited ${s ? `${size} bytes` : "size not indicated"} = ` +
-      expedited(bytes, size);
+      expedited(bytes, size, sdo.typeOf(le(bytes, 1, 2), bytes[3]));
   }
   return `SDO ${service} ${word} ${object} segmented ${s ? `${le(bytes, 4, 4)} bytes` : "size not indicated"}`;
 }
 
-function sdoRequest(bytes) {
+/**
+ * The SDO lookups of one frame: typeOf(index, sub) the data type of an object of the server node (null: not known),
+ * aborts the abort texts (abortTexts(); null: not come yet).
+ */
+function sdoRequest(bytes, sdo) {
   const command = bytes[0];
   switch (command >> 5) {
     case 0:
       return `SDO download segment toggle ${(command >> 4) & 1}, ${segment(bytes, 7 - ((command >> 1) & 7))}` +
         `${command & 1 ? ", last" : ""}`;
     case 1:
-      return initiate(bytes, "download", "request");
+      return initiate(bytes, "download", "request", sdo);
     case 2:
       return `SDO upload request ${objectOf(bytes)}`;
     case 3:
       return `SDO upload segment request toggle ${(command >> 4) & 1}`;
     case 4:
-      return `SDO abort ${objectOf(bytes)}: ${abortText(le(bytes, 4, 4))}`;
+      return `SDO abort ${objectOf(bytes)}: ${abortText(le(bytes, 4, 4), sdo.aborts)}`;
     case 5:
       switch (command & 3) {
         case 0:
@@ -253,7 +248,7 @@ function sdoRequest(bytes) {
   }
 }
 
-function sdoResponse(bytes) {
+function sdoResponse(bytes, sdo) {
   const command = bytes[0];
   switch (command >> 5) {
     case 0:
@@ -262,11 +257,11 @@ function sdoResponse(bytes) {
     case 1:
       return `SDO download segment response toggle ${(command >> 4) & 1}`;
     case 2:
-      return initiate(bytes, "upload", "response");
+      return initiate(bytes, "upload", "response", sdo);
     case 3:
       return `SDO download response ${objectOf(bytes)}`;
     case 4:
-      return `SDO abort ${objectOf(bytes)}: ${abortText(le(bytes, 4, 4))}`;
+      return `SDO abort ${objectOf(bytes)}: ${abortText(le(bytes, 4, 4), sdo.aborts)}`;
     case 5:
       switch (command & 3) {
         case 0:
@@ -389,8 +384,11 @@ function lssSlave(bytes) {
  * answer's toggle)}.
  * pdo(frame, bytes): the PDO the frame is by the mapping read from its node, {name: "TPDO1", node, text: the values}
  * (web/pdomap.js), or null when it is not known (yet): the PDO is then named by the predefined connection set only.
+ * sdo: {type(frame, node, index, sub): the data type ("VISIBLE_STRING") of an object of the SDO server `node`, or null
+ * when it is not known (yet): its expedited values are then unsigned numbers; aborts: the abort codes' texts
+ * (abortTexts()), or null while they have not come: an abort then shows its code only}.
  */
-export function decode(frame, pdo = () => null) {
+export function decode(frame, pdo = () => null, sdo = {}) {
   const id = frame.id;
   const bytes = bytesOf(frame.data);
   const rtr = Boolean(frame.rtr);
@@ -428,7 +426,8 @@ export function decode(frame, pdo = () => null) {
     if (bytes.length !== 8) {
       return sized("SDO", lengthProblem("SDO", "8 bytes", bytes.length));
     }
-    return sized("SDO", fn === 0xB ? sdoResponse(bytes) : sdoRequest(bytes));
+    const lookups = {typeOf: (index, sub) => sdo.type?.(frame, low, index, sub) ?? null, aborts: sdo.aborts ?? null};
+    return sized("SDO", fn === 0xB ? sdoResponse(bytes, lookups) : sdoRequest(bytes, lookups));
   }
   if (fn === 0xE && low !== 0) {
     return sized("heartbeat", errorControl(bytes, rtr, frame.guarded));

@@ -1,8 +1,9 @@
 // The node view's controls (docs/web.md "The node view"): a form per command of the node's device (from `help
 // NODE`), per command every node has (power-cycle, emcy, emcy-clear), and per protocol fault (raise, clear, whether
-// it is in force). Each sends its command through the page's session and shows the answer's lines or its error.
+// it is in force: the kinds the emulator serves in `tables`). Each sends its command through the page's session and
+// shows the answer's lines or its error.
 
-import {NODE_COMMANDS, PROTOCOL_FAULTS, argsOf, parseUsage} from "./commands.js";
+import {NODE_COMMANDS, argsOf, faultForms, parseUsage} from "./commands.js";
 
 /**
  * A form for one command (parseUsage()): its usage and help text, a field per argument, a button, the answer.
@@ -89,7 +90,9 @@ export class NodeControls {
   #run;
   #device;
   #faults = new Map(); // kind -> its row
-  #faultsShown = "";
+  #faultsShown = null; // the faults in force marked last (joined); null: none marked on the rows there are
+  #faultsBox; // the section of the faults
+  #faultNote;
 
   /** root: the element to fill; run(cmd, args) sends {"cmd":cmd,"node":…,"args":args} for the node shown and
    * resolves to its answer, or rejects with its error. */
@@ -104,6 +107,24 @@ export class NodeControls {
     }
     root.append(this.#device, node, this.#faultSection());
     this.loading();
+  }
+
+  /** The protocol faults: the `faults` of the emulator's `tables` answer. Made once: the table does not change. */
+  loadFaults(faults) {
+    if (this.#faults.size > 0) {
+      return;
+    }
+    this.#faultNote.remove();
+    for (const {kind, parsed, text} of faultForms(faults)) {
+      this.#faultsBox.append(this.#faultForm(kind, parsed, text));
+    }
+    this.#faultsShown = null; // the new rows are marked with the next update
+  }
+
+  /** The table of faults could not be read. */
+  faultsFailed(error) {
+    this.#faultNote.textContent = `tables: ${error}`;
+    this.#faultNote.classList.add("refusal");
   }
 
   /** Before the device's commands have come. */
@@ -170,30 +191,34 @@ export class NodeControls {
       return b;
     };
     all.append(button("list", "faults"), button("clear all", "fault-clear"), output);
-    faults.append(all);
-    for (const {usage, text} of PROTOCOL_FAULTS) {
-      const parsed = parseUsage(usage)[0];
-      const kind = parsed.command;
-      const {form, show} = commandForm(parsed, text, (args) => this.#run("fault", [kind, ...args]), "raise");
-      form.classList.add("fault");
-      form.dataset.fault = kind;
-      const state = document.createElement("span");
-      state.className = "state";
-      const clear = document.createElement("button");
-      clear.type = "button";
-      clear.className = "clear";
-      clear.textContent = "clear";
-      clear.addEventListener("click", async () => {
-        try {
-          show((await this.#run("fault-clear", [kind])).lines.join("\n"), false);
-        } catch (refusal) {
-          show(refusal.message, true);
-        }
-      });
-      form.querySelector(".fields").append(clear, state);
-      this.#faults.set(kind, form);
-      faults.append(form);
-    }
+    this.#faultNote = document.createElement("p");
+    this.#faultNote.className = "note";
+    this.#faultNote.textContent = "reading the kinds of fault…";
+    faults.append(all, this.#faultNote);
+    this.#faultsBox = faults;
     return faults;
+  }
+
+  /** The form of one kind of fault: raise with its arguments, clear, whether it is in force. */
+  #faultForm(kind, parsed, text) {
+    const {form, show} = commandForm(parsed, text, (args) => this.#run("fault", [kind, ...args]), "raise");
+    form.classList.add("fault");
+    form.dataset.fault = kind;
+    const state = document.createElement("span");
+    state.className = "state";
+    const clear = document.createElement("button");
+    clear.type = "button";
+    clear.className = "clear";
+    clear.textContent = "clear";
+    clear.addEventListener("click", async () => {
+      try {
+        show((await this.#run("fault-clear", [kind])).lines.join("\n"), false);
+      } catch (refusal) {
+        show(refusal.message, true);
+      }
+    });
+    form.querySelector(".fields").append(clear, state);
+    this.#faults.set(kind, form);
+    return form;
   }
 }

@@ -101,6 +101,16 @@ class NodePanel {
     this.#visible = visible;
   }
 
+  /** The emulator's tables (web/app.js): the fault forms are made from its kinds of fault. */
+  tables(tables) {
+    this.#controls.loadFaults(tables.faults);
+  }
+
+  /** The tables could not be read. */
+  tablesFailed(error) {
+    this.#controls.faultsFailed(error.message);
+  }
+
   /** Reads the values in sight: only while the view is shown, a round at a time (dictionary.js ValuePoll). */
   tick(session, ms) {
     if (!this.#visible || !this.#loaded) {

@@ -1,7 +1,8 @@
 // Reads the PDO mapping of the nodes whose PDOs the trace shows, lazily and a few at a time, over the control protocol:
 // `list` (which device each node is), `objects` once per device and variant (the names, types and units of its
 // dictionary, the same for every node of it), then `get` of the node's PDO COB-IDs and mapping entries (64 objects a
-// request at most). Read again when the mapping may have changed (mappingMayChange()). No DOM: tested with node --test.
+// request at most). Read again when the mapping may have changed (mappingMayChange()). For a node that only serves
+// SDOs, the dictionary alone (its objects' data types decode the SDOs' values). No DOM: tested with node --test.
 
 import {Dictionary, pdosOf} from "./pdomap.js";
 
@@ -45,7 +46,10 @@ export function mappingMayChange(frame) {
 export class PdoReader {
   #maps;
   #onRead;
-  #nodes = new Map(); // "bus/node" -> {bus, node, state: wanted | reading | read | absent | failed}
+  // "bus/node" -> {bus, node, state: wanted | reading | read | absent | failed, again (read it once more when done),
+  // pdos (its mapping is wanted; false: its dictionary alone)}
+  #nodes = new Map();
+  #types = new Map(); // "bus/node" -> the Dictionary of a node read (for its objects' data types)
   #devices = null; // "bus/node" -> "device/variant", from `list`; null: not asked in this session
   #listing = null; // the `list` under way
   #dictionaries = new Map(); // "device/variant" -> Promise<Dictionary>
@@ -61,9 +65,30 @@ export class PdoReader {
   /** A PDO of node `node` on `bus` was seen: read its mapping unless it is known or being read. */
   want(bus, node) {
     const key = `${bus}/${node}`;
-    if (!this.#nodes.has(key)) {
-      this.#nodes.set(key, {bus, node, state: "wanted", again: false});
+    const n = this.#nodes.get(key);
+    if (n === undefined) {
+      this.#nodes.set(key, {bus, node, state: "wanted", again: false, pdos: true});
+    } else if (!n.pdos) { // its dictionary was wanted alone: now its mapping too
+      n.pdos = true;
+      if (n.state === "reading") {
+        n.again = true;
+      } else if (n.state !== "absent") {
+        n.state = "wanted";
+      }
     }
+  }
+
+  /** An SDO of node `node` on `bus` was seen: read its dictionary (not its mapping) unless it is known or being read. */
+  wantTypes(bus, node) {
+    const key = `${bus}/${node}`;
+    if (!this.#nodes.has(key)) {
+      this.#nodes.set(key, {bus, node, state: "wanted", again: false, pdos: false});
+    }
+  }
+
+  /** The data type of index:sub of node `node` on `bus` ("VISIBLE_STRING"), or null: not read (yet), or no such object. */
+  typeOf(bus, node, index, sub) {
+    return this.#types.get(`${bus}/${node}`)?.entry(index, sub)?.type ?? null;
   }
 
   /** The mapping of `node` (null: of every node read on `bus`) may have changed: read it again (what was read stays
@@ -97,6 +122,7 @@ export class PdoReader {
   /** Forgets everything read (the trace was cleared: the PDOs seen from now on are read anew). */
   clear() {
     this.#nodes.clear();
+    this.#types.clear();
     this.#maps.clear();
     this.#dictionaries.clear();
     this.problem = null;
@@ -123,9 +149,18 @@ export class PdoReader {
       if (device === undefined) {
         n.state = "absent"; // not an emulated node: a PDO of another device on the bus
         this.#maps.delete(n.bus, n.node);
+        this.#types.delete(`${n.bus}/${n.node}`);
         return;
       }
       const dictionary = await this.#dictionary(session, device, name);
+      if (!n.pdos) {
+        if (this.#nodes.get(`${n.bus}/${n.node}`) === n) { // not cleared meanwhile
+          this.#types.set(`${n.bus}/${n.node}`, dictionary);
+          n.state = "read";
+          this.#onRead(n.bus, n.node);
+        }
+        return;
+      }
       const values = [];
       const answers = await Promise.all(dictionary.mappingObjects().map((objects) =>
         session.request("get", {node: name, objects})));
@@ -133,13 +168,14 @@ export class PdoReader {
         values.push(...answer.values);
       }
       if (this.#nodes.get(`${n.bus}/${n.node}`) === n) { // not cleared meanwhile
+        this.#types.set(`${n.bus}/${n.node}`, dictionary);
         this.#maps.set(n.bus, n.node, pdosOf(values, dictionary), dictionary);
         n.state = "read";
         this.#onRead(n.bus, n.node);
       }
     } catch (error) {
       n.state = "failed";
-      this.problem = `PDO mapping of node ${n.node}: ${error.message}`;
+      this.problem = `${n.pdos ? "PDO mapping" : "dictionary"} of node ${n.node}: ${error.message}`;
     } finally {
       this.#reading--;
       if (n.again) {

@@ -3,11 +3,12 @@
 // while its view is shown, or always with "record while hidden"; frames go into a ring of 20,000 (web/tracelog.js) as
 // they come, and the table is drawn once an exchange, with at most the last ROWS matching rows in the DOM. Pause and
 // scrolling up stop the table, not the recording. The PDOs' values come from their nodes' mapping, read as PDOs
-// appear (web/pdoreader.js).
+// appear (web/pdoreader.js); the SDOs' expedited values are read by their objects' data types, from the dictionaries
+// of the nodes as their SDOs appear; the abort codes' texts come from the emulator (`tables`: the core's table).
 
 import {element, tableHead} from "./dom.js";
 import * as candump from "./candump.js";
-import {KINDS} from "./decode.js";
+import {KINDS, abortTexts} from "./decode.js";
 import {PdoMaps} from "./pdomap.js";
 import {PdoReader, mappingMayChange} from "./pdoreader.js";
 import {COLUMNS, TraceLog, cells, parseFilter} from "./tracelog.js";
@@ -22,7 +23,8 @@ class TracePanel {
   events = ["nmt"]; // a node gone to pre-operational by a command of the emulator's: its mapping is read again
   #page;
   #maps = new PdoMaps();
-  #log = new TraceLog(undefined, (frame, bytes) => this.#maps.lookup(frame, bytes));
+  #log = new TraceLog(undefined, (frame, bytes) => this.#maps.lookup(frame, bytes),
+    (frame, node, index, sub) => this.#reader.typeOf(frame.bus, node, index, sub));
   #reader = new PdoReader(this.#maps, (bus) => {
     if (this.#log.redecode(bus)) {
       this.#rebuild = true;
@@ -116,6 +118,14 @@ class TracePanel {
     }
   }
 
+  /** The emulator's tables (web/app.js): the abort texts, for the aborts kept and to come. */
+  tables(tables) {
+    if (this.#log.useAbortTexts(abortTexts(tables.aborts))) {
+      this.#rebuild = true;
+    }
+    this.#page.redraw();
+  }
+
   shown(visible) {
     this.#visible = visible;
     if (visible) {
@@ -199,6 +209,8 @@ class TracePanel {
     const entry = this.#log.add(ev);
     if (entry.kind === "PDO" && entry.about !== null) {
       this.#reader.want(entry.bus, entry.about);
+    } else if (entry.kind === "SDO" && entry.about !== null) {
+      this.#reader.wantTypes(entry.bus, entry.about); // its objects' data types read its values
     }
     const change = mappingMayChange(entry);
     if (change !== null) {

@@ -1,5 +1,6 @@
-// The trace's model: the frames received, each decoded once as it comes (web/decode.js), in a bounded ring; the
-// filter; the texts of a row. No DOM: tested with node --test (tests/web/js).
+// The trace's model: the frames received, each decoded once as it comes (web/decode.js), in a bounded ring, and
+// again as what decodes them comes (a node's PDO mapping or dictionary, the abort texts); the filter; the texts of a
+// row. No DOM: tested with node --test (tests/web/js).
 
 import {cobId} from "./candump.js";
 import {KINDS, decode} from "./decode.js";
@@ -63,11 +64,20 @@ export class TraceLog {
   #seq = 0; // the seq of the newest entry (entries are numbered 1, 2, ... and never again, even after clear())
   #guarded = new Set(); // "bus/COB-ID" of node guarding requests not answered yet
   #pdo;
+  #sdo;
 
-  /** pdo: the PDO lookup of decode() (PdoMaps.lookup). */
-  constructor(capacity = CAPACITY, pdo = () => null) {
+  /** pdo: the PDO lookup of decode() (PdoMaps.lookup); type: its SDO type lookup, type(frame, node, index, sub). */
+  constructor(capacity = CAPACITY, pdo = () => null, type = () => null) {
     this.ring = new Ring(capacity);
     this.#pdo = pdo;
+    this.#sdo = {type, aborts: null};
+  }
+
+  /** The abort codes' texts (web/decode.js abortTexts()) came: the SDO aborts kept are decoded again with them. True
+   * when any text changed. */
+  useAbortTexts(texts) {
+    this.#sdo.aborts = texts;
+    return this.redecode(null);
   }
 
   get newest() {
@@ -91,16 +101,16 @@ export class TraceLog {
   }
 
   #decode(frame) {
-    const {kind, node, text} = decode(frame, this.#pdo);
+    const {kind, node, text} = decode(frame, this.#pdo, this.#sdo);
     return {kind, about: node, text};
   }
 
-  /** Decodes the PDOs of `bus` again, and the frames not known (a PDO on a COB-ID of its own), as a node's mapping
-   * came; true when any text changed. */
+  /** Decodes the PDOs and SDOs of `bus` (null: of every bus) again, and the frames not known (a PDO on a COB-ID of
+   * its own), as a node's mapping or dictionary came; true when any text changed. */
   redecode(bus) {
     let changed = false;
     for (const entry of this.ring) {
-      if ((entry.kind === "PDO" || entry.kind === "other") && entry.bus === bus) {
+      if (["PDO", "SDO", "other"].includes(entry.kind) && (bus === null || entry.bus === bus)) {
         const {kind, about, text} = this.#decode(entry);
         if (text !== entry.text || kind !== entry.kind) {
           Object.assign(entry, {kind, about, text, search: undefined});

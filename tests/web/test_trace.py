@@ -369,3 +369,32 @@ def test_127_nodes_with_100_ms_heartbeats_the_trace_keeps_up(page, start_emulato
     wait_for(browser, "the TPDO1 of nodes 1 to 127 by their mapping",
              lambda s: {r["node"] for r in s["rows"]} == {str(n) for n in range(1, 128)} and
              all(r["text"].startswith("TPDO1 Read System Status=") for r in s["rows"]), 30.0)
+
+
+def test_sdo_values_by_their_objects_type_and_aborts_by_the_served_texts(page, start_emulator):
+    """An expedited SDO's value as its object's data type says (the node's dictionary, read as its SDOs appear): 0x1008
+    of the Pro-Ionizer is the text "ES61", not 825643845; a REAL32 a float; an INTEGER16 written negative, signed. An
+    abort with the text the emulator serves (`tables`: the core's), the same its own log gives it."""
+    emu = start_emulator(*NODES)
+    driver = open_trace(page, emu)
+    drain(emu.bus)
+    emu.bus.send(0x610, upload(0x1008, 0))
+    _, _, answer = emu.bus.expect(lambda i, d: i == 0x590, 5.0, "node 16's answer for 0x1008")
+    assert answer == bytes([0x43, 0x08, 0x10, 0x00]) + b"ES61"
+    wait_for(driver, "0x1008 as its text", row_with('SDO upload response 0x1008:00 expedited 4 bytes = "ES61"',
+                                                    id="590", node="16", kind="SDO"), 10.0)
+    emu.bus.send(0x612, upload(0x2004, 3))  # Device Supply Voltage of the Bürkert, REAL32 24.0
+    wait_for(driver, "a REAL32 as a float", row_with("SDO upload response 0x2004:03 expedited 4 bytes = 24 "
+                                                     "(0x41C00000)", id="592"), 10.0)
+    emu.bus.send(0x610, bytes([0x2B, 0x02, 0x20, 0x35, 0xFB, 0xFF, 0, 0]))  # 0x2002:35 INTEGER16 := -5
+    wait_for(driver, "a signed value written", row_with("SDO download request 0x2002:35 expedited 2 bytes = -5 "
+                                                        "(0xFFFB)", id="610", dir="rx", node="16"), 10.0)
+    # An abort: its text is the served one, as the emulator's own log has it
+    session = emu.open_session()
+    (tables,) = [l for l in emu.exchange(session, '{"id":1,"cmd":"tables"}').lines() if isinstance(l, dict)]
+    text = {a["code"]: a["text"] for a in tables["aborts"]}[0x06020000]
+    emu.bus.send(0x610, upload(0x2F00, 0))
+    wait_for(driver, "the abort with its served text",
+             row_with(f"SDO abort 0x2F00:00: 0x06020000 {text}", id="590", node="16", kind="SDO"), 10.0)
+    emu.wait_log(f"SDO abort 0x06020000 on 0x2F00:00 ({text})")
+    assert snapshot(driver)["problem"] == ""

@@ -1,8 +1,10 @@
-// web/commands.js: the forms made from the usage lines of `help NODE`, and the arguments they send.
+// web/commands.js: the forms made from the usage lines of `help NODE` and of the served kinds of fault, and the
+// arguments they send.
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {NODE_COMMANDS, PROTOCOL_FAULTS, argsOf, faultsInForce, parseUsage} from "../../../web/commands.js";
+import {NODE_COMMANDS, argsOf, faultForms, faultsInForce, parseUsage} from "../../../web/commands.js";
+import {needsServed, served} from "./served.mjs";
 
 const input = (name, hint = name, optional = false) => ({kind: "input", name, hint, optional});
 
@@ -29,6 +31,11 @@ test("parseUsage: optional arguments from the first [ on", () => {
   assert.deepEqual(parseUsage("sdo-ignore [N|P%] [SEED]")[0].words,
     [input("N|P%", "N or P%", true), input("SEED", "SEED", true)]);
   assert.deepEqual(parseUsage("sdo-abort INDEX[:SUB] CODE")[0].words, [input("INDEX[:SUB]"), input("CODE")]);
+  // blanks around "|" do not count; a bracket inside one: optional from there on, as any other
+  const ignore = [input("N|P%", "N or P%", true), input("SEED", "SEED", true)];
+  assert.deepEqual(parseUsage("sdo-ignore [N | P% [SEED]]")[0].words, ignore);
+  assert.deepEqual(parseUsage("sdo-ignore [N|P% [SEED]]")[0].words, ignore);
+  assert.deepEqual(parseUsage("mode auto | hand")[0].words, [{kind: "choice", options: ["auto", "hand"], optional: false}]);
 });
 
 test("parseUsage: two commands on one line", () => {
@@ -58,12 +65,35 @@ test("argsOf: what cannot be sent is said, not sent", () => {
   assert.deepEqual(argsOf(mode, [""]), {error: "auto|hand|flashing is needed"});
 });
 
-test("the node's commands and the protocol faults parse to forms", () => {
+test("the node's commands parse to forms", () => {
   assert.deepEqual(NODE_COMMANDS.map((c) => parseUsage(c.usage)[0].command), ["power-cycle", "emcy", "emcy-clear"]);
-  assert.deepEqual(PROTOCOL_FAULTS.map((f) => parseUsage(f.usage)[0].command), ["sdo-ignore", "sdo-delay",
-    "sdo-abort", "heartbeat-stop", "heartbeat-jitter", "heartbeat-state", "tpdo-freeze", "tpdo-drop", "tpdo-length",
-    "emcy-burst", "reboot", "bus-off", "lss-silent"]); // the kinds `fault NODE` lists
-  assert.ok(PROTOCOL_FAULTS.every((f) => parseUsage(f.usage).length === 1));
+  assert.ok(NODE_COMMANDS.every((c) => parseUsage(c.usage).length === 1));
+});
+
+test("faultForms: a form per served kind of fault, in its order, whatever the kind", () => {
+  const forms = faultForms([
+    {kind: "wire-cut", usage: "wire-cut MS [SIDE|both]", limits: "MS 1..100", text: "the wire is cut for MS ms"},
+    {kind: "nap", usage: "nap", limits: "", text: "the node naps"},
+  ]);
+  assert.deepEqual(forms, [
+    {kind: "wire-cut", parsed: {command: "wire-cut", usage: "wire-cut MS [SIDE|both]",
+      words: [input("MS"), input("SIDE|both", "SIDE or both", true)]}, text: "the wire is cut for MS ms (MS 1..100)"},
+    {kind: "nap", parsed: {command: "nap", usage: "nap", words: []}, text: "the node naps"},
+  ]);
+  assert.deepEqual(argsOf(forms[0].parsed.words, ["20", ""]), {args: ["20"]});
+});
+
+test("the served kinds of fault each make one form of their kind, with their text", needsServed, () => {
+  const forms = faultForms(served.faults);
+  assert.ok(served.faults.length > 0);
+  assert.deepEqual(forms.map((f) => f.kind), served.faults.map((f) => f.kind));
+  for (const [i, f] of served.faults.entries()) {
+    assert.deepEqual(parseUsage(f.usage).map((p) => p.command), [f.kind], f.usage); // one command, the kind's
+    assert.ok(f.text.length > 0, f.kind);
+    assert.equal(forms[i].text, f.limits === "" ? f.text : `${f.text} (${f.limits})`);
+    // every word of the usage but the kind is an argument the form asks for: none is sent as a fixed word
+    assert.ok(forms[i].parsed.words.every((w) => w.kind === "input"), f.usage);
+  }
 });
 
 test("faultsInForce: the overview's faults cell as a list", () => {

@@ -2,7 +2,8 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {ABORT_TEXTS, EMCY_CLASSES, KINDS, bytesOf, decode, emcyClass, emcyCode, errorRegister} from "../../../web/decode.js";
+import {EMCY_CLASSES, KINDS, abortTexts, bytesOf, decode, emcyClass, emcyCode, errorRegister} from "../../../web/decode.js";
+import {needsServed, served} from "./served.mjs";
 
 /** decode() of a frame from the bus (rx) or, with {dir: "tx", node}, of a node. */
 function d(id, data, extra = {}) {
@@ -127,7 +128,7 @@ test("SDO requests (client to server, 0x600 + node): every command specifier", (
     ["1D00000000000000", "SDO download segment toggle 1, 1 bytes, last"],
     ["6000000000000000", "SDO upload segment request toggle 0"],
     ["7000000000000000", "SDO upload segment request toggle 1"],
-    ["8018100100000206", "SDO abort 0x1018:01: 0x06020000 object does not exist"],
+    ["8018100100000206", "SDO abort 0x1018:01: 0x06020000"], // the abort texts have not come: the code alone
     ["A40820007F000000", "SDO block upload request 0x2008:00 block size 127, CRC"],
     ["A008200010000000", "SDO block upload request 0x2008:00 block size 16"],
     ["A100000000000000", "SDO block upload end response"],
@@ -155,9 +156,8 @@ test("SDO responses (server to client, 0x580 + node): every command specifier", 
     ["6017100000000000", "SDO download response 0x1017:00"],
     ["2000000000000000", "SDO download segment response toggle 0"],
     ["3000000000000000", "SDO download segment response toggle 1"],
-    ["8000200011000906", "SDO abort 0x2000:00: 0x06090011 sub-index does not exist"],
-    ["8000200000000008", "SDO abort 0x2000:00: 0x08000000 general error"],
-    ["8000200078563412", "SDO abort 0x2000:00: 0x12345678 unknown abort code"],
+    ["8000200011000906", "SDO abort 0x2000:00: 0x06090011"],
+    ["8000200078563412", "SDO abort 0x2000:00: 0x12345678"],
     ["A4501F017F000000", "SDO block download response 0x1F50:01 block size 127, CRC"],
     ["A100000000000000", "SDO block download end response"],
     ["A27F7F0000000000", "SDO block download block response ackseq 127, block size 127"],
@@ -171,17 +171,69 @@ test("SDO responses (server to client, 0x580 + node): every command specifier", 
   }
 });
 
-test("every standard abort code has its text", () => {
-  const codes = [0x05030000, 0x05040000, 0x05040001, 0x05040002, 0x05040003, 0x05040004, 0x05040005, 0x06010000,
-    0x06010001, 0x06010002, 0x06020000, 0x06040041, 0x06040042, 0x06040043, 0x06040047, 0x06060000, 0x06070010,
-    0x06070012, 0x06070013, 0x06090011, 0x06090030, 0x06090031, 0x06090032, 0x06090036, 0x060A0023, 0x08000000,
-    0x08000020, 0x08000021, 0x08000022, 0x08000023, 0x08000024];
-  assert.deepEqual([...ABORT_TEXTS.keys()], codes);
-  const data = (code) => "80001000" + [0, 8, 16, 24].map((s) => ((code >>> s) & 0xFF).toString(16).padStart(2, "0")).join("");
-  assert.equal(text(0x601, data(0x05030000)), "SDO abort 0x1000:00: 0x05030000 toggle bit not alternated");
-  assert.equal(text(0x601, data(0x06010002)), "SDO abort 0x1000:00: 0x06010002 attempt to write a read-only object");
-  assert.equal(text(0x601, data(0x060A0023)), "SDO abort 0x1000:00: 0x060A0023 resource not available: SDO connection");
-  assert.equal(text(0x601, data(0x08000024)), "SDO abort 0x1000:00: 0x08000024 no data available");
+/** The data of an abort of 0x1000:00 with `code`. */
+const abortData = (code) => "80001000" + [0, 8, 16, 24].map((s) => ((code >>> s) & 0xFF).toString(16).padStart(2, "0")).join("");
+
+test("an abort's text is the one of the texts given, whichever codes they have; a code they lack is unknown", () => {
+  const aborts = abortTexts([{code: 0x05030000, text: "toggle bit not alternated"}, {code: 0x0BAD0001, text: "new"}]);
+  const sdo = {aborts};
+  assert.equal(decode({id: 0x601, data: abortData(0x05030000), dir: "rx"}, undefined, sdo).text,
+    "SDO abort 0x1000:00: 0x05030000 toggle bit not alternated");
+  assert.equal(decode({id: 0x581, data: abortData(0x0BAD0001), dir: "tx", node: 1}, undefined, sdo).text,
+    "SDO abort 0x1000:00: 0x0BAD0001 new");
+  assert.equal(decode({id: 0x601, data: abortData(0x06020000), dir: "rx"}, undefined, sdo).text,
+    "SDO abort 0x1000:00: 0x06020000 unknown abort code");
+});
+
+test("every served abort code shows the served text, both ways", needsServed, () => {
+  const sdo = {aborts: abortTexts(served.aborts)};
+  assert.ok(served.aborts.length > 0);
+  for (const {code, text} of served.aborts) {
+    const expected = `SDO abort 0x1000:00: 0x${code.toString(16).toUpperCase().padStart(8, "0")} ${text}`;
+    assert.equal(decode({id: 0x601, data: abortData(code), dir: "rx"}, undefined, sdo).text, expected);
+    assert.equal(decode({id: 0x581, data: abortData(code), dir: "tx", node: 1}, undefined, sdo).text, expected);
+  }
+  const codes = new Set(served.aborts.map((a) => a.code));
+  const unknown = [0x12345678, 0, 0xFFFFFFFF].find((c) => !codes.has(c));
+  assert.equal(decode({id: 0x601, data: abortData(unknown), dir: "rx"}, undefined, sdo).text,
+    `SDO abort 0x1000:00: 0x${unknown.toString(16).toUpperCase().padStart(8, "0")} unknown abort code`);
+});
+
+test("expedited SDO values by the data type of their object: text, signed, float, boolean; else unsigned", () => {
+  const types = new Map([[0x1008, "VISIBLE_STRING"], [0x2001, "INTEGER8"], [0x2002, "INTEGER16"], [0x2003, "INTEGER32"],
+    [0x2004, "REAL32"], [0x2005, "BOOLEAN"], [0x2006, "UNSIGNED16"], [0x2007, "OCTET_STRING"], [0x2008, "INTEGER64"],
+    [0x2009, "INTEGER24"]]);
+  const asked = [];
+  const type = (frame, node, index, sub) => {
+    asked.push([frame.id, node, index, sub]);
+    return types.get(index) ?? null;
+  };
+  const up = (data) => decode({id: 0x591, data, dir: "tx", node: 17}, undefined, {type}).text;
+  const down = (data) => decode({id: 0x611, data, dir: "rx"}, undefined, {type}).text;
+  assert.equal(up("4308100045533631"), "SDO upload response 0x1008:00 expedited 4 bytes = \"ES61\"");
+  assert.deepEqual(asked, [[0x591, 17, 0x1008, 0]]);
+  assert.equal(up("4F08100041000000"), "SDO upload response 0x1008:00 expedited 1 bytes = \"A\"");
+  assert.equal(up("4208100053445300"), "SDO upload response 0x1008:00 expedited size not indicated = \"SDS\"");
+  assert.equal(up("4F012000FB000000"), "SDO upload response 0x2001:00 expedited 1 bytes = -5 (0xFB)");
+  assert.equal(up("4B022001FEFF0000"), "SDO upload response 0x2002:01 expedited 2 bytes = -2 (0xFFFE)");
+  assert.equal(up("4202200018FC0000"), "SDO upload response 0x2002:00 expedited size not indicated = -1000 " +
+    "(0x0000FC18)"); // the type's 2 bytes of the 4
+  assert.equal(up("4303200000000080"), "SDO upload response 0x2003:00 expedited 4 bytes = -2147483648 (0x80000000)");
+  assert.equal(up("430420000000C03F"), "SDO upload response 0x2004:00 expedited 4 bytes = 1.5 (0x3FC00000)");
+  assert.equal(up("4F05200001000000"), "SDO upload response 0x2005:00 expedited 1 bytes = true (0x01)");
+  assert.equal(up("4F05200000000000"), "SDO upload response 0x2005:00 expedited 1 bytes = false (0x00)");
+  assert.equal(up("4B062000FFFF0000"), "SDO upload response 0x2006:00 expedited 2 bytes = 65535 (0xFFFF)");
+  assert.equal(up("4B072000FFFF0000"), "SDO upload response 0x2007:00 expedited 2 bytes = 65535 (0xFFFF)");
+  assert.equal(up("43082000FFFFFFFF"), "SDO upload response 0x2008:00 expedited 4 bytes = 4294967295 (0xFFFFFFFF)");
+  assert.equal(up("4709200000008000"), "SDO upload response 0x2009:00 expedited 3 bytes = -8388608 (0x800000)");
+  assert.equal(up("4B022001FE000000").endsWith("= 254 (0x00FE)"), true); // 0x2002 is 16 bits: positive
+  assert.equal(up("4F02200180000000"), "SDO upload response 0x2002:01 expedited 1 bytes = 128 (0x80)"); // too short
+  assert.equal(up("4300300045533631"), "SDO upload response 0x3000:00 expedited 4 bytes = 825643845 (0x31365345)");
+  // a download request to node 17: the same lookup, of the node it goes to
+  asked.length = 0;
+  assert.equal(down("2B022000F6FF0000"), "SDO download request 0x2002:00 expedited 2 bytes = -10 (0xFFF6)");
+  assert.deepEqual(asked, [[0x611, 17, 0x2002, 0]]);
+  assert.equal(down("2F052000FF000000"), "SDO download request 0x2005:00 expedited 1 bytes = true (0xFF)");
 });
 
 test("heartbeat, boot-up, node guarding", () => {

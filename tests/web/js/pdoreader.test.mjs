@@ -69,6 +69,45 @@ test("a node's mapping: list, objects once per device, get of its PDO objects; t
   assert.deepEqual(session.take(), []); // nothing more to read
 });
 
+test("a node seen in SDOs: its dictionary alone, for its objects' types; its PDOs later read its mapping", async () => {
+  const maps = new PdoMaps();
+  const read = [];
+  const reader = new PdoReader(maps, (bus, node) => read.push(`${bus}/${node}`));
+  const session = new StubSession();
+  reader.wantTypes("vcan0", 17);
+  reader.wantTypes("vcan0", 17); // once
+  assert.equal(reader.typeOf("vcan0", 17, 0x6000, 5), null); // not read yet
+  reader.tick(session);
+  await settle();
+  assert.deepEqual(session.take(), [["list", {}]]);
+  session.pending[0].resolve(LIST);
+  await settle();
+  assert.deepEqual(session.take(), [["objects", {node: "17@vcan0"}]]);
+  session.pending[0].resolve({objects: OBJECTS});
+  await settle();
+  assert.deepEqual(read, ["vcan0/17"]); // the trace decodes its SDOs again
+  assert.equal(reader.typeOf("vcan0", 17, 0x6000, 5), "UNSIGNED8");
+  assert.equal(reader.typeOf("vcan0", 17, 0x6000, 6), null); // no such object
+  assert.equal(reader.typeOf("vcan1", 17, 0x6000, 5), null); // another bus: not read
+  assert.ok(!maps.has("vcan0", 17)); // no mapping read: no get asked
+  reader.tick(session);
+  await settle();
+  assert.deepEqual(session.take(), []);
+  reader.want("vcan0", 17); // a PDO of it: now its mapping, by the dictionary already read
+  reader.tick(session);
+  await settle();
+  assert.deepEqual(session.take(), [["get", {node: "17@vcan0", objects: ["0x1800:01", "0x1A00:00", "0x1A00:01"]}]]);
+  session.pending[0].resolve({values: values(17)});
+  await settle();
+  assert.ok(maps.has("vcan0", 17));
+  reader.wantTypes("vcan0", 17); // its PDOs and its types are read: nothing more
+  reader.tick(session);
+  await settle();
+  assert.deepEqual(session.take(), []);
+  reader.clear();
+  assert.equal(reader.typeOf("vcan0", 17, 0x6000, 5), null);
+});
+
 test(`at most ${PARALLEL} nodes are read at once`, async () => {
   const reader = new PdoReader(new PdoMaps());
   const session = new StubSession();

@@ -126,6 +126,26 @@ test("redecode: PDOs seen before their mapping was read get their values", () =>
   assert.equal(other.text, "TPDO1"); // another bus: not this one's mapping
 });
 
+test("redecode: SDO values get their type as the node's dictionary comes; aborts their text as the texts come", () => {
+  let types = null; // the dictionary of node 17 on vcan0, once read
+  const log = new TraceLog(10, undefined, (frame, node, index, sub) =>
+    (types !== null && frame.bus === "vcan0" && node === 17 ? types.get(`${index}:${sub}`) ?? null : null));
+  const name = log.add(ev(0x591, "4308100045533631", {dir: "tx", node: 17}));
+  const other = log.add(ev(0x591, "4308100045533631", {bus: "vcan1", dir: "tx", node: 17}));
+  const abort = log.add(ev(0x591, "8008100000000206", {dir: "tx", node: 17}));
+  assert.equal(name.text, "SDO upload response 0x1008:00 expedited 4 bytes = 825643845 (0x31365345)");
+  assert.equal(abort.text, "SDO abort 0x1008:00: 0x06020000");
+  types = new Map([["4104:0", "VISIBLE_STRING"]]);
+  assert.equal(log.redecode("vcan0"), true);
+  assert.equal(name.text, "SDO upload response 0x1008:00 expedited 4 bytes = \"ES61\"");
+  assert.equal(other.text, "SDO upload response 0x1008:00 expedited 4 bytes = 825643845 (0x31365345)");
+  assert.deepEqual(log.lastMatching(parseFilter({text: "es61"}).match, 10), [name]); // found by its new text
+  assert.equal(log.useAbortTexts(new Map([[0x06020000, "object does not exist"]])), true);
+  assert.equal(abort.text, "SDO abort 0x1008:00: 0x06020000 object does not exist");
+  assert.equal(log.add(ev(0x591, "8008100000000206", {dir: "tx", node: 17})).text, abort.text); // and those to come
+  assert.equal(log.useAbortTexts(new Map([[0x06020000, "object does not exist"]])), false); // nothing changed
+});
+
 test("a row's texts; the time since the start or by the wall clock", () => {
   const log = new TraceLog(10);
   const entry = log.add({event: "frame", time_us: 12_345_678, bus: "vcan0", dir: "tx", node: 17, id: 0x591,
