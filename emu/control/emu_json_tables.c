@@ -1,6 +1,6 @@
 /* The control protocol's `tables` request (docs/control-protocol.md): the tables a client shows or makes its forms
  * from, served from the one place the program keeps each, so that a client needs no copy that could fall behind:
- * the protocol fault kinds (faults/fault_kinds.h) and the core's SDO abort texts (co_abort_table). The web view
+ * the protocol fault kinds (faults/fault_kinds.h) and the core's SDO abort texts (co_abort_entry). The web view
  * (web/) builds its fault forms and its trace's abort texts from this answer. */
 #define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
 #include "control/emu_json_request.h"
@@ -30,12 +30,12 @@ static json_t *fault_kinds_json(void)
 static json_t *abort_codes_json(void)
 {
     json_t *aborts = json_array();
-    size_t count = 0U;
-    const co_abort_entry_t *table = co_abort_table(&count);
-    for (size_t i = 0U; i < count; i++) {
+    uint32_t code = 0U;
+    const char *text;
+    for (size_t i = 0U; (text = co_abort_entry(i, &code)) != NULL; i++) {
         json_t *a = json_object();
-        (void)json_object_set_new(a, "code", json_integer((json_int_t)table[i].code));
-        (void)json_object_set_new(a, "text", json_string(table[i].text));
+        (void)json_object_set_new(a, "code", json_integer((json_int_t)code));
+        (void)json_object_set_new(a, "text", json_string(text));
         (void)json_array_append_new(aborts, a);
     }
     return aborts;

@@ -86,15 +86,10 @@ extern "C" {
 /** Text of an abort code, or "unknown abort code". For logs; never NULL. */
 const char *co_abort_text(uint32_t code);
 
-/** One abort code of CO_ABORT_LIST and its text. */
-typedef struct co_abort_entry {
-    uint32_t code;
-    const char *text;
-} co_abort_entry_t;
-
-/** Every abort code the core names, with its text, in ascending code order: the table co_abort_text() reads
- *  (read-only, never NULL), for a tool that shows them all (canopen-emu serves it to its web view). */
-const co_abort_entry_t *co_abort_table(size_t *count);
+/** The i-th abort code the core names (CO_ABORT_LIST, in ascending code order) into *code (when code is not NULL),
+ *  and its text, the one co_abort_text() gives; NULL past the last one (*code then unchanged). For a tool that lists
+ *  them all: canopen-emu serves them to its web view. */
+const char *co_abort_entry(size_t i, uint32_t *code);
 
 #ifdef __cplusplus
 }

@@ -325,26 +325,34 @@ static void sdo_abort_is_reported_as_event(void)
     TEST_ASSERT_EQUAL_UINT32(1U, fx.node.stats.sdo_aborts);
 }
 
-/* The table tools list (canopen-emu serves it to its web view) is the one co_abort_text() reads: every code of
- * CO_ABORT_LIST once, in ascending order, each with its text; a code it lacks has none. */
-static void abort_table_is_the_list_and_the_texts(void)
+/* The list tools read (canopen-emu serves it to its web view) is the table co_abort_text() reads: every code of
+ * CO_ABORT_LIST once, in ascending order, each with its text; NULL past the end; a code it lacks has no text. */
+static void abort_entries_are_the_list_and_the_texts(void)
 {
     static const uint32_t listed[] = {
 #define CO_ABORT_X_CODE(name, value, text) value,
         CO_ABORT_LIST(CO_ABORT_X_CODE)
 #undef CO_ABORT_X_CODE
     };
-    size_t count = 0U;
-    const co_abort_entry_t *table = co_abort_table(&count);
-    TEST_ASSERT_NOT_NULL(table);
-    TEST_ASSERT_EQUAL_UINT32(sizeof listed / sizeof listed[0], (uint32_t)count);
+    const size_t count = sizeof listed / sizeof listed[0];
+    uint32_t previous = 0U;
     for (size_t i = 0U; i < count; i++) {
-        TEST_ASSERT_EQUAL_HEX32(listed[i], table[i].code);
-        TEST_ASSERT_TRUE(i == 0U || table[i - 1U].code < table[i].code);
-        TEST_ASSERT_EQUAL_PTR(table[i].text, co_abort_text(table[i].code));
-        TEST_ASSERT_NOT_EQUAL(0, strcmp(table[i].text, "unknown abort code"));
+        uint32_t code = 0U;
+        const char *text = co_abort_entry(i, &code);
+        TEST_ASSERT_NOT_NULL(text);
+        TEST_ASSERT_EQUAL_HEX32(listed[i], code);
+        TEST_ASSERT_TRUE(code > previous);
+        TEST_ASSERT_EQUAL_PTR(text, co_abort_text(code));
+        TEST_ASSERT_EQUAL_PTR(text, co_abort_entry(i, NULL));
+        TEST_ASSERT_NOT_EQUAL(0, strcmp(text, "unknown abort code"));
+        previous = code;
     }
+    uint32_t untouched = 0x12345678UL;
+    TEST_ASSERT_NULL(co_abort_entry(count, &untouched));
+    TEST_ASSERT_EQUAL_HEX32(0x12345678UL, untouched);
+    TEST_ASSERT_EQUAL_STRING("object does not exist", co_abort_text(CO_ABORT_NO_OBJECT));
     TEST_ASSERT_EQUAL_STRING("resource not available: SDO connection", co_abort_text(CO_ABORT_SDO_CONNECTION));
+    TEST_ASSERT_EQUAL_STRING("no data available", co_abort_text(CO_ABORT_NO_DATA)); /* the last */
     TEST_ASSERT_EQUAL_STRING("unknown abort code", co_abort_text(0x12345678UL));
     TEST_ASSERT_EQUAL_STRING("unknown abort code", co_abort_text(CO_ABORT_NONE));
 }
@@ -404,7 +412,7 @@ int main(void)
     RUN_TEST(read_hook_can_hide_an_entry);
     RUN_TEST(hooks_see_objects_from_their_first_index_only);
     RUN_TEST(sdo_abort_is_reported_as_event);
-    RUN_TEST(abort_table_is_the_list_and_the_texts);
+    RUN_TEST(abort_entries_are_the_list_and_the_texts);
     RUN_TEST(sdo_on_new_node_id);
     RUN_TEST(pdo_parameters_follow_node_id);
     return UNITY_END();

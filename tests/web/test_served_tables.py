@@ -64,7 +64,7 @@ def test_the_served_fault_kinds_are_what_fault_node_takes(start_emulator):
 
 
 def core_aborts():
-    """The core's abort codes and texts: CO_ABORT_LIST of its public header (co_abort_table() is that list, in its
+    """The core's abort codes and texts: CO_ABORT_LIST of its public header (co_abort_entry() reads that list, in its
     order: tests/unit/test_sdo.c)."""
     header = (SRC / "include/co/co_abort.h").read_text()
     listed = [(int(code, 16), text) for code, text in re.findall(r'X\(\w+, (0x[0-9A-F]{8})UL, "([^"]*)"\)', header)]
