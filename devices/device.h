@@ -12,7 +12,11 @@
  *   device_init(dev, cls, cfg, now)      set up model (zeroed, environment defaults) + node (power-on: loads NVM, boot-up)
  *   loop: device_rx(dev, frame, t)       for every received frame
  *         next = device_process(dev, now)  model step + core processing; call again at `next` at the latest
- *         device_command(dev, argv, now)   control commands (inputs, faults, power cycle)
+ *         device_command(dev, argv, now, out)  control commands (inputs, faults, power cycle), replies to out
+ *         device_get_value / device_set_value    an object's value, typed, read or written as the device would
+ *
+ * Files: device.c (an instance's life), device_value.c (typed values), device_commands.c (the common commands),
+ * device_words.c (the words of the command language).
  */
 #ifndef DEVICE_H
 #define DEVICE_H
@@ -20,6 +24,7 @@
 #include <stdarg.h>
 
 #include "co/co.h"
+#include "device_words.h"
 
 #if CO_CONFIG_TIME32
 #error "the device models (and canopen-emu) need 64-bit time: build them with CO_CONFIG_TIME32 0"
@@ -31,9 +36,14 @@ extern "C" {
 
 typedef struct device device_t;
 
-/** Where a device writes command replies and log lines (one line per call, no newline, shorter than 512 bytes:
- *  device_printf's buffer). */
+/** Where a device writes lines (one line per call, no newline, shorter than 512 bytes: device_printf's buffer). */
 typedef void (*device_print_fn)(void *ctx, const device_t *dev, const char *line);
+
+/** A destination of lines: the replies of one device_command call. */
+typedef struct device_output {
+    device_print_fn print;
+    void *ctx;
+} device_output_t;
 
 /** Result of device_command(). */
 typedef enum device_cmd_result {
@@ -109,7 +119,8 @@ typedef struct device_cfg {
     const char *variant;           /**< NULL = the class default. */
     const co_port_t *port;         /**< CAN + NVM of this node. */
     void *port_ctx;
-    device_print_fn print;         /**< Replies and logs (may be NULL). */
+    device_print_fn print;         /**< The model's messages outside a command, and the replies of a command given no
+                                        output of its own (may be NULL). */
     void *print_ctx;
     void (*on_event)(void *ctx, const device_t *dev, const co_event_t *ev); /**< Core events, for logs (may be NULL). */
     void *event_ctx;
@@ -129,6 +140,8 @@ struct device {
     co_time_us_t core_due;         /**< What co_node_process returned last (device_rx asks co_node_settled). */
     bool touched;                  /**< Something that may change the model ran since (see step): step at the next
                                         process. */
+    const device_output_t *replies;/**< While device_command runs: its output argument, where device_printf writes;
+                                        NULL otherwise (then cfg.print). */
 };
 
 /**
@@ -188,16 +201,56 @@ static inline co_time_us_t device_process(device_t *dev, co_time_us_t now)
     return dev->core_due < dev->step_due ? dev->core_due : dev->step_due;
 }
 
-/** Runs a control command: the device's own first, then the common ones (see device.c). A command of the device
- *  (a common one, or one of cls->commands_help) that neither takes with these words is DEVICE_CMD_ERROR, with
- *  "error: WORD takes ARGS" (or "takes no arguments") printed; DEVICE_CMD_UNKNOWN only for a word that is none. */
-device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now);
+/** Runs a control command: the device's own first, then the common ones (device_commands.c). A command of the
+ *  device (a common one, or one of cls->commands_help) that neither takes with these words is DEVICE_CMD_ERROR, with
+ *  "error: WORD takes ARGS" (or "takes no arguments") printed; DEVICE_CMD_UNKNOWN only for a word that is none.
+ *  Its reply lines go to out (device_printf of the command's code), or to cfg.print when out is NULL. */
+device_cmd_result_t device_command(device_t *dev, int argc, const char *const *argv, co_time_us_t now,
+                                   const device_output_t *out);
 
-/** The arguments of command word by a help text of "  USAGE  TEXT" lines (device_class_t.commands_help: USAGE is
- *  the word and its arguments, alternatives joined by " / ", and ends at the first two blanks in a row): true when
- *  word is one of its commands, with what follows the word in *args (args_len bytes, 0 for none; not
- *  NUL-terminated). help may be NULL (no commands). */
-bool device_help_usage(const char *help, const char *word, const char **args, size_t *args_len);
+/** What a value is, by the data type of its object. */
+typedef enum device_value_kind {
+    DEVICE_VALUE_UNSIGNED = 0, /**< as.u: UNSIGNED8 .. UNSIGNED64 (the 24/40/48/56-bit ones too), TIME_OF_DAY and
+                                    TIME_DIFFERENCE (their 6 bytes as a number) */
+    DEVICE_VALUE_SIGNED,       /**< as.i: INTEGER8 .. INTEGER64 */
+    DEVICE_VALUE_BOOLEAN,      /**< as.b */
+    DEVICE_VALUE_REAL,         /**< as.r: REAL32, REAL64 */
+    DEVICE_VALUE_TEXT,         /**< bytes, len: VISIBLE_STRING. To write, also a number as its word ("0x2A", "2.5") */
+    DEVICE_VALUE_BYTES         /**< bytes, len: OCTET_STRING, UNICODE_STRING, DOMAIN */
+} device_value_kind_t;
+
+/** A value of an object, typed. */
+typedef struct device_value {
+    device_value_kind_t kind;
+    uint8_t type;          /**< device_get_value: the object's co_od_type_t; device_set_value does not read it */
+    union {
+        uint64_t u;
+        int64_t i;
+        bool b;
+        double r;
+    } as;
+    const uint8_t *bytes;  /**< TEXT and BYTES: len bytes (device_get_value: in the caller's buffer) */
+    size_t len;
+} device_value_t;
+
+/** Reads object index:sub of the node as the device holds it now: a local read (the model's read hook brings it up
+ *  to now, no SDO access check). buf (size bytes, 256 hold any value canopen-emu's nodes have) takes the bytes;
+ *  *out the value by the object's data type (a VISIBLE_STRING up to its first NUL; TEXT and BYTES point into buf).
+ *  Returns 0, or the SDO abort code an upload would get (CO_ABORT_NO_OBJECT, ...; CO_ABORT_OUT_OF_MEMORY when the
+ *  value does not fit buf). */
+uint32_t device_get_value(device_t *dev, uint16_t index, uint8_t sub, co_time_us_t now, uint8_t *buf, size_t size,
+                          device_value_t *out);
+
+/** Writes object index:sub of the node as the device itself would (an input, a measurement): a local write, without
+ *  SDO access checks nor the EDS limits (they bind an SDO client), but within the object's data type and the device's
+ *  rules (its write hook). The value is taken in the object's type: a number of any kind in a number (an integer type
+ *  takes a REAL only when it is whole; BOOLEAN true/false as 1/0), TEXT in a VISIBLE_STRING or as a number's word
+ *  (device_parse_magnitude, strtod for REAL32 and REAL64); an OCTET_STRING of up to 8 bytes as the number of its
+ *  bytes, little-endian. Nothing is cut to size: a value the type cannot hold is refused. Returns true when written;
+ *  false with why (a line for a person, why_size bytes: "70000 is out of range: 0x1017:00 (UNSIGNED16) holds
+ *  0..65535", or the write hook's abort: "0x2002:06: value range exceeded: value too low (0x06090032)"). */
+bool device_set_value(device_t *dev, uint16_t index, uint8_t sub, const device_value_t *value, co_time_us_t now,
+                      char *why, size_t why_size);
 
 /**
  * For a class's power_on: zeroes the model block except the environment inputs, which are the bytes
@@ -212,13 +265,6 @@ void device_printf(const device_t *dev, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
-
-/** Parses a number: an optional sign, then decimal digits or 0x and hex digits ("010" is ten: never octal). Returns
- *  false if the text is anything else (blanks included), overflows, or is out of [lo, hi]. */
-bool device_parse_int(const char *text, long long lo, long long hi, long long *out);
-
-/** INDEX[:SUB] as the commands take it, both hex with or without 0x ("0x2002:06", "1017", "2002:0x3B"). */
-bool device_parse_address(const char *text, uint16_t *index, uint8_t *sub);
 
 /** The CiA 301 name of a co_od_type_t ("UNSIGNED16", "VISIBLE_STRING"...). */
 const char *device_type_name(uint8_t type);

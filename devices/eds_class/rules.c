@@ -151,7 +151,7 @@ typedef struct parse {
 
 /* "FILE:LINE:COLUMN: error: " (or "FILE: error: " without a place) and fmt with a and b; the first
  * RULES_MAX_ERRORS errors, then a line that says more were found. */
-static void fail(parse_t *p, const yaml_node_t *at, const char *fmt, const char *a, const char *b)
+static void rules_parse_error(parse_t *p, const yaml_node_t *at, const char *fmt, const char *a, const char *b)
 {
     p->failed = true;
     if (++p->errors > RULES_MAX_ERRORS) {
@@ -202,7 +202,7 @@ static yaml_node_t *lookup(parse_t *p, const yaml_node_t *map, const char *key)
 static void only_keys(parse_t *p, const yaml_node_t *map, const char *const *allowed, const char *what)
 {
     if (map == NULL || map->type != YAML_MAPPING_NODE) {
-        fail(p, map, "%s: a mapping (key: value) is expected here%s", what, NULL);
+        rules_parse_error(p, map, "%s: a mapping (key: value) is expected here%s", what, NULL);
         return;
     }
     for (yaml_node_pair_t *pair = map->data.mapping.pairs.start; pair < map->data.mapping.pairs.top; pair++) {
@@ -220,7 +220,7 @@ static void only_keys(parse_t *p, const yaml_node_t *map, const char *const *all
             }
             char known[300];
             snprintf(known, sizeof known, "%s: unknown key '%%s' (known: %s)", what, list);
-            fail(p, kn, known, k != NULL ? k : "?", NULL);
+            rules_parse_error(p, kn, known, k != NULL ? k : "?", NULL);
         }
     }
 }
@@ -235,7 +235,7 @@ static double number(parse_t *p, const yaml_node_t *n, const char *what)
         v = (strncmp(t, "0x", 2) == 0 || strncmp(t, "0X", 2) == 0) ? (double)strtoull(t, &end, 16) : strtod(t, &end);
     }
     if (t == NULL || end == t || *end != '\0' || errno == ERANGE || !isfinite(v)) {
-        fail(p, n, "%s: '%s' is not a number", what, t != NULL ? t : "(not a value)");
+        rules_parse_error(p, n, "%s: '%s' is not a number", what, t != NULL ? t : "(not a value)");
         return 0.0;
     }
     return v;
@@ -246,7 +246,7 @@ static double key_number(parse_t *p, const yaml_node_t *map, const char *key, do
     const yaml_node_t *n = lookup(p, map, key);
     if (n == NULL) {
         if (required) {
-            fail(p, map, "%s needs '%s'", what, key);
+            rules_parse_error(p, map, "%s needs '%s'", what, key);
         }
         return dflt;
     }
@@ -258,7 +258,7 @@ static uint64_t key_ms(parse_t *p, const yaml_node_t *map, const char *key, doub
 {
     const double ms = key_number(p, map, key, dflt, false, what);
     if (!(ms >= 1.0 && ms <= 86400000.0)) {
-        fail(p, lookup(p, map, key), "%s: %s must be 1 ms .. 1 day", what, key);
+        rules_parse_error(p, lookup(p, map, key), "%s: %s must be 1 ms .. 1 day", what, key);
         return 1000U;
     }
     return (uint64_t)(ms * 1000.0); /* a day is 8.64e10 µs: past 32 bits (found by the long run of fuzz_rules) */
@@ -274,7 +274,7 @@ static bool flag(parse_t *p, const yaml_node_t *n, const char *what)
     if (t != NULL && (strcmp(t, "true") == 0 || strcmp(t, "false") == 0)) {
         return t[0] == 't';
     }
-    fail(p, n, "%s: '%s' is not true or false", what, t != NULL ? t : "?");
+    rules_parse_error(p, n, "%s: '%s' is not true or false", what, t != NULL ? t : "?");
     return false;
 }
 
@@ -286,18 +286,18 @@ static bool object(parse_t *p, const yaml_node_t *n, const char *what, co_od_ent
     uint8_t sub;
     const char *t = scalar(n);
     if (t == NULL || !device_parse_address(t, &index, &sub)) {
-        fail(p, n, "%s: '%s' is not an object (0xINDEX or 0xINDEX:SUB)", what, t != NULL ? t : "(not a value)");
+        rules_parse_error(p, n, "%s: '%s' is not an object (0xINDEX or 0xINDEX:SUB)", what, t != NULL ? t : "(not a value)");
         return false;
     }
     co_od_entry_t one;
     const co_od_entry_t *e = co_od_find(p->od, index, sub, &one);
     if (e == NULL) {
-        fail(p, n, "%s: the device has no object %s", what, t);
+        rules_parse_error(p, n, "%s: the device has no object %s", what, t);
         return false;
     }
     if (e->size > 8U || e->type == CO_T_VISIBLE_STRING || e->type == CO_T_OCTET_STRING || e->type == CO_T_UNICODE_STRING ||
         e->type == CO_T_DOMAIN) {
-        fail(p, n, "%s: %s is not a number", what, t);
+        rules_parse_error(p, n, "%s: %s is not a number", what, t);
         return false;
     }
     *out = *e;
@@ -309,7 +309,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
     const char *name = scalar(key);
     (void)object(p, key, "objects", &r->row);
     if (body == NULL || body->type != YAML_MAPPING_NODE || body->data.mapping.pairs.top - body->data.mapping.pairs.start != 1) {
-        fail(p, body != NULL ? body : key, "%s: one behaviour is expected (constant, ramp, sine, random_walk, steps, "
+        rules_parse_error(p, body != NULL ? body : key, "%s: one behaviour is expected (constant, ramp, sine, random_walk, steps, "
                                           "counter, follow)%s", name, NULL);
         return;
     }
@@ -321,7 +321,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         k++;
     }
     if (k == sizeof BEHAVIOURS / sizeof BEHAVIOURS[0]) {
-        fail(p, node_at(p, pair->key), "%s: unknown behaviour '%s' (constant, ramp, sine, random_walk, steps, counter, "
+        rules_parse_error(p, node_at(p, pair->key), "%s: unknown behaviour '%s' (constant, ramp, sine, random_walk, steps, counter, "
                                        "follow)", name, kind);
         return;
     }
@@ -337,7 +337,7 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         r->c = fabs(key_number(p, v, "per_s", 0.0, true, "ramp"));
         r->repeat = flag(p, lookup(p, v, "repeat"), "ramp");
         if (r->c == 0.0) {
-            fail(p, v, "ramp: per_s must not be 0%s%s", NULL, NULL);
+            rules_parse_error(p, v, "ramp: per_s must not be 0%s%s", NULL, NULL);
         }
         break;
     case B_SINE:
@@ -355,13 +355,13 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         r->hi = key_number(p, v, "max", INFINITY, false, "random_walk");
         const double seed = key_number(p, v, "seed", 1.0, false, "random_walk");
         if (!(seed >= 0.0 && seed <= 9007199254740992.0)) {
-            fail(p, lookup(p, v, "seed"), "random_walk: seed must be 0 .. 2^53%s%s", NULL, NULL);
+            rules_parse_error(p, lookup(p, v, "seed"), "random_walk: seed must be 0 .. 2^53%s%s", NULL, NULL);
         } else {
             r->seed = (uint64_t)seed;
         }
         r->every_us = key_ms(p, v, "every_ms", 100.0, "random_walk");
         if (r->lo > r->hi) {
-            fail(p, v, "random_walk: min > max%s%s", NULL, NULL);
+            rules_parse_error(p, v, "random_walk: min > max%s%s", NULL, NULL);
         }
         break;
     case B_COUNTER:
@@ -378,32 +378,32 @@ static void parse_rule(parse_t *p, rule_t *r, const yaml_node_t *key, const yaml
         r->b = key_number(p, v, "gain", 1.0, false, "follow");
         r->c = key_number(p, v, "offset", 0.0, false, "follow");
         if (r->a < 0.0) {
-            fail(p, v, "follow: lag_ms must not be negative%s%s", NULL, NULL);
+            rules_parse_error(p, v, "follow: lag_ms must not be negative%s%s", NULL, NULL);
         }
         break;
     case B_STEPS: {
         /* steps: [[VALUE, MS], ...] (repeating) */
         if (v->type != YAML_SEQUENCE_NODE || v->data.sequence.items.top == v->data.sequence.items.start) {
-            fail(p, v, "steps: a list of [value, ms] pairs is expected%s%s", NULL, NULL);
+            rules_parse_error(p, v, "steps: a list of [value, ms] pairs is expected%s%s", NULL, NULL);
             break;
         }
         const size_t n = (size_t)(v->data.sequence.items.top - v->data.sequence.items.start);
         r->values = calloc(n, sizeof *r->values);
         r->ends_us = calloc(n, sizeof *r->ends_us);
         if (r->values == NULL || r->ends_us == NULL) {
-            fail(p, v, "out of memory%s%s", NULL, NULL);
+            rules_parse_error(p, v, "out of memory%s%s", NULL, NULL);
             break;
         }
         for (size_t i = 0U; i < n; i++) {
             const yaml_node_t *item = node_at(p, v->data.sequence.items.start[i]);
             if (item == NULL || item->type != YAML_SEQUENCE_NODE || item->data.sequence.items.top - item->data.sequence.items.start != 2) {
-                fail(p, item, "steps: each step is [value, ms]%s%s", NULL, NULL);
+                rules_parse_error(p, item, "steps: each step is [value, ms]%s%s", NULL, NULL);
                 break;
             }
             r->values[i] = number(p, node_at(p, item->data.sequence.items.start[0]), "steps");
             const double ms = number(p, node_at(p, item->data.sequence.items.start[1]), "steps");
             if (!(ms >= 1.0 && ms <= 86400000.0)) {
-                fail(p, item, "steps: a step lasts 1 ms .. 1 day%s%s", NULL, NULL);
+                rules_parse_error(p, item, "steps: a step lasts 1 ms .. 1 day%s%s", NULL, NULL);
                 break;
             }
             r->ends_us[i] = (i > 0U ? r->ends_us[i - 1U] : 0U) + (uint64_t)(ms * 1000.0); /* < 2^16 days: < 2^53 us */
@@ -426,10 +426,10 @@ static void parse_alarm(parse_t *p, alarm_t *a, const yaml_node_t *n)
     const double code = key_number(p, n, "emcy", 0.0, true, "alarms");
     const double reg = key_number(p, n, "register", 0x01, false, "alarms");
     if (!a->has_above && !a->has_below) {
-        fail(p, n, "alarms: give 'above' or 'below' (or both)%s%s", NULL, NULL);
+        rules_parse_error(p, n, "alarms: give 'above' or 'below' (or both)%s%s", NULL, NULL);
     }
     if (!(code >= 0x1000 && code <= 0xFFFF && reg >= 1 && reg <= 0xFF)) {
-        fail(p, n, "alarms: emcy is an error code 0x1000..0xFFFF, register the 0x1001 bits 0x01..0xFF%s%s", NULL, NULL);
+        rules_parse_error(p, n, "alarms: emcy is an error code 0x1000..0xFFFF, register the 0x1001 bits 0x01..0xFF%s%s", NULL, NULL);
         return; /* no cast of a number out of range (undefined behaviour: found by fuzz_rules) */
     }
     a->code = (uint16_t)code;
@@ -449,7 +449,7 @@ static void refuse_same_object_twice(parse_t *p, const rules_t *r, const yaml_no
                 char place[64];
                 snprintf(place, sizeof place, "line %lu, column %lu", (unsigned long)first->start_mark.line + 1UL,
                          (unsigned long)first->start_mark.column + 1UL);
-                fail(p, node_at(p, objects->data.mapping.pairs.start[i].key),
+                rules_parse_error(p, node_at(p, objects->data.mapping.pairs.start[i].key),
                      "objects: '%s' names an object that has a rule already (at %s)",
                      scalar(node_at(p, objects->data.mapping.pairs.start[i].key)), place);
                 break;
@@ -462,7 +462,7 @@ static void parse_document(parse_t *p, rules_t *r)
 {
     const yaml_node_t *root = yaml_document_get_root_node(&p->doc);
     if (root == NULL) {
-        fail(p, NULL, "an empty rules file%s%s", NULL, NULL);
+        rules_parse_error(p, NULL, "an empty rules file%s%s", NULL, NULL);
         return;
     }
     only_keys(p, root, (const char *const[]){"device", "tick_ms", "objects", "alarms", "profile", NULL}, "rules");
@@ -477,14 +477,14 @@ static void parse_document(parse_t *p, rules_t *r)
     const yaml_node_t *objects = lookup(p, root, "objects");
     if (objects != NULL) {
         if (objects->type != YAML_MAPPING_NODE) {
-            fail(p, objects, "objects: a mapping of 0xINDEX[:SUB]: behaviour is expected%s%s", NULL, NULL);
+            rules_parse_error(p, objects, "objects: a mapping of 0xINDEX[:SUB]: behaviour is expected%s%s", NULL, NULL);
             return;
         }
         const size_t n = (size_t)(objects->data.mapping.pairs.top - objects->data.mapping.pairs.start);
         if (n > RULES_MAX_OBJECTS) {
             char most[48];
             snprintf(most, sizeof most, "%u", RULES_MAX_OBJECTS);
-            fail(p, objects, "objects: more than %s objects (each one is written every tick)%s", most, NULL);
+            rules_parse_error(p, objects, "objects: more than %s objects (each one is written every tick)%s", most, NULL);
             return;
         }
         r->rules = calloc(n + 1U, sizeof *r->rules);
@@ -497,14 +497,14 @@ static void parse_document(parse_t *p, rules_t *r)
     const yaml_node_t *alarms = lookup(p, root, "alarms");
     if (alarms != NULL) {
         if (alarms->type != YAML_SEQUENCE_NODE) {
-            fail(p, alarms, "alarms: a list is expected%s%s", NULL, NULL);
+            rules_parse_error(p, alarms, "alarms: a list is expected%s%s", NULL, NULL);
             return;
         }
         const size_t n = (size_t)(alarms->data.sequence.items.top - alarms->data.sequence.items.start);
         if (n > RULES_MAX_ALARMS) {
             char most[48];
             snprintf(most, sizeof most, "%u", RULES_MAX_ALARMS);
-            fail(p, alarms, "alarms: more than %s alarms (each one reads its object every tick)%s", most, NULL);
+            rules_parse_error(p, alarms, "alarms: more than %s alarms (each one reads its object every tick)%s", most, NULL);
             return;
         }
         r->alarms = calloc(n + 1U, sizeof *r->alarms);
@@ -517,9 +517,9 @@ static void parse_document(parse_t *p, rules_t *r)
         const char *name = scalar(profile);
         char why[160];
         if (name == NULL || strcmp(name, "cia402") != 0) {
-            fail(p, profile, "profile: '%s' is not a profile (cia402)%s", name != NULL ? name : "?", NULL);
+            rules_parse_error(p, profile, "profile: '%s' is not a profile (cia402)%s", name != NULL ? name : "?", NULL);
         } else if (!cia402_resolve(p->od, &r->drive, why, sizeof why)) {
-            fail(p, profile, "profile: %s%s", why, NULL);
+            rules_parse_error(p, profile, "profile: %s%s", why, NULL);
         } else {
             r->cia402 = true;
         }

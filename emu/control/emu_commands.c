@@ -7,40 +7,6 @@
 #include "eds_class/eds_class.h"
 #include "runtime/emu_output.h"
 
-/* The words of a line into argv; -1 when there are more than MAX_ARGS (the rest was ignored and the command then
- * met as "unknown", which hid the reason). */
-static int split(char *line, char **argv)
-{
-    int argc = 0;
-    char *p = line;
-    while (*p != '\0') {
-        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n') {
-            p++;
-        }
-        if (*p == '\0' || *p == '#') {
-            break;
-        }
-        if (argc == MAX_ARGS) {
-            return -1;
-        }
-        if (*p == '"') {
-            argv[argc++] = ++p;
-            while (*p != '\0' && *p != '"') {
-                p++;
-            }
-        } else {
-            argv[argc++] = p;
-            while (*p != '\0' && *p != ' ' && *p != '\t' && *p != '\r' && *p != '\n') {
-                p++;
-            }
-        }
-        if (*p != '\0') {
-            *p++ = '\0';
-        }
-    }
-    return argc;
-}
-
 /* The command table: help's text, and the usage a command with too few words is answered with (device_help_usage
  * reads its "  USAGE  TEXT" lines). */
 static const char help_text[] =
@@ -81,7 +47,7 @@ static bool selects(const node_selector_t *sel, const emu_node_t *n)
     return (sel->bus == NULL || n->bus == sel->bus) && (sel->all || has_id(n, sel->id));
 }
 
-static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, bool any_bus)
+static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, bool any_bus, const reply_sink_t *to)
 {
     sel->bus = NULL;
     sel->id = -1;
@@ -94,13 +60,13 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, b
             }
         }
         if (sel->bus == NULL) {
-            reply("error: no interface '%s'", at + 1);
+            reply(to, "error: no interface '%s'", at + 1);
             return false;
         }
     }
     sel->all = strcmp(word, "all") == 0;
     if (!sel->all && !device_parse_int(word, 0, 255, &sel->id)) {
-        reply("error: '%s' is not a node-ID", word);
+        reply(to, "error: '%s' is not a node-ID", word);
         return false;
     }
     if (!sel->all && sel->bus == NULL && !any_bus) {
@@ -110,7 +76,7 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, b
             const emu_node_t *n = emu->nodes[i];
             if (has_id(n, sel->id)) {
                 if (found != NULL && found != n->bus) {
-                    reply("error: node %lld is on %s and on %s: say %lld@%s", sel->id, found->can.name,
+                    reply(to, "error: node %lld is on %s and on %s: say %lld@%s", sel->id, found->can.name,
                           n->bus->can.name, sel->id, found->can.name);
                     return false;
                 }
@@ -124,10 +90,10 @@ static bool parse_selector(const emu_t *emu, char *word, node_selector_t *sel, b
     return true;
 }
 
-static int select_on(emu_t *emu, char *word, emu_node_t **out, size_t max, bool any_bus)
+static int select_on(emu_t *emu, char *word, emu_node_t **out, size_t max, bool any_bus, const reply_sink_t *to)
 {
     node_selector_t sel;
-    if (!parse_selector(emu, word, &sel, any_bus)) {
+    if (!parse_selector(emu, word, &sel, any_bus, to)) {
         return -1;
     }
     size_t n = 0U;
@@ -139,42 +105,53 @@ static int select_on(emu_t *emu, char *word, emu_node_t **out, size_t max, bool 
     return (int)n;
 }
 
-int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max) { return select_on(emu, word, out, max, false); }
-
-int select_nodes_any_bus(emu_t *emu, char *word, emu_node_t **out, size_t max)
+int select_nodes(emu_t *emu, char *word, emu_node_t **out, size_t max, const reply_sink_t *to)
 {
-    return select_on(emu, word, out, max, true);
+    return select_on(emu, word, out, max, false, to);
+}
+
+int select_nodes_any_bus(emu_t *emu, char *word, emu_node_t **out, size_t max, const reply_sink_t *to)
+{
+    return select_on(emu, word, out, max, true, to);
+}
+
+/* A device's reply line to the command's sink, with the node it is of: "node 16: 0x1017:00 = 5000 (0x1388)". */
+static void node_reply(void *ctx, const device_t *dev, const char *line)
+{
+    /* Before co_node_init (a model loading its own NVM at power-on) the node has no ID yet: the configured one. */
+    const unsigned id = co_node_id(&dev->node) != 0U ? co_node_id(&dev->node) : dev->cfg.node_id;
+    reply((const reply_sink_t *)ctx, "node %u: %s", id, line);
 }
 
 /* export-dcf NODE FILE: one node's current values as a DCF (eds_class.h). */
-static command_result_t export_dcf(int argc, char **argv, emu_node_t **nodes, int n_sel)
+static command_result_t export_dcf(int argc, char **argv, emu_node_t **nodes, int n_sel, const reply_sink_t *to)
 {
     if (argc != 3 || n_sel != 1) {
-        reply("error: export-dcf takes one node and a file: export-dcf NODE FILE");
+        reply(to, "error: export-dcf takes one node and a file: export-dcf NODE FILE");
         return COMMAND_ERROR;
     }
     char why[512];
     emu_node_t *n = nodes[0];
     if (!eds_class_export(&n->dev, argv[2], why, sizeof why)) {
-        reply("node %u: error: export-dcf: %s", co_node_id(&n->dev.node), why);
+        reply(to, "node %u: error: export-dcf: %s", co_node_id(&n->dev.node), why);
         return COMMAND_ERROR;
     }
-    reply("node %u: DCF written to %s", co_node_id(&n->dev.node), argv[2]);
+    reply(to, "node %u: DCF written to %s", co_node_id(&n->dev.node), argv[2]);
     return COMMAND_OK;
 }
 
-command_result_t run_command(emu_t *emu, char *line)
+command_result_t run_command(emu_t *emu, char *line, const reply_sink_t *to)
 {
     char *argv[MAX_ARGS];
-    const int argc = split(line, argv);
+    const int argc = device_split_words(line, argv, MAX_ARGS);
     if (argc < 0) {
-        reply("error: too many words (at most %d)", MAX_ARGS);
+        reply(to, "error: too many words (at most %d)", MAX_ARGS);
         return COMMAND_ERROR;
     }
     if (argc == 0) {
         return COMMAND_OK;
     }
-    return run_command_words(emu, argc, argv);
+    return run_command_words(emu, argc, argv, to);
 }
 
 const char *command_restriction(const char *word)
@@ -185,12 +162,12 @@ const char *command_restriction(const char *word)
     return strcmp(word, "export-dcf") == 0 ? "writes a file" : NULL;
 }
 
-command_result_t run_command_words(emu_t *emu, int argc, char **argv)
+command_result_t run_command_words(emu_t *emu, int argc, char **argv, const reply_sink_t *to)
 {
     const co_time_us_t now = socketcan_now_us();
     const char *refused = emu->command_restricted ? command_restriction(argv[0]) : NULL;
     if (refused != NULL) {
-        reply("error: %s is refused in a web session: it %s", argv[0], refused);
+        reply(to, "error: %s is refused in a web session: it %s", argv[0], refused);
         return COMMAND_ERROR;
     }
     if (strcmp(argv[0], "quit") == 0 || strcmp(argv[0], "exit") == 0) {
@@ -198,13 +175,13 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         return COMMAND_OK;
     }
     if (strcmp(argv[0], "help") == 0 && argc == 1) {
-        reply("%s", help_text);
+        reply(to, "%s", help_text);
         return COMMAND_OK;
     }
     if (strcmp(argv[0], "list") == 0) {
         for (size_t i = 0U; i < emu->n_nodes; i++) {
             const emu_node_t *n = emu->nodes[i];
-            reply("node %u: %s (started as %u) %s%s%s", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
+            reply(to, "node %u: %s (started as %u) %s%s%s", co_node_id(&n->dev.node), n->dev.cls->name, n->cmdline_id,
                   co_nmt_state_name(co_node_state(&n->dev.node)), emu->n_buses > 1U ? " on " : "",
                   emu->n_buses > 1U ? n->bus->can.name : "");
         }
@@ -214,31 +191,33 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         const char *args;
         size_t args_len;
         if (device_help_usage(help_text, argv[0], &args, &args_len)) {
-            reply("error: %s takes %.*s", argv[0], (int)args_len, args);
+            reply(to, "error: %s takes %.*s", argv[0], (int)args_len, args);
         } else {
-            reply("error: '%s' needs a NODE (try help)", argv[0]);
+            reply(to, "error: '%s' needs a NODE (try help)", argv[0]);
         }
         return COMMAND_ERROR;
     }
     emu_node_t *nodes[MAX_NODES_ALL];
-    const int n_sel = select_nodes(emu, argv[1], nodes, MAX_NODES_ALL);
+    const int n_sel = select_nodes(emu, argv[1], nodes, MAX_NODES_ALL, to);
     if (n_sel < 0) {
         return COMMAND_ERROR;
     }
     if (n_sel == 0) {
-        reply("error: no node %s", argv[1]);
+        reply(to, "error: no node %s", argv[1]);
         return COMMAND_ERROR;
     }
     if (strcmp(argv[0], "export-dcf") == 0) {
-        return export_dcf(argc, argv, nodes, n_sel);
+        return export_dcf(argc, argv, nodes, n_sel, to);
     }
     command_result_t result = COMMAND_OK;
     const char *const cmd = argv[0];
+    reply_sink_t sink = *to;
+    const device_output_t node_replies = {node_reply, &sink};
     const bool injects = strcmp(cmd, "fault") == 0 || strcmp(cmd, "fault-clear") == 0; /* emu_faults.h, not the device */
     for (int i = 0; i < n_sel; i++) {
         emu_node_t *n = nodes[i];
         if (strcmp(cmd, "help") == 0) {
-            reply("node %u (%s) commands:\n%s", co_node_id(&n->dev.node), n->dev.cls->name,
+            reply(to, "node %u (%s) commands:\n%s", co_node_id(&n->dev.node), n->dev.cls->name,
                   n->dev.cls->commands_help != NULL ? n->dev.cls->commands_help : "  (only the common ones)");
             continue;
         }
@@ -247,18 +226,18 @@ command_result_t run_command_words(emu_t *emu, int argc, char **argv)
         device_cmd_result_t r = DEVICE_CMD_UNKNOWN;
         emu->in_command = true;
         if (!injects) {
-            r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now);
+            r = device_command(&n->dev, argc - 1, (const char *const *)&argv[1], now, &node_replies);
         }
         if (injects || strcmp(cmd, "faults") == 0) {
             /* Protocol faults (emu_faults.h); `faults` of an Eltex device lists its own errors first. */
             n->dev.now = now;
-            r = faults_command(n, argc - 1, &argv[1], now) == 0 && r != DEVICE_CMD_ERROR ? DEVICE_CMD_OK : DEVICE_CMD_ERROR;
+            r = faults_command(n, argc - 1, &argv[1], now, to) == 0 && r != DEVICE_CMD_ERROR ? DEVICE_CMD_OK : DEVICE_CMD_ERROR;
         }
         emu->in_command = false;
         argv[1] = saved;
         node_mark_dirty(n);
         if (r == DEVICE_CMD_UNKNOWN) {
-            reply("node %u: error: unknown command '%s' (try help %u)", co_node_id(&n->dev.node), cmd,
+            reply(to, "node %u: error: unknown command '%s' (try help %u)", co_node_id(&n->dev.node), cmd,
                   co_node_id(&n->dev.node));
         }
         if (r != DEVICE_CMD_OK) {

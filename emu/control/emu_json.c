@@ -85,7 +85,13 @@ void json_error(emu_session_t *s, const char *fmt, ...)
 
 /* ---- Reply lines of the command language, captured ---------------------------------------------------------- */
 
-void capture_sink(void *ctx, const char *text, size_t len)
+/* Reply lines of the command language captured into a JSON array (a reply_sink_t's context, with capture_sink). */
+typedef struct capture {
+    json_t *lines;
+    char error[1024]; /* the first error line, without "node N: " and "error: " */
+} capture_t;
+
+static void capture_sink(void *ctx, const char *text, size_t len)
 {
     capture_t *c = (capture_t *)ctx;
     char line[4096];
@@ -113,10 +119,8 @@ static command_result_t run_captured(emu_t *emu, int argc, char **argv, capture_
 {
     c->lines = json_array();
     c->error[0] = '\0';
-    output_set_reply_sink(capture_sink, c);
-    const command_result_t r = run_command_words(emu, argc, argv);
-    output_set_reply_sink(NULL, NULL);
-    return r;
+    const reply_sink_t to = {capture_sink, c};
+    return run_command_words(emu, argc, argv, &to);
 }
 
 /* select_nodes with the reply that explains a refusal kept in c->error instead of written. */
@@ -124,9 +128,8 @@ static int select_captured(emu_t *emu, char *word, emu_node_t **out, size_t max,
 {
     c->lines = json_array();
     c->error[0] = '\0';
-    output_set_reply_sink(capture_sink, c);
-    const int n = select_nodes(emu, word, out, max);
-    output_set_reply_sink(NULL, NULL);
+    const reply_sink_t to = {capture_sink, c};
+    const int n = select_nodes(emu, word, out, max, &to);
     json_decref(c->lines);
     c->lines = NULL;
     return n;

@@ -10,6 +10,9 @@
 #include "control/emu_json_request.h"
 #include "runtime/emu_output.h"
 
+/* The longest string "value" of a set: as a word of the command language once, now what device_set_value writes. */
+#define SET_TEXT_MAX 512U
+
 /* ---- Typed values ------------------------------------------------------------------------------------------ */
 
 json_t *hex_string(const uint8_t *b, size_t len)
@@ -48,49 +51,33 @@ static json_t *unsigned_json(uint64_t u)
 /* The value as JSON: integers as numbers (an UNSIGNED64 above 2^63-1 as a decimal string), BOOLEAN as true/false,
  * REAL32 as a number (NaN and infinities, which JSON lacks, as "nan", "inf", "-inf"), VISIBLE_STRING as a string,
  * OCTET_STRING, UNICODE_STRING and DOMAIN as hex. */
-static json_t *value_json(const co_od_entry_t *e, const uint8_t *buf, size_t len)
+/* A VISIBLE_STRING as JSON text (jstr: bytes that are not UTF-8 become '?'). */
+static json_t *text_json(const uint8_t *bytes, size_t len)
 {
-    uint64_t u = 0U;
-    for (size_t i = len < 8U ? len : 8U; i > 0U; i--) {
-        u = (u << 8) | buf[i - 1U];
+    char text[257];
+    const size_t n = len < sizeof text - 1U ? len : sizeof text - 1U;
+    memcpy(text, bytes, n);
+    text[n] = '\0';
+    return jstr(text);
+}
+
+static json_t *value_json(const device_value_t *v)
+{
+    switch (v->kind) {
+    case DEVICE_VALUE_BOOLEAN:
+        return json_boolean(v->as.b);
+    case DEVICE_VALUE_REAL:
+        return real_json(v->as.r);
+    case DEVICE_VALUE_TEXT:
+        return text_json(v->bytes, v->len);
+    case DEVICE_VALUE_BYTES:
+        return hex_string(v->bytes, v->len);
+    case DEVICE_VALUE_SIGNED:
+        return json_integer((json_int_t)v->as.i);
+    case DEVICE_VALUE_UNSIGNED:
+        break;
     }
-    switch (e->type) {
-    case CO_T_BOOLEAN:
-        return json_boolean(u != 0U);
-    case CO_T_REAL32:
-    case CO_T_REAL64: {
-        double d;
-        if (e->type == CO_T_REAL32) {
-            float f;
-            const uint32_t u32 = (uint32_t)u;
-            memcpy(&f, &u32, sizeof f);
-            d = (double)f;
-        } else {
-            memcpy(&d, &u, sizeof d);
-        }
-        return real_json(d);
-    }
-    case CO_T_VISIBLE_STRING: {
-        char text[257];
-        const size_t n = len < 256U ? len : 256U;
-        memcpy(text, buf, n);
-        text[n] = '\0';
-        return jstr(text);
-    }
-    case CO_T_OCTET_STRING:
-    case CO_T_UNICODE_STRING:
-    case CO_T_DOMAIN:
-        return hex_string(buf, len);
-    default:
-        if (device_type_is_signed(e->type)) {
-            const unsigned bits = (unsigned)len * 8U;
-            if (bits > 0U && bits < 64U && (u >> (bits - 1U)) != 0U) {
-                u |= ~((UINT64_C(1) << bits) - 1U);
-            }
-            return json_integer((json_int_t)(int64_t)u);
-        }
-        return unsigned_json(u);
-    }
+    return unsigned_json(v->as.u);
 }
 
 /* {"node", "object", "value", "type", "name"} of one object of n, or false after a failure response. */
@@ -103,10 +90,9 @@ static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, ui
         return false;
     }
     uint8_t buf[256];
-    size_t len = 0U;
-    n->dev.now = socketcan_now_us(); /* a model's read hook brings the value up to now */
+    device_value_t value;
     q->emu->in_command = true;
-    const uint32_t abort_code = co_od_read(&n->dev.node, index, sub, buf, sizeof buf, &len, CO_ORIGIN_LOCAL);
+    const uint32_t abort_code = device_get_value(&n->dev, index, sub, socketcan_now_us(), buf, sizeof buf, &value);
     q->emu->in_command = false;
     node_mark_dirty(n);
     if (abort_code != 0U) {
@@ -117,7 +103,7 @@ static bool describe_value(const request_t *q, emu_node_t *n, uint16_t index, ui
     (void)snprintf(object, sizeof object, "0x%04X:%02X", index, sub);
     (void)json_object_set_new(r, "node", json_integer(co_node_id(&n->dev.node)));
     (void)json_object_set_new(r, "object", json_string(object));
-    (void)json_object_set_new(r, "value", value_json(e, buf, len));
+    (void)json_object_set_new(r, "value", value_json(&value));
     (void)json_object_set_new(r, "type", json_string(device_type_name(e->type)));
     const char *name = device_object_name(n->dev.cls, e);
     if (name != NULL) {
@@ -174,21 +160,18 @@ static void answer_values(const request_t *q, emu_node_t *n, const json_t *list)
     }
     json_t *values = json_array();
     const co_time_us_t now = socketcan_now_us();
-    n->dev.now = now; /* a model's read hook brings the value up to now */
     q->emu->in_command = true;
     for (size_t i = 0U; i < json_array_size(list); i++) {
         json_t *v = json_object();
         char object[16];
         (void)snprintf(object, sizeof object, "0x%04X:%02X", index[i], sub[i]);
         (void)json_object_set_new(v, "object", json_string(object));
-        co_od_entry_t one;
-        const co_od_entry_t *e = co_od_find(n->dev.cls->od, index[i], sub[i], &one);
         uint8_t buf[256];
-        size_t len = 0U;
-        const uint32_t abort_code = co_od_read(&n->dev.node, index[i], sub[i], buf, sizeof buf, &len, CO_ORIGIN_LOCAL);
-        if (e != NULL && abort_code == 0U) {
-            (void)json_object_set_new(v, "value", value_json(e, buf, len));
-            (void)json_object_set_new(v, "type", json_string(device_type_name(e->type)));
+        device_value_t value;
+        const uint32_t abort_code = device_get_value(&n->dev, index[i], sub[i], now, buf, sizeof buf, &value);
+        if (abort_code == 0U) {
+            (void)json_object_set_new(v, "value", value_json(&value));
+            (void)json_object_set_new(v, "type", json_string(device_type_name(value.type)));
         } else {
             (void)json_object_set_new(v, "error", abort_json(abort_code));
         }
@@ -222,20 +205,29 @@ void cmd_get(const request_t *q)
     }
 }
 
-/* The value as a word of `set`: numbers in decimal, true/false as 1/0, strings as they are. */
-static bool value_word(const request_t *q, char *word, size_t size)
+/* "value" as the device takes it (device_set_value): a number, true/false, or a string (a VISIBLE_STRING's text, or a
+ * number's word: "0x2A"); false after a failure response. The string stays the request's. */
+static bool request_value(const request_t *q, device_value_t *v)
 {
-    json_t *v = json_object_get(q->req, "value");
-    if (json_is_integer(v)) {
-        (void)snprintf(word, size, "%" JSON_INTEGER_FORMAT, json_integer_value(v));
-    } else if (json_is_real(v)) {
-        (void)snprintf(word, size, "%.9g", json_real_value(v));
-    } else if (json_is_boolean(v)) {
-        (void)snprintf(word, size, "%d", json_is_true(v) ? 1 : 0);
-    } else if (json_is_string(v) && json_string_length(v) < size && strlen(json_string_value(v)) == json_string_length(v)) {
-        (void)snprintf(word, size, "%s", json_string_value(v));
+    json_t *j = json_object_get(q->req, "value");
+    memset(v, 0, sizeof *v);
+    if (json_is_integer(j)) {
+        v->kind = DEVICE_VALUE_SIGNED;
+        v->as.i = (int64_t)json_integer_value(j);
+    } else if (json_is_real(j)) {
+        v->kind = DEVICE_VALUE_REAL;
+        v->as.r = json_real_value(j);
+    } else if (json_is_boolean(j)) {
+        v->kind = DEVICE_VALUE_BOOLEAN;
+        v->as.b = json_is_true(j);
+    } else if (json_is_string(j) && strlen(json_string_value(j)) == json_string_length(j) &&
+               json_string_length(j) < SET_TEXT_MAX) {
+        v->kind = DEVICE_VALUE_TEXT;
+        v->bytes = (const uint8_t *)json_string_value(j);
+        v->len = json_string_length(j);
     } else {
-        fail(q->s, q->id, "set: \"value\" must be a number, true/false or a string (without NUL, under %zu bytes)", size);
+        fail(q->s, q->id, "set: \"value\" must be a number, true/false or a string (without NUL, under %u bytes)",
+             SET_TEXT_MAX);
         return false;
     }
     return true;
@@ -246,27 +238,21 @@ void cmd_set(const request_t *q)
     static const char *const fields[] = {"node", "object", "sub", "value", NULL};
     uint16_t index;
     uint8_t sub;
-    char object[16], value[512];
+    char object[16];
     emu_node_t *n;
+    device_value_t value;
     if (!only_fields(q, fields) || (n = one_node(q)) == NULL || !object_address(q, &index, &sub, object, sizeof object) ||
-        !value_word(q, value, sizeof value)) {
+        !request_value(q, &value)) {
         return;
     }
     /* Written as the device's `set` writes it (its checks and messages), on the one node. */
-    char *argv[3] = {(char *)"set", object, value};
-    capture_t c;
-    c.lines = json_array();
-    c.error[0] = '\0';
-    output_set_reply_sink(capture_sink, &c);
-    n->dev.now = socketcan_now_us();
+    char why[512];
     q->emu->in_command = true;
-    const device_cmd_result_t dr = device_command(&n->dev, 3, (const char *const *)argv, n->dev.now);
+    const bool written = device_set_value(&n->dev, index, sub, &value, socketcan_now_us(), why, sizeof why);
     q->emu->in_command = false;
     node_mark_dirty(n);
-    output_set_reply_sink(NULL, NULL);
-    json_decref(c.lines);
-    if (dr != DEVICE_CMD_OK) {
-        fail(q->s, q->id, "%s", c.error[0] != '\0' ? c.error : "refused");
+    if (!written) {
+        fail(q->s, q->id, "%s", why);
         return;
     }
     answer_value(q, n, index, sub);
@@ -307,8 +293,8 @@ static json_t *limit_json(uint8_t type, const co_od_limit_t *l)
 static json_t *object_row(emu_node_t *n, const co_od_entry_t *e, bool values)
 {
     uint8_t buf[256];
-    size_t len = 0U;
-    const uint32_t abort_code = co_od_read(&n->dev.node, e->index, e->sub, buf, sizeof buf, &len, CO_ORIGIN_LOCAL);
+    device_value_t value;
+    const uint32_t abort_code = device_get_value(&n->dev, e->index, e->sub, n->dev.now, buf, sizeof buf, &value);
     if (abort_code == CO_ABORT_NO_SUBINDEX || abort_code == CO_ABORT_NO_OBJECT) {
         return NULL;
     }
@@ -337,7 +323,7 @@ static json_t *object_row(emu_node_t *n, const co_od_entry_t *e, bool values)
     }
     if (values) {
         if (abort_code == 0U) {
-            (void)json_object_set_new(o, "value", value_json(e, buf, len));
+            (void)json_object_set_new(o, "value", value_json(&value));
         } else {
             (void)json_object_set_new(o, "error", abort_json(abort_code));
         }

@@ -22,14 +22,6 @@ typedef struct request {
     const char *cmd;
 } request_t;
 
-/** Reply lines of the command language captured into a JSON array (output_set_reply_sink with capture_sink). */
-typedef struct capture {
-    json_t *lines;
-    char error[1024]; /**< the first error line, without "node N: " and "error: " */
-} capture_t;
-
-void capture_sink(void *ctx, const char *text, size_t len);
-
 /** A JSON string of text; bytes that are not UTF-8 become '?' (never NULL for a reply that echoes input). */
 json_t *jstr(const char *text);
 

@@ -131,9 +131,8 @@ bool session_node_filter(emu_t *emu, char *word, session_node_filter_t *out, cha
     refusal_t r = {err, errlen};
     err[0] = '\0';
     const bool on_bus = strchr(word, '@') != NULL;
-    output_set_reply_sink(refusal_sink, &r);
-    const int n = select_nodes_any_bus(emu, word, found, 1U);
-    output_set_reply_sink(NULL, NULL);
+    const reply_sink_t to = {refusal_sink, &r};
+    const int n = select_nodes_any_bus(emu, word, found, 1U, &to);
     if (n <= 0 || strncmp(word, "all", 3U) == 0) {
         if (n > 0) {
             err[0] = '\0'; /* "all" is no filter */
@@ -236,9 +235,8 @@ void session_run_line(emu_t *emu, emu_session_t *s, char *line)
             return;
         }
     }
-    output_set_reply_sink(text_sink, s);
+    const reply_sink_t to = {text_sink, s};
     emu->command_restricted = s->restricted;
-    (void)run_command(emu, line);
+    (void)run_command(emu, line, &to);
     emu->command_restricted = false;
-    output_set_reply_sink(NULL, NULL);
 }

@@ -228,9 +228,9 @@ co_time_us_t faults_run(struct emu_node *n, co_time_us_t now)
 
 static unsigned node_id(const struct emu_node *n) { return co_node_id(&n->dev.node); }
 
-static int refuse(const struct emu_node *n, const char *usage)
+static int refuse(const struct emu_node *n, const reply_sink_t *to, const char *usage)
 {
-    reply("node %u: error: usage: %s", node_id(n), usage);
+    reply(to, "node %u: error: usage: %s", node_id(n), usage);
     return 1;
 }
 
@@ -301,40 +301,40 @@ static bool tpdo_number(const struct emu_node *n, const char *s, unsigned *t)
     return true;
 }
 
-static void describe(struct emu_node *n, fault_kind_t k, co_time_us_t now)
+static void describe(struct emu_node *n, fault_kind_t k, co_time_us_t now, const reply_sink_t *to)
 {
     const node_faults_t *f = &n->faults;
     const unsigned id = node_id(n);
     switch (k) {
     case FAULT_SDO_IGNORE:
         if (f->sdo_ignore_ppm != 0U) {
-            reply("node %u: fault sdo-ignore: %lu.%04lu %% of SDO requests get no answer", id,
+            reply(to, "node %u: fault sdo-ignore: %lu.%04lu %% of SDO requests get no answer", id,
                   (unsigned long)(f->sdo_ignore_ppm / 10000U), (unsigned long)(f->sdo_ignore_ppm % 10000U));
         } else {
-            reply("node %u: fault sdo-ignore: the next %lu SDO request(s) get no answer", id,
+            reply(to, "node %u: fault sdo-ignore: the next %lu SDO request(s) get no answer", id,
                   (unsigned long)f->sdo_ignore_left);
         }
         break;
     case FAULT_SDO_DELAY:
-        reply("node %u: fault sdo-delay: SDO answers %lu ms late", id, (unsigned long)f->sdo_delay_ms);
+        reply(to, "node %u: fault sdo-delay: SDO answers %lu ms late", id, (unsigned long)f->sdo_delay_ms);
         break;
     case FAULT_SDO_ABORT:
         if (f->abort_whole_object) {
-            reply("node %u: fault sdo-abort: requests for 0x%04X answered with abort 0x%08lX", id, f->abort_index,
+            reply(to, "node %u: fault sdo-abort: requests for 0x%04X answered with abort 0x%08lX", id, f->abort_index,
                   (unsigned long)f->abort_code);
         } else {
-            reply("node %u: fault sdo-abort: requests for 0x%04X:%02X answered with abort 0x%08lX", id, f->abort_index,
+            reply(to, "node %u: fault sdo-abort: requests for 0x%04X:%02X answered with abort 0x%08lX", id, f->abort_index,
                   f->abort_sub, (unsigned long)f->abort_code);
         }
         break;
     case FAULT_HB_STOP:
-        reply("node %u: fault heartbeat-stop: no heartbeat (nor node-guarding answer)", id);
+        reply(to, "node %u: fault heartbeat-stop: no heartbeat (nor node-guarding answer)", id);
         break;
     case FAULT_HB_JITTER:
-        reply("node %u: fault heartbeat-jitter: each heartbeat 0..%lu ms late", id, (unsigned long)f->hb_jitter_ms);
+        reply(to, "node %u: fault heartbeat-jitter: each heartbeat 0..%lu ms late", id, (unsigned long)f->hb_jitter_ms);
         break;
     case FAULT_HB_STATE:
-        reply("node %u: fault heartbeat-state: heartbeats say 0x%02X", id, f->hb_state);
+        reply(to, "node %u: fault heartbeat-state: heartbeats say 0x%02X", id, f->hb_state);
         break;
     case FAULT_TPDO_FREEZE:
     case FAULT_TPDO_DROP:
@@ -342,41 +342,41 @@ static void describe(struct emu_node *n, fault_kind_t k, co_time_us_t now)
         for (unsigned t = 0U; t < CO_TPDO_MAX; t++) {
             const fault_tpdo_t *p = &f->tpdo[t];
             if (k == FAULT_TPDO_FREEZE && p->freeze) {
-                reply("node %u: fault tpdo-freeze: TPDO%u keeps the data it had%s", id, t + 1U,
+                reply(to, "node %u: fault tpdo-freeze: TPDO%u keeps the data it had%s", id, t + 1U,
                       p->have_frozen ? "" : " (from its next frame)");
             } else if (k == FAULT_TPDO_DROP && p->drop_every != 0U) {
-                reply("node %u: fault tpdo-drop: every %lu. frame of TPDO%u dropped", id, (unsigned long)p->drop_every,
+                reply(to, "node %u: fault tpdo-drop: every %lu. frame of TPDO%u dropped", id, (unsigned long)p->drop_every,
                       t + 1U);
             } else if (k == FAULT_TPDO_LENGTH && p->length >= 0) {
-                reply("node %u: fault tpdo-length: TPDO%u sent with %d data byte(s)", id, t + 1U, (int)p->length);
+                reply(to, "node %u: fault tpdo-length: TPDO%u sent with %d data byte(s)", id, t + 1U, (int)p->length);
             }
         }
         break;
     case FAULT_BUS_OFF:
-        reply("node %u: fault bus-off: no frame out or in for %lu ms more", id,
+        reply(to, "node %u: fault bus-off: no frame out or in for %lu ms more", id,
               (unsigned long)((f->bus_off_until > now ? f->bus_off_until - now : 0U) / 1000U));
         break;
     case FAULT_LSS_SILENT:
-        reply("node %u: fault lss-silent: no answer to LSS", id);
+        reply(to, "node %u: fault lss-silent: no answer to LSS", id);
         break;
     default:
         break;
     }
 }
 
-static void list(struct emu_node *n, co_time_us_t now)
+static void list(struct emu_node *n, co_time_us_t now, const reply_sink_t *to)
 {
     const node_faults_t *f = &n->faults;
     if (f->active == 0U) {
-        reply("node %u: no protocol faults (%lu frame(s) dropped by faults so far)", node_id(n), f->dropped);
+        reply(to, "node %u: no protocol faults (%lu frame(s) dropped by faults so far)", node_id(n), f->dropped);
         return;
     }
     for (int k = 0; k < (int)FAULT_KIND_COUNT; k++) {
         if ((f->active & bit((fault_kind_t)k)) != 0U) {
-            describe(n, (fault_kind_t)k, now);
+            describe(n, (fault_kind_t)k, now, to);
         }
     }
-    reply("node %u: %lu frame(s) dropped by faults so far", node_id(n), f->dropped);
+    reply(to, "node %u: %lu frame(s) dropped by faults so far", node_id(n), f->dropped);
 }
 
 static void clear_kind(node_faults_t *f, fault_kind_t k, co_time_us_t now)
@@ -406,11 +406,11 @@ static void clear_kind(node_faults_t *f, fault_kind_t k, co_time_us_t now)
     f->active &= ~bit(k);
 }
 
-static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
+static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now, const reply_sink_t *to)
 {
     node_faults_t *f = &n->faults;
     if (argc < 2) {
-        return refuse(n, kinds_usage());
+        return refuse(n, to, kinds_usage());
     }
     const int k = fault_kind_of(argv[1]);
     long long a = 0, b = 0;
@@ -423,18 +423,18 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
             if (argc > 4 || !parse_share(argv[2], &f->sdo_ignore_ppm) ||
                 (argc == 4 && !device_parse_int(argv[3], 0, INT64_MAX, &b))) {
                 f->sdo_ignore_ppm = 0U;
-                return refuse(n, usage_of(FAULT_SDO_IGNORE));
+                return refuse(n, to, usage_of(FAULT_SDO_IGNORE));
             }
             f->rng = (uint64_t)(argc == 4 ? b : 1);
         } else if (argc > 3 || (argc == 3 && !device_parse_int(argv[2], 1, 1000000, &a))) {
-            return refuse(n, usage_of(FAULT_SDO_IGNORE));
+            return refuse(n, to, usage_of(FAULT_SDO_IGNORE));
         } else if (argc == 3) {
             f->sdo_ignore_left = (uint32_t)a;
         }
         break;
     case FAULT_SDO_DELAY:
         if (argc != 3 || !device_parse_int(argv[2], 1, 600000, &a)) {
-            return refuse(n, usage_of(FAULT_SDO_DELAY));
+            return refuse(n, to, usage_of(FAULT_SDO_DELAY));
         }
         f->sdo_delay_ms = (uint32_t)a;
         break;
@@ -442,7 +442,7 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
         uint16_t index;
         uint8_t sub;
         if (argc != 4 || !device_parse_address(argv[2], &index, &sub) || !device_parse_int(argv[3], 1, 0xFFFFFFFFLL, &a)) {
-            return refuse(n, usage_of(FAULT_SDO_ABORT));
+            return refuse(n, to, usage_of(FAULT_SDO_ABORT));
         }
         f->abort_index = index;
         f->abort_sub = sub;
@@ -453,46 +453,46 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
     case FAULT_HB_STOP:
     case FAULT_LSS_SILENT:
         if (argc != 2) {
-            return refuse(n, usage_of((fault_kind_t)k));
+            return refuse(n, to, usage_of((fault_kind_t)k));
         }
         break;
     case FAULT_HB_JITTER:
         if (argc != 3 || !device_parse_int(argv[2], 1, 60000, &a)) {
-            return refuse(n, usage_of(FAULT_HB_JITTER));
+            return refuse(n, to, usage_of(FAULT_HB_JITTER));
         }
         f->hb_jitter_ms = (uint32_t)a;
         f->rng = f->rng != 0U ? f->rng : 1U;
         break;
     case FAULT_HB_STATE:
         if (argc != 3 || !device_parse_int(argv[2], 0, 0xFF, &a)) {
-            return refuse(n, usage_of(FAULT_HB_STATE));
+            return refuse(n, to, usage_of(FAULT_HB_STATE));
         }
         f->hb_state = (uint8_t)a;
         break;
     case FAULT_TPDO_FREEZE:
         if (argc != 3 || !tpdo_number(n, argv[2], &t)) {
-            return refuse(n, usage_of(FAULT_TPDO_FREEZE));
+            return refuse(n, to, usage_of(FAULT_TPDO_FREEZE));
         }
         f->tpdo[t].freeze = true;
         f->tpdo[t].have_frozen = false;
         break;
     case FAULT_TPDO_DROP:
         if (argc != 4 || !tpdo_number(n, argv[2], &t) || !device_parse_int(argv[3], 1, 1000000, &a)) {
-            return refuse(n, usage_of(FAULT_TPDO_DROP));
+            return refuse(n, to, usage_of(FAULT_TPDO_DROP));
         }
         f->tpdo[t].drop_every = (uint32_t)a;
         f->tpdo[t].drop_count = 0U;
         break;
     case FAULT_TPDO_LENGTH:
         if (argc != 4 || !tpdo_number(n, argv[2], &t) || !device_parse_int(argv[3], 0, 8, &a)) {
-            return refuse(n, usage_of(FAULT_TPDO_LENGTH));
+            return refuse(n, to, usage_of(FAULT_TPDO_LENGTH));
         }
         f->tpdo[t].length = (int16_t)a;
         break;
     case FAULT_EMCY_BURST: {
         if (argc < 3 || argc > 4 || !device_parse_int(argv[2], 1, 100, &a) ||
             (argc == 4 && !device_parse_int(argv[3], 0, 0xFFFF, &b))) {
-            return refuse(n, usage_of(FAULT_EMCY_BURST));
+            return refuse(n, to, usage_of(FAULT_EMCY_BURST));
         }
         const uint32_t cob = od_cob(n, 0x1014U, 0U, 0x80U + node_id(n));
         const uint16_t code = (uint16_t)(argc == 4 ? b : 0x1000);
@@ -511,55 +511,55 @@ static int inject(struct emu_node *n, int argc, char **argv, co_time_us_t now)
                 sent++;
             }
         }
-        reply("node %u: fault emcy-burst: %lu of %lld EMCY frame(s) 0x%04X sent", node_id(n), sent, a, code);
+        reply(to, "node %u: fault emcy-burst: %lu of %lld EMCY frame(s) 0x%04X sent", node_id(n), sent, a, code);
         events_fault(n, "emcy-burst", "injected", "EMCY burst sent");
         return 0;
     }
     case FAULT_REBOOT:
         if (argc != 2) {
-            return refuse(n, usage_of(FAULT_REBOOT));
+            return refuse(n, to, usage_of(FAULT_REBOOT));
         }
         events_fault(n, "reboot", "injected", "silent reboot (brown-out): the node restarts and sends its boot-up");
         if (device_power_cycle(&n->dev, now) != CO_OK) {
-            reply("node %u: error: the node did not restart", node_id(n));
+            reply(to, "node %u: error: the node did not restart", node_id(n));
             return 1;
         }
         node_mark_dirty(n);
-        reply("node %u: fault reboot: restarted", node_id(n));
+        reply(to, "node %u: fault reboot: restarted", node_id(n));
         return 0;
     case FAULT_BUS_OFF:
         if (argc != 3 || !device_parse_int(argv[2], 1, 3600000, &a)) {
-            return refuse(n, usage_of(FAULT_BUS_OFF));
+            return refuse(n, to, usage_of(FAULT_BUS_OFF));
         }
         f->bus_off_until = now + (co_time_us_t)a * 1000U;
         node_mark_dirty(n); /* its deadline now includes the recovery */
         break;
     default:
-        reply("node %u: error: unknown fault '%s' (try: fault %u)", node_id(n), argv[1], node_id(n));
+        reply(to, "node %u: error: unknown fault '%s' (try: fault %u)", node_id(n), argv[1], node_id(n));
         return 1;
     }
     f->active |= bit((fault_kind_t)k);
     node_mark_dirty(n);
-    describe(n, (fault_kind_t)k, now);
+    describe(n, (fault_kind_t)k, now, to);
     char text[160];
     (void)snprintf(text, sizeof text, "fault %s injected", argv[1]);
     events_fault(n, argv[1], "injected", text);
     return 0;
 }
 
-int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now)
+int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now, const reply_sink_t *to)
 {
     if (strcmp(argv[0], "faults") == 0) {
         if (argc != 1) {
-            return refuse(n, "faults NODE");
+            return refuse(n, to, "faults NODE");
         }
-        list(n, now);
+        list(n, now, to);
         return 0;
     }
     if (strcmp(argv[0], "fault-clear") == 0) {
         int k = -1;
         if (argc > 2 || (argc == 2 && strcmp(argv[1], "all") != 0 && (k = fault_kind_of(argv[1])) < 0)) {
-            return refuse(n, "fault-clear NODE [KIND | all]");
+            return refuse(n, to, "fault-clear NODE [KIND | all]");
         }
         for (int i = 0; i < (int)FAULT_KIND_COUNT; i++) {
             if ((k < 0 || k == i) && (n->faults.active & bit((fault_kind_t)i)) != 0U) {
@@ -570,8 +570,8 @@ int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now)
             }
         }
         node_mark_dirty(n);
-        reply("node %u: fault-clear: %s", node_id(n), k < 0 ? "all faults cleared" : "cleared");
+        reply(to, "node %u: fault-clear: %s", node_id(n), k < 0 ? "all faults cleared" : "cleared");
         return 0;
     }
-    return inject(n, argc, argv, now);
+    return inject(n, argc, argv, now, to);
 }

@@ -28,6 +28,7 @@
 
 #include "co/co.h"
 #include "faults/fault_kinds.h" /* fault_kind_t; the kinds' names, usages and texts */
+#include "runtime/emu_output.h"
 
 struct emu_node;
 
@@ -89,8 +90,8 @@ fault_tx_t faults_tx(struct emu_node *n, co_frame_t *frame, co_time_us_t now);
 /** Sends the frames that are due, ends a bus-off; returns when it must run again (CO_NEVER: nothing waits). */
 co_time_us_t faults_run(struct emu_node *n, co_time_us_t now);
 
-/** The fault commands of the command language (fault, fault-clear, faults) for one node; replies through
- *  reply(). 0: done; 1: refused (the reply says why). argv[0] is the command. */
-int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now);
+/** The fault commands of the command language (fault, fault-clear, faults) for one node; replies to `to`
+ *  (emu_output.h). 0: done; 1: refused (the reply says why). argv[0] is the command. */
+int faults_command(struct emu_node *n, int argc, char **argv, co_time_us_t now, const reply_sink_t *to);
 
 #endif /* EMU_FAULTS_H */

@@ -135,7 +135,7 @@ void events_device_print(void *ctx, const device_t *dev, const char *line)
     emu_node_t *n = (emu_node_t *)ctx;
     /* Before co_node_init (a model loading its own NVM at power-on) the node has no ID yet: the configured one. */
     const unsigned id = co_node_id(&dev->node) != 0U ? co_node_id(&dev->node) : dev->cfg.node_id;
-    reply("node %u: %s", id, line);
+    reply(&output_stdout_replies, "node %u: %s", id, line);
     emu_t *emu = n != NULL && n->bus != NULL ? n->bus->emu : NULL;
     if (emu != NULL && !emu->in_command && anyone_wants(emu, EVENT_MESSAGE, (uint8_t)id, n->bus, 0U)) {
         publish(emu, EVENT_MESSAGE, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), 0U, line, NULL);

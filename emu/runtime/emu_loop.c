@@ -70,7 +70,7 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
         /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
         while (!emu->quit && script_next_at(&emu->script) <= now - emu->start &&
                script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
-            run_command(emu, line);
+            run_command(emu, line, &output_stdout_replies);
             commands = true;
         }
         /* The sessions' waiting lines and streamed answers, within the pass's budget and never past the nodes'

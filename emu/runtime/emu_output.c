@@ -222,31 +222,33 @@ void output_reply_line(const char *line, size_t len)
     append(STREAM_REPLY, line, len);
 }
 
-static reply_sink_fn reply_sink;
-static void *reply_sink_ctx;
-
-void output_set_reply_sink(reply_sink_fn fn, void *ctx)
+/* output_stdout_replies: the reply and its newline, a whole line of the reply stream. */
+static void write_stdout_reply(void *ctx, const char *text, size_t len)
 {
-    reply_sink = fn;
-    reply_sink_ctx = ctx;
+    (void)ctx;
+    char line[LINE_BYTES];
+    if (len > sizeof line - 1U) {
+        len = sizeof line - 1U;
+    }
+    memcpy(line, text, len);
+    line[len++] = '\n';
+    output_reply_line(line, len);
 }
 
-void reply(const char *fmt, ...)
+const reply_sink_t output_stdout_replies = {write_stdout_reply, NULL};
+
+void reply(const reply_sink_t *to, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    if (reply_sink != NULL) {
-        char text[LINE_BYTES];
-        const int n = vsnprintf(text, sizeof text, fmt, ap);
-        char shown[LINE_BYTES];
-        const size_t text_len = n < 0 ? 0U : (size_t)n < sizeof text ? (size_t)n : sizeof text - 1U;
-        const size_t len = text_escape(shown, sizeof shown - 1U, text, text_len, TEXT_LINES);
-        shown[len] = '\0'; /* a sink may read it as a string */
-        reply_sink(reply_sink_ctx, shown, len);
-    } else {
-        append_formatted(STREAM_REPLY, "", TEXT_LINES, fmt, ap);
-    }
+    char text[LINE_BYTES];
+    const int n = vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    const size_t text_len = n < 0 ? 0U : (size_t)n < sizeof text ? (size_t)n : sizeof text - 1U;
+    char shown[LINE_BYTES];
+    const size_t len = text_escape(shown, sizeof shown - 1U, text, text_len, TEXT_LINES);
+    shown[len] = '\0'; /* a sink may read it as a string */
+    to->write(to->ctx, shown, len);
 }
 
 static bool has_room(int fd)

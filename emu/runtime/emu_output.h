@@ -21,6 +21,7 @@
 
 #include <poll.h>
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "co/co.h"
 
@@ -41,16 +42,21 @@ void logline(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3
 /** A fatal message, "canopen-emu: ..." on the log stream whatever the log level (no newline in fmt). */
 void output_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
-/** One reply line on stdout (no newline in fmt; a multi-line reply is one line with newlines inside), escaped as
- *  text_escape.h says (its line breaks kept), also when a reply sink takes it. */
-void reply(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/** Where the reply lines of a command go (an argument of every command: run_command, faults_command ...): write
+ *  takes each reply as one call, escaped as text_escape.h says (its line breaks kept), without its newline (a
+ *  multi-line reply has newlines inside), NUL-terminated after len. */
+typedef struct reply_sink {
+    void (*write)(void *ctx, const char *text, size_t len);
+    void *ctx;
+} reply_sink_t;
 
-/** Where reply() lines go instead of stdout while a control session runs a command (emu_session.h): each reply
- *  as one call, without its newline (a multi-line reply has newlines inside). NULL: stdout again. */
-typedef void (*reply_sink_fn)(void *ctx, const char *text, size_t len);
-void output_set_reply_sink(reply_sink_fn fn, void *ctx);
+/** The reply stream: stdout, one line each. */
+extern const reply_sink_t output_stdout_replies;
 
-/** One whole line (newline included) on stdout as it is, whatever the reply sink: the stdin session's output. */
+/** One reply to `to` (no newline in fmt). */
+void reply(const reply_sink_t *to, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/** One whole line (newline included) on stdout as it is: the stdin session's output. */
 void output_reply_line(const char *line, size_t len);
 
 /** A line was put or dropped since output_flush last found both streams idle (read only: the output module's). */

@@ -33,8 +33,8 @@ static void logf_(udp_multicast_t *u, const char *fmt, ...)
     u->log(u->log_ctx, line);
 }
 
-static int fail(char *err, size_t errlen, int e, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
-static int fail(char *err, size_t errlen, int e, const char *fmt, ...)
+static int socket_error(char *err, size_t errlen, int e, const char *fmt, ...) __attribute__((format(printf, 4, 5)));
+static int socket_error(char *err, size_t errlen, int e, const char *fmt, ...)
 {
     if (err != NULL && errlen > 0U) {
         va_list ap;
@@ -58,17 +58,17 @@ static int parse_options(char *opts, udp_multicast_config_t *cfg, char *err, siz
             errno = 0;
             const unsigned long ttl = strtoul(opt + 4, &end, 10);
             if (opt[4] < '0' || opt[4] > '9' || *end != '\0' || errno != 0 || ttl > 255U) {
-                return fail(err, errlen, EINVAL, "udp_multicast: ttl takes 0..255 (1: this link only), not '%s'",
+                return socket_error(err, errlen, EINVAL, "udp_multicast: ttl takes 0..255 (1: this link only), not '%s'",
                             opt + 4);
             }
             cfg->hop_limit = (uint8_t)ttl;
         } else if (strncmp(opt, "iface=", 6U) == 0) {
             if (opt[6] == '\0' || strlen(opt + 6) >= sizeof cfg->iface) {
-                return fail(err, errlen, EINVAL, "udp_multicast: iface takes an interface name, not '%s'", opt + 6);
+                return socket_error(err, errlen, EINVAL, "udp_multicast: iface takes an interface name, not '%s'", opt + 6);
             }
             (void)snprintf(cfg->iface, sizeof cfg->iface, "%s", opt + 6);
         } else {
-            return fail(err, errlen, EINVAL, "udp_multicast: unknown option '%s' (ttl=N, iface=NAME)", opt);
+            return socket_error(err, errlen, EINVAL, "udp_multicast: unknown option '%s' (ttl=N, iface=NAME)", opt);
         }
         opt = next;
     }
@@ -82,7 +82,7 @@ int udp_multicast_parse(const char *text, udp_multicast_config_t *cfg, char *err
     cfg->hop_limit = 1U;
     char buf[160];
     if (strlen(text) >= sizeof buf) {
-        return fail(err, errlen, EINVAL, "udp_multicast: '%s' is too long", text);
+        return socket_error(err, errlen, EINVAL, "udp_multicast: '%s' is too long", text);
     }
     (void)snprintf(buf, sizeof buf, "%s", text);
     char *opts = strchr(buf, ',');
@@ -93,14 +93,14 @@ int udp_multicast_parse(const char *text, udp_multicast_config_t *cfg, char *err
     if (group[0] == ':') {
         group++;
     } else if (group[0] != '\0') {
-        return fail(err, errlen, EINVAL, "udp_multicast takes udp_multicast[:GROUP[:PORT]][,ttl=N][,iface=NAME], "
+        return socket_error(err, errlen, EINVAL, "udp_multicast takes udp_multicast[:GROUP[:PORT]][,ttl=N][,iface=NAME], "
                     "not 'udp_multicast%s'", text);
     }
     char *port = NULL;
     if (group[0] == '[') {
         char *close = strchr(group, ']');
         if (close == NULL || (close[1] != '\0' && close[1] != ':')) {
-            return fail(err, errlen, EINVAL, "udp_multicast: an IPv6 group goes in brackets: [ff15::1]:43113");
+            return socket_error(err, errlen, EINVAL, "udp_multicast: an IPv6 group goes in brackets: [ff15::1]:43113");
         }
         *close = '\0';
         port = close[1] == ':' ? close + 2 : NULL;
@@ -117,7 +117,7 @@ int udp_multicast_parse(const char *text, udp_multicast_config_t *cfg, char *err
         errno = 0;
         const unsigned long p = strtoul(port, &end, 10);
         if (port[0] < '0' || port[0] > '9' || *end != '\0' || errno != 0 || p == 0U || p > 65535U) {
-            return fail(err, errlen, EINVAL, "udp_multicast: the port is 1..65535, not '%s'", port);
+            return socket_error(err, errlen, EINVAL, "udp_multicast: the port is 1..65535, not '%s'", port);
         }
         cfg->port = (uint16_t)p;
     }
@@ -128,7 +128,7 @@ int udp_multicast_parse(const char *text, udp_multicast_config_t *cfg, char *err
     struct sockaddr_in6 *v6 = (struct sockaddr_in6 *)&cfg->group;
     if (inet_pton(AF_INET, group, &v4->sin_addr) == 1) {
         if (!IN_MULTICAST(ntohl(v4->sin_addr.s_addr))) {
-            return fail(err, errlen, EINVAL, "udp_multicast: %s is not an IPv4 multicast group (224.0.0.0/4; "
+            return socket_error(err, errlen, EINVAL, "udp_multicast: %s is not an IPv4 multicast group (224.0.0.0/4; "
                         "python-can's default: " UDP_MULTICAST_DEFAULT_GROUP_V4 ")", group);
         }
         v4->sin_family = AF_INET;
@@ -136,14 +136,14 @@ int udp_multicast_parse(const char *text, udp_multicast_config_t *cfg, char *err
         cfg->group_len = (socklen_t)sizeof *v4;
     } else if (inet_pton(AF_INET6, group, &v6->sin6_addr) == 1) {
         if (!IN6_IS_ADDR_MULTICAST(&v6->sin6_addr)) {
-            return fail(err, errlen, EINVAL, "udp_multicast: %s is not an IPv6 multicast group (ff00::/8; "
+            return socket_error(err, errlen, EINVAL, "udp_multicast: %s is not an IPv6 multicast group (ff00::/8; "
                         "python-can's default: " UDP_MULTICAST_DEFAULT_GROUP_V6 ")", group);
         }
         v6->sin6_family = AF_INET6;
         v6->sin6_port = htons(cfg->port);
         cfg->group_len = (socklen_t)sizeof *v6;
     } else {
-        return fail(err, errlen, EINVAL, "udp_multicast: '%s' is not an IP multicast group (e.g. "
+        return socket_error(err, errlen, EINVAL, "udp_multicast: '%s' is not an IP multicast group (e.g. "
                     UDP_MULTICAST_DEFAULT_GROUP_V4 " or [" UDP_MULTICAST_DEFAULT_GROUP_V6 "])", group);
     }
     (void)inet_ntop(cfg->group.ss_family, cfg->group.ss_family == AF_INET ? (const void *)&v4->sin_addr
@@ -232,7 +232,7 @@ static int open_rx(udp_multicast_t *u, unsigned ifindex, char *err, size_t errle
     const int family = cfg->group.ss_family;
     const int fd = socket(family, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (fd < 0) {
-        return fail(err, errlen, errno, "%s: cannot open a UDP socket: %s", u->name, strerror(errno));
+        return socket_error(err, errlen, errno, "%s: cannot open a UDP socket: %s", u->name, strerror(errno));
     }
     u->rx_fd = fd;
     const int on = 1;
@@ -281,7 +281,7 @@ static int open_rx(udp_multicast_t *u, unsigned ifindex, char *err, size_t errle
         }
     }
     if (e != 0) {
-        return fail(err, errlen, e, "%s: cannot join group %s port %u on %s: %s", u->name, cfg->group_text,
+        return socket_error(err, errlen, e, "%s: cannot join group %s port %u on %s: %s", u->name, cfg->group_text,
                     (unsigned)cfg->port, u->ifname, strerror(e));
     }
     return 0;
@@ -294,7 +294,7 @@ static int open_tx(udp_multicast_t *u, unsigned ifindex, char *err, size_t errle
     const udp_multicast_config_t *cfg = &u->cfg;
     const int fd = socket(cfg->group.ss_family, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (fd < 0) {
-        return fail(err, errlen, errno, "%s: cannot open a UDP socket: %s", u->name, strerror(errno));
+        return socket_error(err, errlen, errno, "%s: cannot open a UDP socket: %s", u->name, strerror(errno));
     }
     u->tx_fd = fd;
     const int hops = cfg->hop_limit;
@@ -320,17 +320,17 @@ static int open_tx(udp_multicast_t *u, unsigned ifindex, char *err, size_t errle
         }
     }
     if (e != 0) {
-        return fail(err, errlen, e, "%s: cannot set up multicast on %s: %s", u->name, u->ifname, strerror(e));
+        return socket_error(err, errlen, e, "%s: cannot set up multicast on %s: %s", u->name, u->ifname, strerror(e));
     }
     if (connect(fd, (const struct sockaddr *)&cfg->group, cfg->group_len) != 0) {
         e = errno;
-        return fail(err, errlen, e, "%s: cannot send to group %s: %s; it needs %s", u->name, cfg->group_text,
+        return socket_error(err, errlen, e, "%s: cannot send to group %s: %s; it needs %s", u->name, cfg->group_text,
                     strerror(e), family_hint(cfg));
     }
     u->self_len = (socklen_t)sizeof u->self;
     if (getsockname(fd, (struct sockaddr *)&u->self, &u->self_len) != 0) {
         e = errno;
-        return fail(err, errlen, e, "%s: getsockname: %s", u->name, strerror(e));
+        return socket_error(err, errlen, e, "%s: getsockname: %s", u->name, strerror(e));
     }
     return 0;
 }
@@ -349,12 +349,12 @@ int udp_multicast_open(udp_multicast_t *u, const udp_multicast_config_t *cfg, co
     if (cfg->iface[0] != '\0') {
         ifindex = if_nametoindex(cfg->iface);
         if (ifindex == 0U) {
-            return fail(err, errlen, ENODEV, "%s: interface %s: %s", name, cfg->iface, strerror(errno));
+            return socket_error(err, errlen, ENODEV, "%s: interface %s: %s", name, cfg->iface, strerror(errno));
         }
     } else {
         ifindex = route_ifindex(cfg);
         if (ifindex == 0U) {
-            return fail(err, errlen, ENETUNREACH, "%s: no route to group %s: it needs %s", name, cfg->group_text,
+            return socket_error(err, errlen, ENETUNREACH, "%s: no route to group %s: it needs %s", name, cfg->group_text,
                         family_hint(cfg));
         }
     }

@@ -57,7 +57,7 @@ static device_cmd_result_t set(const char *address, const char *value)
 {
     const char *argv[] = {"set", address, value};
     last_line[0] = '\0';
-    return device_command(&dev, 3, argv, now);
+    return device_command(&dev, 3, argv, now, NULL);
 }
 
 static bool parses(const char *text, long long *out)
@@ -132,10 +132,10 @@ static void device_commands_read_leading_zeros_as_decimal(void)
     TEST_ASSERT_EQUAL_UINT16(256U, co_od_get_u16(&dev.node, 0x1017U, 0U));
     /* a device's own command: the Bürkert temperature input, 0..150 */
     const char *temperature[] = {"temperature", "0100"};
-    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, device_command(&dev, 2, temperature, now));
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, device_command(&dev, 2, temperature, now, NULL));
     TEST_ASSERT_EQUAL_STRING_LEN("temperature 100 C", last_line, strlen("temperature 100 C"));
     temperature[1] = "090";
-    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, device_command(&dev, 2, temperature, now));
+    TEST_ASSERT_EQUAL_INT(DEVICE_CMD_OK, device_command(&dev, 2, temperature, now, NULL));
     TEST_ASSERT_EQUAL_STRING_LEN("temperature 90 C", last_line, strlen("temperature 90 C"));
 }
 

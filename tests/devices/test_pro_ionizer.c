@@ -197,7 +197,7 @@ static device_cmd_result_t cmd(const char *line)
     for (char *t = strtok(buf, " "); t != NULL && argc < 8; t = strtok(NULL, " ")) {
         argv[argc++] = t;
     }
-    const device_cmd_result_t r = device_command(&dev, argc, argv, now);
+    const device_cmd_result_t r = device_command(&dev, argc, argv, now, NULL);
     process();
     return r;
 }

@@ -183,7 +183,7 @@ static device_cmd_result_t cmd(const char *line)
     for (char *p = strtok(buf, " "); p != NULL && argc < 8; p = strtok(NULL, " ")) {
         argv[argc++] = p;
     }
-    const device_cmd_result_t r = device_command(&S.dev, argc, argv, S.now);
+    const device_cmd_result_t r = device_command(&S.dev, argc, argv, S.now, NULL);
     process();
     return r;
 }

@@ -11,7 +11,7 @@
  * control_read until the pipe is empty and processes the nodes as the main loop does, and stops, like the main
  * loop, once a command set emu.quit. At the end the pipe is closed (end of input).
  *
- * Replaced for the test: the output of emu_output.c (reply(), output_reply_line(), output_set_reply_sink(),
+ * Replaced for the test: the output of emu_output.c (reply(), output_reply_line(), output_stdout_replies,
  * logline(): the harness records the lines instead of writing them), socketcan_now_us() (a clock that advances
  * 1 ms per call: runs are repeatable), and session_run_line() is wrapped (-Wl,--wrap=session_run_line) to see
  * which lines the control path hands on.
@@ -96,8 +96,6 @@ static size_t g_next;     /* the next line the control path must hand over (run 
 static size_t g_quit_at;  /* index of the first line that quits, or g_ref_n */
 static int g_in_command;  /* inside session_run_line: replies belong to the line */
 static int g_json_answers; /* JSON objects answered to the line being run */
-static reply_sink_fn g_sink;
-static void *g_sink_ctx;
 static char g_tmp[COMMAND_LINE_MAX + 1];
 static char g_out[1U << 20]; /* one line written to stdout (a JSON answer with a device's help is long) */
 static bool g_restricted;    /* the input began with RESTRICTED_MARK: the session is a web session's kind */
@@ -344,7 +342,18 @@ static void control_path_line(const char *text)
     g_next++;
 }
 
-void reply(const char *fmt, ...)
+/* Replies to stdout outside a session (a device's message between commands): not a line's answer, and none may
+ * come while a line runs' answers are checked (reply() fails those outside a line's run). */
+static void stdout_reply(void *ctx, const char *text, size_t len)
+{
+    (void)ctx;
+    (void)text;
+    (void)len;
+}
+
+const reply_sink_t output_stdout_replies = {stdout_reply, NULL};
+
+void reply(const reply_sink_t *to, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -359,15 +368,7 @@ void reply(const char *fmt, ...)
     if (is_refusal(g_tmp)) {
         g_refusal_seen = true;
     }
-    if (g_sink != NULL) {
-        g_sink(g_sink_ctx, g_tmp, strlen(g_tmp)); /* as emu_output.c: to the session, or captured for JSON */
-    }
-}
-
-void output_set_reply_sink(reply_sink_fn fn, void *ctx)
-{
-    g_sink = fn;
-    g_sink_ctx = ctx;
+    to->write(to->ctx, g_tmp, strlen(g_tmp)); /* as emu_output.c: to the session, or captured for JSON */
 }
 
 void output_reply_line(const char *line, size_t len)
@@ -460,9 +461,6 @@ void __wrap_session_run_line(emu_t *emu, emu_session_t *s, char *line)
     }
     if (r->json && g_json_answers != 1) {
         fail("the JSON line %zu got %d answers, not one ('%.60s')", g_next, g_json_answers, r->text);
-    }
-    if (g_sink != NULL) {
-        fail("the reply sink is still set after line %zu", g_next);
     }
 }
 

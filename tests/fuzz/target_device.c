@@ -307,7 +307,7 @@ bool fzt_app(fz_t *h, fz_in_t *in)
             }
             fprintf(stderr, "\n");
         }
-        const device_cmd_result_t r = device_command(g_dev, argc, argv, h->now);
+        const device_cmd_result_t r = device_command(g_dev, argc, argv, h->now, NULL);
         if (r != DEVICE_CMD_OK && r != DEVICE_CMD_UNKNOWN && r != DEVICE_CMD_ERROR) {
             fz_fail(h, "device_command(%s) returned %d", tmpl, (int)r);
         }
