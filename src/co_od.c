@@ -315,6 +315,15 @@ uint32_t co_od_u32_or(const co_node_t *node, uint16_t index, uint8_t sub, uint32
     return e != NULL ? co_od_entry_u32(node, e) : fallback;
 }
 
+/* Sets the length kept after a string's or domain's value (co_od.h); nothing for a number. One copy for the two
+ * callers: a firmware's image keeps the bytes. */
+static void set_length(uint8_t *value, const co_od_entry_t *e, size_t n)
+{
+    if (is_bytes(e)) {
+        co_put_u16(value + e->size, (uint16_t)n);
+    }
+}
+
 void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
 {
     value_written(node, e);
@@ -324,20 +333,27 @@ void co_od_store_value(co_node_t *node, const co_od_entry_t *e, const uint8_t *d
     if (n < e->size) {
         memset(p + n, 0, (size_t)e->size - n);
     }
+    set_length(p, e, n);
 }
 
-/* Wire length of a row's current value: strings end at the first NUL. */
+/* Wire length of a row's current value: a number's size; a string's or domain's length, kept after it (co_od.h),
+ * and a VISIBLE_STRING's up to its first NUL within that (a value written around co_od_write(), NUL-padded). */
 static size_t value_len(co_node_t *node, const co_od_entry_t *e)
 {
-    if (e->type == CO_T_VISIBLE_STRING) {
-        const uint8_t *p = co_od_ptr(node, e);
-        size_t n = 0U;
-        while (n < e->size && p[n] != 0U) {
-            n++;
-        }
-        return n;
+    if (!is_bytes(e)) {
+        return e->size;
     }
-    return e->size;
+    const uint8_t *p = co_od_ptr(node, e);
+    const size_t kept = co_get_u16(p + e->size);
+    const size_t len = kept < e->size ? kept : e->size;
+    if (e->type != CO_T_VISIBLE_STRING) {
+        return len;
+    }
+    size_t n = 0U;
+    while (n < len && p[n] != 0U) {
+        n++;
+    }
+    return n;
 }
 
 static uint32_t write_hook(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len,
@@ -687,6 +703,7 @@ void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub)
         return;
     }
     value_written(node, e);
+    set_length(co_od_ptr(node, e), e, e->size); /* a string's whole capacity (co_od.h) */
     if (index < 0x2000U) {
         comm_written(node, e);
     }
@@ -755,7 +772,9 @@ void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last)
     for (unsigned i = lower_bound_key(od, entry_key(first, 0U)); i < od->count && od->entries[i].index <= last; i++) {
         const co_od_entry_t *row = &od->entries[i];
         const unsigned subs = co_od_entry_subs(row);
-        co_od_copy_defaults(od, row->offset, (size_t)row->size * subs, node->values + row->offset);
+        /* a string's or domain's length with it (runs are numbers: co_od.h) */
+        const size_t n = (size_t)row->size * subs + (is_bytes(row) ? CO_OD_LEN_SIZE : 0U);
+        co_od_copy_defaults(od, row->offset, n, node->values + row->offset);
         if ((row->flags & CO_OD_NODEID) != 0U && node->node_id != CO_NODE_ID_UNCONFIGURED) {
             for (unsigned k = 0U; k < subs; k++) {
                 co_od_entry_t one;

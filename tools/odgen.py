@@ -389,7 +389,10 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
 
     def member(r: Row) -> str:
         arr = f"[{r.size}]" if r.dtype in STRING_TYPES + BYTE_INTEGERS else ""
-        return f"    {TYPES[r.dtype][1]} {r.member}{arr}; /* 0x{r.index:04X}:{r.sub:02X} {c_string(r.name)} */\n"
+        text = f"    {TYPES[r.dtype][1]} {r.member}{arr}; /* 0x{r.index:04X}:{r.sub:02X} {c_string(r.name)} */\n"
+        if r.dtype in STRING_TYPES:  # its current length, right after it (co_od.h CO_OD_LEN_SIZE)
+            text += f"    uint8_t {r.member}_len[CO_OD_LEN_SIZE];\n"
+        return text
     h.append(f"typedef struct {c_name}_od_values {{\n")
     h.extend(member(r) for r in layout)
     h.append(f"}} {c_name}_od_values_t;\n\n")
@@ -453,6 +456,8 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
         c.append("    " + " ".join(f"{v}U," for v in slots[k:k + 16]) + "\n")
     c.append("};\n#endif\n\n")
     last = layout[n_defaults - 1].member
+    if layout[n_defaults - 1].dtype in STRING_TYPES:
+        last += "_len"  # the image ends with the last value's length
     c.append(f"/* The first {n_defaults} members of {c_name}_od_values_t, laid out as there: the values whose default is not 0\n"
              " * (the rest of a values block starts at 0). */\ntypedef struct {\n")
     c.extend(member(r) for r in layout[:n_defaults])
@@ -466,9 +471,11 @@ def generate(od: Od, c_name: str, eds_name: str, profile_name: str) -> tuple[str
             data = r.value.encode("ascii")
             if data:
                 c.append(f"    .{r.member} = {c_bytes(data, r.size)}, /* \"{c_string(r.value)}\" */\n")
+                c.append(f"    .{r.member}_len = {c_bytes(len(data).to_bytes(2, 'little'), 2)},\n")
         elif r.dtype in (0x0A, 0x0B, 0x0F):
             if r.value:
                 c.append(f"    .{r.member} = {c_bytes(r.value, r.size)},\n")
+                c.append(f"    .{r.member}_len = {c_bytes(len(r.value).to_bytes(2, 'little'), 2)},\n")
         elif r.dtype in BYTE_INTEGERS:
             if r.value:
                 c.append(f"    .{r.member} = {c_bytes(int(r.value).to_bytes(r.size, 'little', signed=r.value < 0), r.size)},"
@@ -517,6 +524,14 @@ def fitted_config(od: Od, c_name: str, eds_name: str) -> str:
     off = []  # (switch, why)
     if 0x1005 not in indices:
         off.append(("CO_CONFIG_SYNC", "no SYNC COB-ID 0x1005"))
+    row = lambda i, s: next((r for r in od.rows if r.index == i and r.sub == s), None)  # noqa: E731
+    # A value the node may have: written (writable), or its default.
+    may = lambda r, test: r is not None and (ACCESS[r.access][1] or test(int(r.value or 0)))  # noqa: E731
+    if 0x1005 in indices and not may(row(0x1005, 0), lambda v: (v & 0x40000000) != 0):
+        off.append(("CO_CONFIG_SYNC_PRODUCER", "0x1005 cannot have bit 30 (gen): no SYNC produced"))
+    if not any(may(row(i, 1), lambda v: (v & 0x40000000) == 0) and (row(i, 2) is None or may(row(i, 2), lambda v: v >= 252))
+               for i in range(0x1800, 0x1A00)):  # no sub 2: type 255
+        off.append(("CO_CONFIG_TPDO_RTR", "no TPDO whose COB-ID can allow RTR (bit 30 clear) with a type 252..255"))
     if 0x100C not in indices and 0x100D not in indices:
         off.append(("CO_CONFIG_NODE_GUARDING", "no guard time 0x100C, no life time factor 0x100D"))
     if n_hbc == 0:

@@ -103,9 +103,15 @@ static uint8_t flags_of(const eds_entry_t *e)
 static void put_default(uint8_t *dst, const co_od_entry_t *row, const eds_value_t *v)
 {
     switch (v->kind) {
-    case EDS_V_BYTES:
-        memcpy(dst, v->bytes, v->len < row->size ? v->len : row->size);
+    case EDS_V_BYTES: {
+        const size_t n = v->len < row->size ? v->len : row->size;
+        memcpy(dst, v->bytes, n);
+        if (co_od_type_has_length(row->type)) { /* the default's length, after the value (co_od.h) */
+            dst[row->size] = (uint8_t)n;
+            dst[row->size + 1U] = (uint8_t)(n >> 8);
+        }
         return;
+    }
     case EDS_V_REAL:
         if (row->size == 4U) {
             const float f = (float)v->r;
@@ -238,7 +244,7 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
         const uint32_t align = (r->size == 2U || r->size == 4U || r->size == 8U) ? r->size : 1U;
         offset = (offset + align - 1U) / align * align;
         r->offset = offset;
-        offset += r->size;
+        offset += r->size + (co_od_type_has_length(r->type) ? CO_OD_LEN_SIZE : 0U); /* a length after it (co_od.h) */
         if (e->low.kind != EDS_V_NONE || e->high.kind != EDS_V_NONE) {
             c->limits[i].low = limit_of(e, &e->low, false);
             c->limits[i].high = limit_of(e, &e->high, true);

@@ -46,6 +46,20 @@ typedef enum co_od_type {
     CO_T_UNSIGNED64 = 0x1B
 } co_od_type_t;
 
+/** Bytes of the current length kept with a value of variable size (VISIBLE_STRING, OCTET_STRING, UNICODE_STRING,
+ *  DOMAIN): a little-endian count, 0..size, in the values block right after the row's size bytes (its value). A
+ *  values struct gives such a row two members, `uint8_t name[size]` and `uint8_t name_len[CO_OD_LEN_SIZE]` (what
+ *  tools/odgen.py writes; no padding between byte arrays), and its defaults image the default's length there: an
+ *  upload returns that many bytes, a download sets it (docs/decisions.md, "Values have a length"). */
+#define CO_OD_LEN_SIZE 2U
+
+/** True for the data types whose values have a length of their own (CO_OD_LEN_SIZE). */
+static inline bool co_od_type_has_length(uint8_t type)
+{
+    return type == CO_T_VISIBLE_STRING || type == CO_T_OCTET_STRING || type == CO_T_UNICODE_STRING ||
+           type == CO_T_DOMAIN;
+}
+
 /** Row flags (co_od_entry_t.flags). */
 enum co_od_flag {
     CO_OD_READ = 0x0001U,      /**< Readable by SDO. */
@@ -100,12 +114,14 @@ typedef struct co_od_entry {
     uint8_t flags;                 /**< co_od_flag bits. */
 #if CO_CONFIG_OD_COMPACT
     uint8_t limit;                 /**< 0: no limits; n: co_od_t.limits[n - 1]. */
-    uint8_t size;                  /**< Value size in bytes (for strings: capacity, at most 255 here). */
+    uint8_t size;                  /**< Value size in bytes (for strings: capacity, at most 255 here; 0: a large
+                                        object, co_hooks_t.large_read). */
     uint8_t count;                 /**< Sub-indices the row describes (0 counts as 1). */
     co_od_offset_t offset;         /**< Offset of the value in the node's values block. */
 #else
     uint8_t count;                 /**< Sub-indices the row describes (0 counts as 1). */
-    uint16_t size;                 /**< Value size in bytes (for strings: capacity). */
+    uint16_t size;                 /**< Value size in bytes (for strings: capacity; 0: a large object held by the
+                                        application, co_hooks_t.large_read). */
     co_od_offset_t offset;         /**< Offset of the value in the node's values block. */
     const co_od_limits_t *limits;  /**< NULL when the row has no limits. */
 #endif
@@ -236,7 +252,8 @@ uint16_t co_od_type_size(uint8_t type);
  * Reads an object's value through the full read path (existence, access for SDO, the device's read hook).
  * @param buf   receives at most cap bytes: the value in CANopen wire format (numbers little-endian, as an SDO
  *              carries them), whatever the CPU's byte order. co_od_get_u32() gives a number in native order.
- * @param len   receives the value's length (for VISIBLE_STRING, up to the first NUL).
+ * @param len   receives the value's length: a number's size; of a string or domain the length written last (or
+ *              the default's), a VISIBLE_STRING up to its first NUL within it.
  * @return      0, or the SDO abort code (e.g. CO_ABORT_WRITE_ONLY for SDO reads of write-only rows).
  */
 uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, size_t cap, size_t *len,
@@ -245,7 +262,8 @@ uint32_t co_od_read(co_node_t *node, uint16_t index, uint8_t sub, void *buf, siz
 /**
  * Writes an object through the full write path: existence, access, length, limits, the protocol rules of
  * communication objects, the device's write hook, then the value, then its side effects (e.g. a new
- * heartbeat period takes effect at once). Strings may be shorter than their capacity (rest is zeroed).
+ * heartbeat period takes effect at once). Strings and domains may be shorter than their capacity: len becomes their
+ * length (the rest is zeroed).
  * @param data  the value in CANopen wire format (numbers little-endian), whatever the CPU's byte order: a native
  *              uint16_t passed here is reversed on a big-endian CPU; co_od_set_u8/u16/u32() take native numbers.
  * @return 0 when written, or the SDO abort code; nothing changes when an abort code is returned.
@@ -264,7 +282,9 @@ void *co_od_value(co_node_t *node, uint16_t index, uint8_t sub);
  * A value was written around co_od_write() (through co_od_value() or the generated values struct): the core takes
  * note as after a co_od_write() of it, without its checks (the value must be one co_od_write() would accept): a
  * communication parameter takes effect (a heartbeat period, a PDO's COB-ID, ...), event-driven TPDOs compare at the
- * next co_node_process(). Nothing happens for an object the OD lacks.
+ * next co_node_process(). Nothing happens for an object the OD lacks. A string or domain written this way takes its
+ * whole capacity as its length (a VISIBLE_STRING reads up to its first NUL): write one of another length with
+ * co_od_write(..., CO_ORIGIN_LOCAL).
  */
 void co_od_changed(co_node_t *node, uint16_t index, uint8_t sub);
 

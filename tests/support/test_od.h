@@ -20,7 +20,9 @@ typedef struct test_od_values {
     uint32_t x1006_cycle_period;
     uint32_t x1007_window;
     char x1008_name[4];
+    uint8_t x1008_name_len[CO_OD_LEN_SIZE]; /* each string's length after it (co_od.h) */
     char x1009_hw_version[24];
+    uint8_t x1009_hw_version_len[CO_OD_LEN_SIZE];
     uint16_t x100c_guard_time;
     uint8_t x100d_life_factor;
     uint8_t x1010_n;
@@ -65,6 +67,7 @@ typedef struct test_od_values {
     uint32_t x2003_volatile;     /* U32 RW, not stored */
     float x2004_setpoint;        /* REAL32 RW, RPDO/TPDO */
     char x2005_description[20];  /* VISIBLE_STRING RW, stored */
+    uint8_t x2005_description_len[CO_OD_LEN_SIZE];
     uint64_t x2006_counter;      /* U64 RO (an 8-byte object) */
     uint8_t x6000_n;
     uint8_t x6000_inputs[2];     /* U8 RO TPDO */

@@ -37,6 +37,7 @@ typedef struct types_values {
     uint64_t r64; /* the bits of a REAL64 (a double is 32 bits wide on AVR) */
     uint64_t u64;
     uint8_t text[12];
+    uint8_t text_len[CO_OD_LEN_SIZE]; /* its length (co_od.h) */
     uint16_t word;
     float r32_narrow;
 } types_values_t;
@@ -144,6 +145,7 @@ void setUp(void)
     defaults.u64 = 0x20U;
     const uint8_t utf16[] = {'G', 0, 'r', 0, 0xFC, 0, 0xDF, 0, 'e', 0};
     memcpy(defaults.text, utf16, sizeof utf16);
+    defaults.text_len[0] = (uint8_t)sizeof utf16;
     TEST_ASSERT_EQUAL_INT(CO_OK, start(false));
 }
 void tearDown(void) {}
@@ -297,7 +299,7 @@ static void six_byte_and_unicode_rows(void)
     TEST_ASSERT_EQUAL_UINT32(6U, len);
     TEST_ASSERT_EQUAL_HEX8_ARRAY(tod, buf, 6U);
     TEST_ASSERT_EQUAL_HEX32(0U, co_od_read(&node, 0x2006, 0, buf, sizeof buf, &len, CO_ORIGIN_SDO));
-    TEST_ASSERT_EQUAL_UINT32(12U, len); /* an OCTET-like string: its whole capacity */
+    TEST_ASSERT_EQUAL_UINT32(10U, len); /* a string: the length of its value (its default), not its capacity */
     TEST_ASSERT_EQUAL_HEX8_ARRAY(((uint8_t[]){'G', 0, 'r', 0, 0xFC, 0, 0xDF, 0}), buf, 8U);
     TEST_ASSERT_EQUAL_UINT16(0U, co_od_type_size(CO_T_UNICODE_STRING));
     TEST_ASSERT_EQUAL_UINT16(7U, co_od_type_size(CO_T_UNSIGNED56));

@@ -20,6 +20,7 @@ typedef struct channels_values {
     uint32_t s2_cob[2];
     uint32_t value;
     char text[20];
+    uint8_t text_len[CO_OD_LEN_SIZE]; /* its length (co_od.h) */
 } channels_values_t;
 
 #define C(i, s, t, f, m) CO_OD_ROW(i, s, t, f, sizeof(((channels_values_t *)0)->m), offsetof(channels_values_t, m))
@@ -46,7 +47,7 @@ static const co_od_entry_t entries[] = {
 };
 static const channels_values_t defaults = {
     0x00000191UL, 0U, 1U, 1U, 2U, {0x600UL, 0x580UL}, 3U, {0x80000000UL, 0x80000000UL}, 0U,
-    2U, {0x6C1UL, 0x6D1UL}, 0x11223344UL, "two servers"};
+    2U, {0x6C1UL, 0x6D1UL}, 0x11223344UL, "two servers", {11U, 0U}};
 static const co_od_t od = {.name = "channels", .entries = entries,
                            .count = (uint16_t)(sizeof entries / sizeof entries[0]), .defaults = &defaults,
                            .values_size = (uint32_t)sizeof(channels_values_t), .signature = 0x5D0C4A11UL};
