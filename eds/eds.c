@@ -127,7 +127,8 @@ static unsigned long diagnostic_line(const eds_file_t *f, const char *d)
     return strtoul(p + 1, NULL, 10);
 }
 
-/* In the order of their lines, as a reader of the file goes (insertion sort: stable, at most 201 of them). */
+/* In the order of their lines, as a reader of the file goes (insertion sort: stable, at most some 460 of them:
+ * EDS_MAX_DIAGNOSTICS, a note per kind, one of those not shown). */
 static void sort_diagnostics(eds_file_t *f)
 {
     for (uint32_t i = 1U; i < f->n_diagnostics; i++) {
@@ -142,7 +143,7 @@ static void sort_diagnostics(eds_file_t *f)
     }
 }
 
-eds_file_t *eds_read_buffer(const char *name, const char *data, size_t len)
+static eds_file_t *read_buffer(const char *name, const char *data, size_t len)
 {
     eds_file_t *f = new_file(name);
     if (f == NULL) {
@@ -166,9 +167,19 @@ eds_file_t *eds_read_buffer(const char *name, const char *data, size_t len)
     }
     eds_read_model(f, &ini);
     if (f->errors == 0U) {
+        eds_relative_params(f);
         eds_check_pdos(f);
     }
-    sort_diagnostics(f);
+    return f;
+}
+
+eds_file_t *eds_read_buffer(const char *name, const char *data, size_t len)
+{
+    eds_file_t *f = read_buffer(name, data, len);
+    if (f != NULL) {
+        eds_diagnostics_done(f);
+        sort_diagnostics(f);
+    }
     return f;
 }
 

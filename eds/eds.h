@@ -24,7 +24,11 @@
 
 /** Largest file the reader takes: real device descriptions stay far below (the largest seen: 2 MB). */
 #define EDS_MAX_FILE_BYTES (16UL * 1024UL * 1024UL)
-/** Diagnostics kept per file; beyond, one line says how many more there were. */
+/**
+ * Diagnostics given in full per file. Repeated ones are grouped by kind (the message without the places and values
+ * it names): the first three of a kind in full, the rest in one note line ("... and 126 more like this, lines ...");
+ * the first of every kind is given while there is room, so the cap never hides a different one behind many of one.
+ */
 #define EDS_MAX_DIAGNOSTICS 200U
 
 /** What a value holds (the kind follows from the entry's data type). */
@@ -120,10 +124,12 @@ typedef struct eds_file {
     uint32_t n_entries;
     eds_info_key_t *info;   /**< Uninterpreted keys, in file order. */
     uint32_t n_info;
-    char **diagnostics;     /**< "FILE:LINE: warning|error: ..." lines, at most EDS_MAX_DIAGNOSTICS (+1 summary). */
+    char **diagnostics;     /**< "FILE:LINE: warning|error: ..." lines, at most EDS_MAX_DIAGNOSTICS, then "note:" lines
+                                 that group the repeated ones (one per kind) and count any not shown. */
     uint32_t n_diagnostics;
     uint32_t warnings, errors; /**< Counts, also of those not kept. */
     struct eds_arena *arena;   /**< Owns every string and byte array above. */
+    struct eds_diag_kinds *kinds; /**< The reader's own: diagnostics by kind (in the arena). */
 } eds_file_t;
 
 /** Reads a file. Never NULL except when out of memory; check ->errors. Free with eds_free(). */
@@ -186,6 +192,14 @@ void eds_type_bound(uint8_t type, bool high, eds_value_t *out);
 int eds_value_cmp(const eds_value_t *a, const eds_value_t *b);
 /** True when the value is of the type's kind and fits it (node-ID-relative: for every node-ID 1..127). */
 bool eds_value_fits(uint8_t type, const eds_value_t *v);
+
+/**
+ * A DCF value at node_id (the file's NodeID) of an entry whose DefaultValue is node-ID-relative: true, with *relative
+ * set, when value is that default worked out at node_id (bits 29..31 of an UNSIGNED32 COB-ID may differ), so that
+ * it follows the node-ID the device runs at. The reader applies it to ParameterValues, the writer to the values of
+ * the DCF it writes (docs/eds.md, "A DCF at another node-ID").
+ */
+bool eds_value_follows_node_id(const eds_entry_t *e, const eds_value_t *value, uint8_t node_id, eds_value_t *relative);
 
 /** Formats a value as CiA 306 text (hex for unsigned, decimal for signed, %.9g/%.17g for reals, hex bytes). */
 void eds_format_value(char *buf, size_t cap, uint8_t type, const eds_value_t *value);

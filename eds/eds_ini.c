@@ -1,6 +1,7 @@
 /**
  * @file eds_ini.c
- * @brief The INI layer of the EDS reader: arena, diagnostics, sections and keys with their line numbers.
+ * @brief The INI layer of the EDS reader: arena, sections and keys with their line numbers (diagnostics:
+ * eds_diag.c).
  *
  * Hand-written rather than taken from an INI library (docs/eds.md, "Why its own INI layer"): diagnostics need
  * the line of every key, real files need tolerance (keys before the first section, duplicate sections that
@@ -9,7 +10,6 @@
 #include "eds_internal.h"
 
 #include <ctype.h>
-#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -71,58 +71,6 @@ void eds_arena_free(eds_arena_t *arena)
         free(arena);
         arena = next;
     }
-}
-
-/* ---- Diagnostics --------------------------------------------------------------------------------------------- */
-
-static void diag(eds_file_t *f, uint32_t line, const char *what, const char *fmt, va_list ap)
-{
-    uint32_t total = f->warnings + f->errors;
-    if (total > EDS_MAX_DIAGNOSTICS) {
-        return;
-    }
-    char text[512];
-    if (total == EDS_MAX_DIAGNOSTICS) {
-        snprintf(text, sizeof text, "%s: note: more problems follow; only the first %u are reported", f->path,
-                 EDS_MAX_DIAGNOSTICS);
-    } else {
-        int n = line > 0U ? snprintf(text, sizeof text, "%s:%lu: %s: ", f->path, (unsigned long)line, what)
-                          : snprintf(text, sizeof text, "%s: %s: ", f->path, what);
-        if (n > 0 && (size_t)n < sizeof text) {
-            vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
-        }
-    }
-    char **list = f->diagnostics;
-    if ((f->n_diagnostics & (f->n_diagnostics - 1U)) == 0U) { /* grow at powers of two */
-        size_t cap = f->n_diagnostics == 0U ? 8U : (size_t)f->n_diagnostics * 2U;
-        list = realloc(f->diagnostics, cap * sizeof(char *));
-        if (list == NULL) {
-            return;
-        }
-        f->diagnostics = list;
-    }
-    char *copy = eds_strndup(f, text, strlen(text));
-    if (copy != NULL) {
-        list[f->n_diagnostics++] = copy;
-    }
-}
-
-void eds_warn(eds_file_t *f, uint32_t line, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    diag(f, line, "warning", fmt, ap);
-    va_end(ap);
-    f->warnings++;
-}
-
-void eds_error(eds_file_t *f, uint32_t line, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    diag(f, line, "error", fmt, ap);
-    va_end(ap);
-    f->errors++;
 }
 
 /* ---- Sections --------------------------------------------------------------------------------------------------- */

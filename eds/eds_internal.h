@@ -21,6 +21,8 @@ void eds_arena_free(eds_arena_t *arena);
 #endif
 void eds_warn(eds_file_t *f, uint32_t line, const char *fmt, ...) EDS_PRINTF(3, 4);
 void eds_error(eds_file_t *f, uint32_t line, const char *fmt, ...) EDS_PRINTF(3, 4);
+/* Adds the notes of the grouped diagnostics (once, when the file is read). */
+void eds_diagnostics_done(eds_file_t *f);
 
 /* ---- INI layer: sections and keys with their lines ------------------------------------------------------ */
 typedef enum ini_kind {
@@ -77,8 +79,11 @@ typedef enum eds_parse {
     EDS_PARSE_NODEID_BAD  /* $NODEID where it has no meaning (reals, strings, limits): the value is without it */
 } eds_parse_t;
 
-/* Parses one CiA 306 integer term or $NODEID sum: "0x1A", "012" (octal), "-5", "$NODEID+0x180". */
-bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bool *nodeid, bool *octal_like);
+/* Parses one CiA 306 integer term or $NODEID sum: "0x1A", "012" (octal), "-5", "$NODEID+0x180". *octal_like: a
+ * term with a leading 0 and an 8 or 9, read as decimal; *octal: a term read as octal to a value other than its
+ * decimal reading ("010": 8). */
+bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bool *nodeid, bool *octal_like,
+                       bool *octal);
 /* Parses text as a value of type (DefaultValue, LowLimit, HighLimit, ParameterValue). */
 eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_value_t *out, char *why, size_t why_cap);
 /* The REAL32 (size 4) or REAL64 of IEEE 754 bits. */
@@ -91,6 +96,8 @@ size_t eds_utf8_len(const unsigned char *s, size_t n);
 
 /* ---- Steps of eds_read -------------------------------------------------------------------------------------- */
 void eds_read_model(eds_file_t *f, const ini_t *ini);
+/* A DCF's ParameterValues that are their $NODEID default at the file's NodeID become node-ID-relative (eds_dcf.c). */
+void eds_relative_params(eds_file_t *f);
 void eds_check_pdos(eds_file_t *f);
 eds_entry_t *eds_find_mut(eds_file_t *f, uint16_t index, uint8_t sub);
 

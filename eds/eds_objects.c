@@ -9,6 +9,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* An [xxxxObjectLinks] entry with its line, checked once every object is read. */
+typedef struct link_ref {
+    uint16_t owner, target;
+    uint32_t line;
+} link_ref_t;
+
 typedef struct builder {
     eds_file_t *f;
     const ini_t *ini;
@@ -16,7 +22,24 @@ typedef struct builder {
     bool oom;
     uint64_t identity[3];     /* VendorNumber, ProductNumber, RevisionNumber; UINT64_MAX: not in [DeviceInfo] */
     uint32_t *listed_line;    /* line of the object list key that names each index */
+    link_ref_t *links;        /* every [xxxxObjectLinks] entry read, in the order of the objects and their links */
+    size_t n_links, cap_links;
 } builder_t;
+
+static void push_link(builder_t *b, uint16_t owner, uint16_t target, uint32_t line)
+{
+    if (b->n_links == b->cap_links) {
+        size_t cap = b->cap_links == 0U ? 64U : b->cap_links * 2U;
+        link_ref_t *l = realloc(b->links, cap * sizeof *l);
+        if (l == NULL) {
+            b->oom = true;
+            return;
+        }
+        b->links = l;
+        b->cap_links = cap;
+    }
+    b->links[b->n_links++] = (link_ref_t){owner, target, line};
+}
 
 static eds_entry_t *push_entry(builder_t *b)
 {
@@ -390,6 +413,16 @@ static void read_param(builder_t *b, const ini_section_t *s, const ini_key_t *va
     const ini_key_t *k = value_key != NULL ? value_key : ini_get(b->ini, s, "ParameterValue");
     if (k != NULL) {
         b->f->is_dcf = true;
+        /* An empty number is no value (Lely and python-canopen keep the default); it used to become 0, and a DCF
+         * with "ParameterValue=" everywhere started with SYNC COB-ID 0 and vendor-ID 0. An empty string is the
+         * empty string (python-canopen reads it so, and export-dcf writes a string emptied over SDO so). */
+        if (!eds_type_is_bytes(e->type) && *value_text(b, k, e->type) == '\0') {
+            char def[64];
+            eds_format_value(def, sizeof def, e->type, &e->def);
+            eds_warn(b->f, k->line, "[%s%s] %s is empty; DefaultValue %s kept", s->name,
+                     value_key != NULL ? "Value" : "", k->key, def);
+            return;
+        }
         read_value(b, s, k, value_text(b, k, e->type), e->type, &e->param, true);
         into_limits(b->f, s, e, &e->param, k->key, k->line, false);
     }
@@ -434,8 +467,10 @@ static bool read_fields(builder_t *b, const ini_section_t *s, uint16_t index, ui
     k = ini_get(b->ini, s, "PDOMapping");
     if (k != NULL) {
         const char *t = ini_number_text(f, k);
-        if (strcmp(t, "1") == 0 || strcmp(t, "0") == 0 || *t == '\0') {
-            e->pdo_mapping = strcmp(t, "1") == 0;
+        uint64_t flag = 0U;
+        /* A number in any CiA 306 form: python-canopen's export writes 0x0 and 0x1. */
+        if (*t == '\0' || eds_parse_unsigned(t, 1U, &flag)) {
+            e->pdo_mapping = flag != 0U;
         } else {
             e->pdo_mapping = t[0] == 't' || t[0] == 'T';
             eds_warn(f, k->line, "[%s] PDOMapping=%s is not 0 or 1; read as %d", s->name, t, e->pdo_mapping ? 1 : 0);
@@ -480,6 +515,36 @@ static bool read_entry(builder_t *b, const ini_section_t *s, uint16_t index, uin
     }
     read_param(b, s, NULL, e);
     return true;
+}
+
+static bool is_mapping(uint16_t index)
+{
+    return (index >= 0x1600U && index <= 0x17FFU) || (index >= 0x1A00U && index <= 0x1BFFU);
+}
+
+/* Sub-index 0 of a PDO mapping that lacks it: the number of entries from sub-index 1 on that map something (the
+ * highest sub-index counted the unused entries too, so the PDO was disabled for mapping 0x0000:00), writable
+ * where the entries are (dynamic mapping); a DCF's value likewise from the entries' values. */
+static void mapping_count(const eds_entry_t *subs, uint32_t n, eds_entry_t *sub0)
+{
+    bool any_param = false;
+    for (uint32_t i = 0; i < n; i++) {
+        any_param = any_param || subs[i].param.kind != EDS_V_NONE;
+    }
+    for (int pass = 0; pass < (any_param ? 2 : 1); pass++) {
+        uint64_t count = 0U;
+        for (uint32_t i = 0; i < n && subs[i].sub == count + 1U; i++) {
+            const eds_value_t *v = pass == 1 && subs[i].param.kind != EDS_V_NONE ? &subs[i].param : &subs[i].def;
+            if (v->kind != EDS_V_UINT || v->nodeid || v->u == 0U) {
+                break;
+            }
+            count++;
+        }
+        eds_value_t *out = pass == 0 ? &sub0->def : &sub0->param;
+        out->kind = EDS_V_UINT;
+        out->u = count;
+    }
+    sub0->access = n > 0U && eds_access_writable(subs[0].access) ? EDS_RW : EDS_RO;
 }
 
 /* Sub-index 0 of an ARRAY/RECORD counts active entries rather than giving the highest sub-index. */
@@ -549,6 +614,25 @@ static void read_compact(builder_t *b, const ini_section_t *s, eds_object_t *o, 
     }
 }
 
+/* The ObjectType of a section without one: CiA 306 makes it a VAR, but an object with sub-index sections is a
+ * RECORD (read as a VAR it had no DataType and was left out: a [1018] so made the file "miss object 0x1018"), one
+ * with CompactSubObj an ARRAY (CompactSubObj is for ARRAYs only). */
+static uint64_t without_object_type(builder_t *b, const ini_section_t *s)
+{
+    uint32_t n_subs;
+    (void)ini_find_subs(b->ini, s->index, &n_subs);
+    const ini_key_t *compact_key = ini_get(b->ini, s, "CompactSubObj"); /* read (and warned about) later */
+    uint64_t zero = 1U;
+    const bool compact = compact_key != NULL && compact_key->value[0] != '\0' &&
+                         !(eds_parse_unsigned(compact_key->value, UINT64_MAX, &zero) && zero == 0U);
+    if (n_subs == 0U && !compact) {
+        return 0x7U;
+    }
+    eds_warn(b->f, s->line, "[%s] has no ObjectType but %s; read as %s", s->name,
+             compact ? "CompactSubObj" : "sub-index sections", compact ? "an ARRAY (0x8)" : "a RECORD (0x9)");
+    return compact ? 0x8U : 0x9U;
+}
+
 static void read_object(builder_t *b, uint16_t index)
 {
     eds_file_t *f = b->f;
@@ -559,6 +643,10 @@ static void read_object(builder_t *b, uint16_t index)
         return;
     }
     uint64_t otype = number_of(b, s, "ObjectType", 0xFFU, 0x7U);
+    const ini_key_t *otype_key = ini_get(b->ini, s, "ObjectType");
+    if (otype_key == NULL || otype_key->value[0] == '\0') {
+        otype = without_object_type(b, s);
+    }
     if (otype == 0x0U) {
         eds_warn(f, s->line, "[%s] ObjectType=0 (NULL): nothing to emulate; left out", s->name);
         return;
@@ -591,6 +679,7 @@ static void read_object(builder_t *b, uint16_t index)
             uint64_t v = number_of(b, links, key, 0xFFFFU, 0x10000U);
             if (v <= 0xFFFFU) {
                 o->links[o->n_links++] = (uint16_t)v;
+                push_link(b, index, (uint16_t)v, ini_get(b->ini, links, key)->line);
             }
         }
     }
@@ -640,19 +729,27 @@ static void read_object(builder_t *b, uint16_t index)
         }
         eds_entry_t *sub0 = got > 0U ? &f->entries[before] : NULL;
         if (sub0 != NULL && sub0->sub != 0U) {
-            eds_warn(f, s->line, "[%s] has no sub-index 0; added (UNSIGNED8, ro, %u)", s->name, (unsigned)highest);
+            eds_entry_t added;
+            memset(&added, 0, sizeof added);
+            added.index = index;
+            added.line = s->line;
+            added.name = "Highest sub-index supported";
+            added.type = 0x05;
+            added.access = EDS_RO;
+            added.def.kind = EDS_V_UINT;
+            added.def.u = highest;
+            if (is_mapping(index)) {
+                mapping_count(&f->entries[before], f->n_entries - before, &added);
+                eds_warn(f, s->line, "[%s] has no sub-index 0; added as the number of mapping entries present "
+                         "(UNSIGNED8, %s, %u)", s->name, eds_access_name(added.access), (unsigned)added.def.u);
+            } else {
+                eds_warn(f, s->line, "[%s] has no sub-index 0; added (UNSIGNED8, ro, %u)", s->name, (unsigned)highest);
+            }
             eds_entry_t *e = push_entry(b);
             if (e == NULL) {
                 return;
             }
-            memset(e, 0, sizeof *e);
-            e->index = index;
-            e->line = s->line;
-            e->name = "Highest sub-index supported";
-            e->type = 0x05;
-            e->access = EDS_RO;
-            e->def.kind = EDS_V_UINT;
-            e->def.u = highest;
+            *e = added;
             sub0 = NULL;
         }
         if (sub0 != NULL && sub0->type != 0x05U) {
@@ -698,6 +795,29 @@ static void orphan_subs(builder_t *b)
     }
 }
 
+/* Links to objects the device does not have are left out with a warning (they were kept, naming nothing). The
+ * entries of b->links are in the order of the objects (read by index) and of each object's links. */
+static void check_links(builder_t *b)
+{
+    size_t r = 0U;
+    for (uint32_t i = 0; i < b->f->n_objects; i++) {
+        eds_object_t *o = &b->f->objects[i];
+        while (r < b->n_links && b->links[r].owner < o->index) {
+            r++; /* links of an object that was left out */
+        }
+        uint16_t kept = 0U;
+        for (uint16_t k = 0U; k < o->n_links; k++, r++) {
+            if (eds_find_object(b->f, o->links[k]) != NULL) {
+                o->links[kept++] = o->links[k];
+            } else if (r < b->n_links) {
+                eds_warn(b->f, b->links[r].line, "[%04XObjectLinks] names object 0x%04X, which the device does not "
+                         "have; the link is left out", (unsigned)o->index, (unsigned)o->links[k]);
+            }
+        }
+        o->n_links = kept;
+    }
+}
+
 /* The identity numbers [DeviceInfo] lacks, from 0x1018 sub 1..3 (a device's own statement of them). */
 static void identity_from_1018(builder_t *b)
 {
@@ -725,6 +845,7 @@ void eds_read_model(eds_file_t *f, const ini_t *ini)
         read_object(&b, indices[i]);
     }
     if (b.oom) {
+        free(b.links);
         eds_error(f, 0U, "out of memory");
         return;
     }
@@ -744,6 +865,8 @@ void eds_read_model(eds_file_t *f, const ini_t *ini)
         o->count = (uint16_t)(e - o->first);
     }
     orphan_subs(&b);
+    check_links(&b);
+    free(b.links);
     identity_from_1018(&b);
     if (f->n_objects == 0U) {
         eds_error(f, 0U, "no objects: not a device description");

@@ -7,6 +7,7 @@
  */
 #include "eds_internal.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 /* The value a node starts with: a DCF's ParameterValue, else the default. */
@@ -204,6 +205,87 @@ static bool pdo_types_ok(const eds_file_t *f, const eds_object_t *c, const eds_o
     return true;
 }
 
+/* Inserts a VAR object of one entry into the sorted model. False when out of memory. */
+static bool insert_var(eds_file_t *f, const eds_entry_t *entry)
+{
+    eds_entry_t *entries = realloc(f->entries, ((size_t)f->n_entries + 1U) * sizeof *entries);
+    if (entries == NULL) {
+        return false;
+    }
+    f->entries = entries;
+    eds_object_t *objects = realloc(f->objects, ((size_t)f->n_objects + 1U) * sizeof *objects);
+    if (objects == NULL) {
+        return false;
+    }
+    f->objects = objects;
+    uint32_t at = 0U;
+    while (at < f->n_objects && f->objects[at].index < entry->index) {
+        at++;
+    }
+    const uint32_t first = at < f->n_objects ? f->objects[at].first : f->n_entries;
+    memmove(&f->entries[first + 1U], &f->entries[first], (f->n_entries - first) * sizeof *f->entries);
+    f->entries[first] = *entry;
+    f->n_entries++;
+    memmove(&f->objects[at + 1U], &f->objects[at], (f->n_objects - at) * sizeof *f->objects);
+    eds_object_t *o = &f->objects[at];
+    memset(o, 0, sizeof *o);
+    o->index = entry->index;
+    o->object_type = 0x7U;
+    o->name = entry->name;
+    o->first = first;
+    o->count = 1U;
+    o->line = entry->line;
+    f->n_objects++;
+    for (uint32_t i = at + 1U; i < f->n_objects; i++) {
+        f->objects[i].first++;
+    }
+    return true;
+}
+
+/* A synchronous PDO (transmission type 0..240, or a TPDO's 252) waits for SYNC, which the core consumes on the
+ * COB-ID of 0x1005: without the object such a PDO never ran. CiA 301's default COB-ID 0x80 is added. */
+static void sync_for_synchronous_pdos(eds_file_t *f)
+{
+    if (eds_find_object(f, 0x1005U) != NULL) {
+        return;
+    }
+    eds_entry_t *first = NULL;
+    unsigned synchronous = 0U;
+    for (uint32_t i = 0; i < f->n_entries; i++) {
+        eds_entry_t *e = &f->entries[i];
+        const bool receive = e->index >= 0x1400U && e->index <= 0x15FFU;
+        if (e->sub != 2U || e->type != 0x05U || !(receive || (e->index >= 0x1800U && e->index <= 0x19FFU))) {
+            continue;
+        }
+        const uint64_t type = effective(e)->u;
+        if (type <= 240U || (!receive && type == 252U)) {
+            first = first != NULL ? first : e;
+            synchronous++;
+        }
+    }
+    if (first == NULL) {
+        return;
+    }
+    eds_entry_t sync;
+    memset(&sync, 0, sizeof sync);
+    sync.index = 0x1005U;
+    sync.type = 0x07U;
+    sync.access = EDS_RW;
+    sync.name = "COB-ID SYNC message";
+    sync.def.kind = EDS_V_UINT;
+    sync.def.u = 0x80U;
+    sync.line = first->line;
+    const uint16_t index = first->index;
+    const uint64_t type = effective(first)->u; /* first moves with the entries: what the warning says, now */
+    if (!insert_var(f, &sync)) {
+        eds_error(f, 0U, "out of memory");
+        return;
+    }
+    eds_warn(f, sync.line, "[%04Xsub2] transmission type %llu is synchronous%s, but the file has no SYNC object "
+             "0x1005; added with CiA 301's default COB-ID 0x80", (unsigned)index, (unsigned long long)type,
+             synchronous > 1U ? " (and so are other PDOs of the file)" : "");
+}
+
 void eds_check_pdos(eds_file_t *f)
 {
     static const struct {
@@ -250,4 +332,5 @@ void eds_check_pdos(eds_file_t *f)
     if (dropped->any) {
         remove_dropped(f, dropped);
     }
+    sync_for_synchronous_pdos(f);
 }

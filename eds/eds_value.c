@@ -3,7 +3,8 @@
  * @brief Data types and values of the EDS reader: CiA 306 number forms, $NODEID sums, ranges, text out.
  *
  * CiA 306 numbers: "0x" hexadecimal, a leading "0" octal (so "010" is 8, as CANopenEditor, objdictgen and Lely
- * read it), otherwise decimal. A value may be a sum of such terms with one "$NODEID" among them
+ * read it; a warning says so where the decimal reading differs), otherwise decimal; a hexadecimal value of a signed
+ * type is its bit pattern ("0xFD" in an INTEGER8: -3). A value may be a sum of such terms with one "$NODEID" among them
  * ("0x80000000+$NODEID+0x180").
  */
 #include "eds_internal.h"
@@ -99,8 +100,9 @@ const char *eds_access_name(eds_access_t access)
     return (unsigned)access < 6U ? names[access] : "ro";
 }
 
-/* One term: [+-] then 0x<hex>, 0<octal>, or <decimal>. *octal_like: a leading 0 with digits 8/9 (read as decimal). */
-static bool parse_term(const char *s, size_t n, bool *negative, uint64_t *magnitude, bool *octal_like)
+/* One term: [+-] then 0x<hex>, 0<octal>, or <decimal>. *octal_like: a leading 0 with digits 8/9 (read as decimal).
+ * *octal: read as octal, to a value other than its decimal reading ("010"; not "00" or "07"). */
+static bool parse_term(const char *s, size_t n, bool *negative, uint64_t *magnitude, bool *octal_like, bool *octal)
 {
     *negative = false;
     size_t i = 0U;
@@ -140,17 +142,22 @@ static bool parse_term(const char *s, size_t n, bool *negative, uint64_t *magnit
         }
         v = v * base + d;
     }
+    if (base == 8U && v >= 8U) {
+        *octal = true;
+    }
     *magnitude = v;
     return true;
 }
 
-bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bool *nodeid, bool *octal_like)
+bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bool *nodeid, bool *octal_like,
+                       bool *octal)
 {
     /* A sum of terms: signed 128-bit arithmetic emulated with a sign and a magnitude of at most 2^64-1. */
     bool neg = false;
     uint64_t mag = 0U;
     *nodeid = false;
     *octal_like = false;
+    *octal = false;
     const char *p = text;
     bool first = true;
     for (;;) {
@@ -182,7 +189,7 @@ bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bo
         } else {
             bool tneg;
             uint64_t tmag;
-            if (!parse_term(start, n, &tneg, &tmag, octal_like)) {
+            if (!parse_term(start, n, &tneg, &tmag, octal_like, octal)) {
                 return false;
             }
             if (tneg == neg) {
@@ -216,9 +223,9 @@ bool eds_parse_integer(const char *text, bool *negative, uint64_t *magnitude, bo
 
 bool eds_parse_unsigned(const char *text, uint64_t max, uint64_t *out)
 {
-    bool neg, nodeid, octal_like;
+    bool neg, nodeid, octal_like, octal;
     uint64_t mag;
-    if (!eds_parse_integer(text, &neg, &mag, &nodeid, &octal_like) || neg || nodeid || mag > max) {
+    if (!eds_parse_integer(text, &neg, &mag, &nodeid, &octal_like, &octal) || neg || nodeid || mag > max) {
         return false;
     }
     *out = mag;
@@ -348,6 +355,20 @@ static bool utf16(eds_file_t *f, const char *text, eds_value_t *out)
     return true;
 }
 
+/* "0x" and hexadecimal digits only: one term, no sign, no $NODEID. */
+static bool is_one_hex_term(const char *s)
+{
+    if (s[0] != '0' || (s[1] != 'x' && s[1] != 'X') || s[2] == '\0') {
+        return false;
+    }
+    for (s += 2; *s != '\0'; s++) {
+        if (!isxdigit((unsigned char)*s)) {
+            return false;
+        }
+    }
+    return true;
+}
+
 static bool is_decimal_real(const char *s)
 {
     const char *p = s;
@@ -461,9 +482,9 @@ eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_v
         }
         return EDS_PARSE_OK;
     }
-    bool neg, nodeid, octal_like;
+    bool neg, nodeid, octal_like, octal;
     uint64_t mag;
-    if (!eds_parse_integer(text, &neg, &mag, &nodeid, &octal_like)) {
+    if (!eds_parse_integer(text, &neg, &mag, &nodeid, &octal_like, &octal)) {
         snprintf(why, why_cap, "is not an integer (CiA 306: 0x hexadecimal, 0 octal, decimal, $NODEID+...)");
         return EDS_PARSE_BAD;
     }
@@ -472,7 +493,12 @@ eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_v
     eds_type_bound(type, false, &lo);
     eds_type_bound(type, true, &hi);
     bool range = false;
-    if (t->kind == EDS_V_INT) {
+    if (t->kind == EDS_V_INT && !neg && !nodeid && mag > (uint64_t)hi.i && mag <= UINT64_MAX >> (64U - t->bits) &&
+        is_one_hex_term(text)) {
+        /* "0xFD" in an INTEGER8 is its bit pattern, -3, as tools that write signed values in hex mean it (and as
+         * python-canopen reads limits): 0xFD - 0x100, computed without overflow for INTEGER64 too. */
+        out->i = -(int64_t)((UINT64_MAX >> (64U - t->bits)) - mag) - 1;
+    } else if (t->kind == EDS_V_INT) {
         if (!neg && mag > (uint64_t)hi.i) {
             out->i = hi.i, range = true;
         } else if (neg && mag > (uint64_t)(-(lo.i + 1)) + 1U) {
@@ -501,6 +527,15 @@ eds_parse_t eds_parse_value(eds_file_t *f, uint8_t type, const char *text, eds_v
     }
     if (octal_like) {
         snprintf(why, why_cap, "has a leading 0 but is not octal: read as decimal");
+    } else if (octal) {
+        /* CiA 306 says so, but "01000" is more often meant as 1000 than as 512: say which was read */
+        if (t->kind == EDS_V_INT) {
+            snprintf(why, why_cap, "has a leading 0: read as octal (CiA 306), %s%" PRId64, nodeid ? "$NODEID+" : "",
+                     out->i);
+        } else {
+            snprintf(why, why_cap, "has a leading 0: read as octal (CiA 306), %s%" PRIu64, nodeid ? "$NODEID+" : "",
+                     out->u);
+        }
     }
     return EDS_PARSE_OK;
 }

@@ -134,6 +134,7 @@ static const eds_value_t *dcf_values(eds_file_t *scratch, const eds_file_t *f, c
         errno = ENOMEM;
         return NULL;
     }
+    const uint8_t node_id = o->node_id != 0U ? o->node_id : f->comm.node_id; /* the NodeID written */
     for (uint32_t i = 0; i < f->n_entries; i++) {
         const eds_entry_t *e = &f->entries[i];
         values[i] = e->param.kind != EDS_V_NONE ? e->param : e->def;
@@ -144,6 +145,11 @@ static const eds_value_t *dcf_values(eds_file_t *scratch, const eds_file_t *f, c
             if (n >= 0 && (size_t)n <= sizeof raw && decode_raw(scratch, e->type, raw, (size_t)n, &current)) {
                 values[i] = current;
             }
+        }
+        /* What the reader makes of it at the DCF's NodeID: written so (a value read back is the value written). */
+        eds_value_t relative;
+        if (eds_value_follows_node_id(e, &values[i], node_id, &relative)) {
+            values[i] = relative;
         }
         size_t at = 0U;
         const char *why = unwritable(e->type, &values[i], &at);

@@ -42,11 +42,14 @@ EXPECTED_DIAGNOSTICS = {
     "sdo-servers.eds": [],
     "all-types.eds": [],
     "compact.eds": [],
-    "device.dcf": [],
+    # transmission type 1 without 0x1005: SYNC on CiA 301's 0x80 (issue 35)
+    "device.dcf": ["device.dcf:149: warning: [1800sub2] transmission type 1 is synchronous, but the file has no SYNC "
+                   "object 0x1005; added with CiA 301's default COB-ID 0x80"],
     "drive.eds": [],
     "domain-links.eds": [],
     "many-pdos.eds": [],
-    "numbers.eds": ["numbers.eds:145: warning: [2003] DefaultValue: '08' has a leading 0 but is not octal: read as decimal"],
+    "numbers.eds": ["numbers.eds:121: warning: [2000] DefaultValue: '010' has a leading 0: read as octal (CiA 306), 8",
+                    "numbers.eds:145: warning: [2003] DefaultValue: '08' has a leading 0 but is not octal: read as decimal"],
     "bom-latin1.eds": ["bom-latin1.eds:107: warning: not UTF-8 (byte 0xDF); the file is read as Latin-1"],
     "inline-comments.eds": ["inline-comments.eds:112: warning: DefaultValue: inline comment '; sixteen' removed "
                             "(CiA 306 has comments on lines of their own)"],
@@ -63,6 +66,25 @@ EXPECTED_DIAGNOSTICS = {
         "missing-info.eds:9: warning: [DeviceInfo] has no RevisionNumber; taken from object 0x1018 (or 0)"],
     "dummy-usage.eds": ["dummy-usage.eds:211: warning: [1601sub1] DefaultValue 0x00070020 maps dummy 0x0007 while "
                         "[DummyUsage] Dummy0007 is not 1; the PDO is disabled"],
+    # The files of issue 35 (test_eds_repairs.py checks their models)
+    "pdomapping-hex.eds": [],
+    "empty-values.dcf": [
+        "empty-values.dcf:81: warning: [1018sub1] ParameterValue is empty; DefaultValue 0xABC kept",
+        "empty-values.dcf:114: warning: [1005] ParameterValue is empty; DefaultValue 0x80 kept",
+        "empty-values.dcf:136: warning: [1800sub1] ParameterValue is empty; DefaultValue $NODEID+0x180 kept"],
+    "node-id.dcf": ["node-id.dcf:274: warning: [1801sub1] ParameterValue 0x2A5 is the COB-ID of node-ID 37 "
+                    "($NODEID+0x280), not of the file's NodeID 32; kept as 0x2A5 at any node-ID"],
+    "small-rules.eds": [
+        "small-rules.eds:123: warning: [1800sub2] transmission type 1 is synchronous, but the file has no SYNC object "
+        "0x1005; added with CiA 301's default COB-ID 0x80",
+        "small-rules.eds:183: warning: [2003] DefaultValue: '01000' has a leading 0: read as octal (CiA 306), 512",
+        "small-rules.eds:191: warning: [2004] DefaultValue: '0x1FF' does not fit INTEGER8; 127 used"],
+    "diagnostics.eds": [
+        "diagnostics.eds:54: warning: [1018] has no ObjectType but sub-index sections; read as a RECORD (0x9)",
+        "diagnostics.eds:127: warning: [1A00] has no sub-index 0; added as the number of mapping entries present "
+        "(UNSIGNED8, rw, 2)",
+        "diagnostics.eds:215: warning: [2000ObjectLinks] names object 0x2005, which the device does not have; the "
+        "link is left out"],
     "broken-refs.eds": [
         "broken-refs.eds:106: warning: object 0x2002 is listed but has no section [2002]; left out",
         "broken-refs.eds:112: warning: [2000] SubNumber: '99999' is not a number from 0 to 65535; 2 used",
@@ -280,7 +302,8 @@ def test_round_trip_dcf(tmp_path, path):
     out = tmp_path / "out.dcf"
     assert run("convert", "--dcf", "--node-id", "7", path, out).returncode == 0
     second = model(out)
-    assert second["warnings"] == 0 and second["errors"] == 0, second["diagnostics"]
+    # only a value kept as it is may be told again (node-id.dcf's COB-ID of node 37 is not node 7's either)
+    assert all("; kept" in d for d in second["diagnostics"]) and second["errors"] == 0, second["diagnostics"]
     assert second["commissioning"]["node_id"] == 7
     assert comparable(model(path), dcf=True) == comparable(second, dcf=True)
 

@@ -86,6 +86,28 @@ def test_dcf_values_node_id_and_commissioning(emulator, network, capture):
     assert node.sdo.upload(0x2100, 2) == struct.pack("<h", 0)
 
 
+def test_a_dcf_at_another_node_id_follows_it(emulator, network, capture):
+    """node-id.dcf was written for NodeID 0x20, its $NODEID values resolved there: run at node-ID 20 it answered node
+    0x20's (0x1014 = 0xA0, 0x1200:01 = 0x620; issue 35). Those values follow the node-ID now; the COB-ID 0x2A5 the
+    file configured for TPDO 2 (node 0x25's) stays as configured."""
+    emu = emulator(f"{FILES / 'node-id.dcf'}:20")
+    capture.wait_for(0x700 + 20, data=b"\x00", timeout=3)
+    node = eds_node(network, FILES / "node-id.dcf", 20)
+
+    def u32(index, sub=0):
+        return struct.unpack("<I", node.sdo.upload(index, sub))[0]
+
+    assert u32(0x1014) == 0x80 + 20
+    assert (u32(0x1200, 1), u32(0x1200, 2)) == (0x600 + 20, 0x580 + 20)
+    assert u32(0x1400, 1) == 0x80000200 + 20  # disabled in the DCF, still disabled
+    assert (u32(0x1800, 1), u32(0x1801, 1)) == (0x180 + 20, 0x2A5)
+    assert node.sdo.upload(0x2002, 0) == bytes([10 + 20])
+    node.nmt.state = "OPERATIONAL"
+    since = time.time()
+    emu.command("set 20 0x2000 0x1234", expect="0x2000")
+    assert capture.wait_for(0x180 + 20, timeout=3, since=since)[-1].data == b"\x34\x12"
+
+
 def test_lss_only_where_supported(emulator, network, capture):
     # LSS_Supported=0 in all-types.eds: an LSS inquiry gets no answer; the Buerkert (LSS) answers
     emulator(f"{FILES / 'all-types.eds'}:0x33", "buerkert:0x34")
