@@ -300,8 +300,8 @@ void co_node_routes_update(co_node_t *node)
     if (services_run(node)) {
         route_add(node, 0x000U, route_target(CO_RX_NMT, 0U));
 #if CO_CONFIG_SYNC
-        if (node->sync.can_id != CO_NO_CAN_ID) {
-            route_add(node, node->sync.can_id, route_target(CO_RX_SYNC, 0U));
+        if (co_sync_rx_id(node) != CO_NO_CAN_ID) {
+            route_add(node, co_sync_rx_id(node), route_target(CO_RX_SYNC, 0U));
         }
 #endif
         route_add(node, node->sdo.rx_id, route_target(CO_RX_SDO, 0U));
@@ -345,32 +345,54 @@ static bool guarding_request(const co_node_t *node, const co_frame_t *frame)
 #endif
 }
 
-static void put_id(uint16_t *ids, uint16_t cap, uint16_t *n, uint16_t id)
+static void put_one(uint16_t *ids, uint16_t cap, uint16_t *n, uint32_t *from, uint32_t id)
 {
     if (*n < cap) {
-        ids[*n] = id;
+        ids[*n] = (uint16_t)id;
     }
     (*n)++;
+    *from = id + 1U;
+}
+
+/* Puts id (0x800: none) in order: after the ids below it of the TPDOs answering remote requests (co_tpdo_rtr_next from
+ * *from, the lowest id not yet put), once. */
+static void put_id(const co_node_t *node, uint16_t *ids, uint16_t cap, uint16_t *n, uint32_t *from, uint32_t id)
+{
+#if CO_CONFIG_TPDO_RTR
+    for (uint32_t t; services_run(node) && (t = co_tpdo_rtr_next(node, *from)) < id;) {
+        put_one(ids, cap, n, from, t);
+    }
+    if (id < 0x800U && id >= *from) {
+        put_one(ids, cap, n, from, id);
+    }
+#else
+    (void)node;
+    if (id < 0x800U) {
+        put_one(ids, cap, n, from, id);
+    }
+#endif
 }
 
 uint16_t co_node_rx_ids(const co_node_t *node, uint16_t *ids, uint16_t cap)
 {
     uint16_t n = 0U;
     uint16_t r = 0U;
+    uint32_t from = 0U;
     for (; r < node->n_route && node->route[r].id <= 0x700U; r++) {
-        put_id(ids, cap, &n, node->route[r].id);
+        put_id(node, ids, cap, &n, &from, node->route[r].id);
     }
     if (services_run(node)) { /* heartbeats consumed and the guard request, between the table's ids */
         for (uint16_t id = 0x701U; id <= 0x77FU; id++) {
             const co_frame_t guard = {id, 0U, CO_FRAME_RTR, {0U}};
             if (guarding_request(node, &guard) || monitored(node, id)) {
-                put_id(ids, cap, &n, id);
+                put_id(node, ids, cap, &n, &from, id);
             }
         }
     }
     for (; r < node->n_route; r++) {
-        put_id(ids, cap, &n, node->route[r].id);
+        put_id(node, ids, cap, &n, &from, node->route[r].id);
     }
+    put_id(node, ids, cap, &n, &from, 0x800U); /* the TPDOs' ids above the others */
     return n;
 }
 
@@ -408,8 +430,14 @@ bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
 bool co_node_take(co_node_t *node, const co_frame_t *frame)
 {
     if (frame->flags != 0U || frame->len > 8U || frame->id > 0x7FFU) {
+#if CO_CONFIG_TPDO_RTR
+        if (frame->flags == CO_FRAME_RTR && frame->id <= 0x7FFU && services_run(node) &&
+            co_tpdo_rtr(node, (uint16_t)frame->id)) {
+            return true; /* a remote request of a TPDO */
+        }
+#endif
         if (!guarding_request(node, frame)) {
-            return false; /* extended, error and remote frames but a guard request; RTR of TPDOs is not supported */
+            return false; /* extended, error and remote frames but a guard request or a TPDO's */
         }
 #if CO_CONFIG_NODE_GUARDING
         co_guard_rx(node, frame);

@@ -4,6 +4,8 @@
  * TPDOs (254/255) go out when a mapped value changes (compared with what was sent last, so the
  * application needs no call), when co_tpdo_trigger() asks, and when the event timer expires; always
  * subject to the inhibit time. Synchronous TPDOs (0..240) and RPDOs go with SYNC. Only in Operational.
+ * Remote requests (CO_CONFIG_TPDO_RTR, a TPDO whose COB-ID bit 30 is clear): type 252 sends what the last SYNC sampled,
+ * 253 samples and sends at once, 254/255 take it as an event (inhibit time permitting); 0..240 do not answer.
  * Mapping granularity is one byte; entries whose length is not a multiple of 8 bits are refused. A mapping whose
  * sub-index 0 is 0xFE or 0xFF makes the PDO a multiplexed PDO (co_mpdo.c, CO_CONFIG_MPDO).
  */
@@ -401,7 +403,7 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
     }
     for (unsigned n = 0U; n < node->n_tpdo; n++) {
         co_tpdo_t *p = &node->tpdo[n];
-        if (!p->valid || p->type > 240U || IS_MPDO(p)) {
+        if (!p->valid || (p->type > 240U && (!CO_CONFIG_TPDO_RTR || p->type != 252U)) || IS_MPDO(p)) {
             continue; /* an MPDO is event-driven only (CiA 301) */
         }
         if (!p->sync_started) {
@@ -413,6 +415,13 @@ void co_pdo_on_sync(co_node_t *node, uint8_t counter)
         }
         uint8_t buf[8];
         tpdo_sample(node, p, buf);
+#if CO_CONFIG_TPDO_RTR
+        if (p->type == 252U) {
+            memcpy(p->last, buf, 8U); /* sent on the next remote request */
+            p->sent_once = true;
+            continue;
+        }
+#endif
         if (p->type == 0U) {
             if (p->event || !p->sent_once || memcmp(buf, p->last, 8U) != 0) {
                 tpdo_send(node, p, buf); /* acyclic: only when something changed */
@@ -458,6 +467,55 @@ void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to)
     }
 }
 
+#if CO_CONFIG_TPDO_RTR
+/* A TPDO that answers remote requests: valid, RTR allowed by its COB-ID, an RTR-only or event-driven type. */
+static bool answers_rtr(const co_tpdo_t *p)
+{
+    return p->valid && (p->cob_id & CO_COBID_NO_RTR) == 0U && p->type >= 252U && !IS_MPDO(p);
+}
+
+bool co_tpdo_rtr(co_node_t *node, uint16_t id)
+{
+    bool taken = false;
+    co_tpdo_t *const end = node->tpdo + node->n_tpdo;
+    for (co_tpdo_t *p = node->tpdo; p < end; p++) {
+        if (!answers_rtr(p) || (p->cob_id & CO_COBID_CAN_ID) != id) {
+            continue;
+        }
+        taken = true;
+        if (node->nmt_state != CO_NMT_OPERATIONAL) {
+            continue;
+        }
+        uint8_t buf[8];
+        if (p->type >= 254U) {
+            p->event = true; /* event-driven: a transmission asked for, inhibit time permitting */
+            co_node_wake(node, CO_SVC_PDO);
+            continue;
+        }
+        if (p->type == 252U && p->sent_once) {
+            memcpy(buf, p->last, 8U); /* what the last SYNC sampled */
+        } else {
+            tpdo_sample(node, p, buf); /* 253, or 252 before its first SYNC */
+        }
+        tpdo_send(node, p, buf);
+    }
+    return taken;
+}
+
+uint32_t co_tpdo_rtr_next(const co_node_t *node, uint32_t from)
+{
+    uint32_t next = 0x800U;
+    const co_tpdo_t *const end = node->tpdo + node->n_tpdo;
+    for (const co_tpdo_t *p = node->tpdo; p < end; p++) {
+        const uint32_t id = p->cob_id & CO_COBID_CAN_ID;
+        if (answers_rtr(p) && id >= from && id < next) {
+            next = id;
+        }
+    }
+    return next;
+}
+#endif
+
 void co_tpdo_trigger(co_node_t *node, uint16_t n)
 {
     if (n < node->n_tpdo) {
@@ -487,13 +545,19 @@ static uint32_t check_comm(co_node_t *node, const co_od_entry_t *e, const uint8_
         const uint16_t map = (uint16_t)(e->index + 0x200U);
         co_pdo_map_t tmp[8];
         uint8_t n;
-        if (resolve_all(node, map, receive, tmp, &n) <= 0) {
-            return CO_ABORT_INVALID_VALUE; /* a PDO without a valid, non-empty mapping cannot be valid */
+        if (resolve_all(node, map, receive, tmp, &n) < 0) {
+            return CO_ABORT_INVALID_VALUE; /* a PDO whose mapping is invalid cannot be valid */
         }
+        /* An empty mapping is taken, as from a file (vendor files have valid PDOs mapping nothing): the PDO stays
+         * silent until mapped, which starts with making it invalid again (the mapping procedure). */
         return CO_ABORT_NONE;
     }
-    case 2:
-        return (data[0] >= 241U && data[0] <= 253U) ? CO_ABORT_INVALID_VALUE : CO_ABORT_NONE;
+    case 2: {
+        /* 241..251 reserved; 252/253 RTR-only, for a TPDO that answers RTR (CO_CONFIG_TPDO_RTR) */
+        const uint8_t type = data[0];
+        const bool rtr_only = !receive && CO_CONFIG_TPDO_RTR && type >= 252U;
+        return (type >= 241U && type <= 253U && !rtr_only) ? CO_ABORT_INVALID_VALUE : CO_ABORT_NONE;
+    }
     case 3:
     case 6:
         return (!receive && valid) ? CO_ABORT_INVALID_VALUE : CO_ABORT_NONE;
@@ -530,8 +594,12 @@ static uint32_t check_map(co_node_t *node, const co_od_entry_t *e, const uint8_t
         }
         return bytes > 8U ? CO_ABORT_PDO_LENGTH : CO_ABORT_NONE;
     }
-    if (!stored && co_od_u32_or(node, e->index, 0U, 0U) != 0U) {
+    const uint32_t count = co_od_u32_or(node, e->index, 0U, 0U);
+    if (!stored && count != 0U) {
         return CO_ABORT_UNSUPPORTED_ACCESS; /* step 2: sub 0 must be 0 while entries change */
+    }
+    if (stored && (e->sub > count || mpdo_mapping(count, receive))) {
+        return CO_ABORT_NONE; /* CiA 301 checks the entries up to the count: those above it may name anything */
     }
     const uint32_t v = co_get_u32(data);
     if (v == 0U) {
@@ -572,7 +640,16 @@ void co_pdo_written(co_node_t *node, const co_od_entry_t *e)
     const unsigned n = e->index & 0x01FFU;
     if (!is_receive(e->index)) {
         if (n < node->n_tpdo) {
+#if CO_CONFIG_TPDO_RTR
+            const co_tpdo_t *p = &node->tpdo[n];
+            const uint32_t was = answers_rtr(p) ? p->cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID;
             configure_tpdo(node, n);
+            if ((answers_rtr(p) ? p->cob_id & CO_COBID_CAN_ID : CO_NO_CAN_ID) != was) {
+                co_node_routes_update(node); /* the remote requests it answers changed (co_node_rx_ids) */
+            }
+#else
+            configure_tpdo(node, n);
+#endif
         }
     } else if (n < node->n_rpdo) {
         const co_rpdo_t *p = &node->rpdo[n];

@@ -11,6 +11,8 @@
  * - No SYNC: neither dictionary has 0x1005/0x1006/0x1007/0x1019, and the PDO transmission types
  *   (0x1400:02, 0x1800:02, 0x1801:02, 0x1802:02) are read-only and event-driven (254/255).
  * - No node guarding: neither dictionary has 0x100C/0x100D (heartbeat only).
+ * - No remote requests of TPDOs (CO_CONFIG_TPDO_RTR): the manuals name none; remote frames on the TPDO COB-IDs are
+ *   ignored (their COB-IDs, read-only, leave bit 30 "no RTR" clear; the host build, with the default, answers them).
  * - No dynamic PDO mapping: 0x1600/0x1A00.. are read-only in both.
  * - No PDO timers: neither dictionary has an RPDO event timer (0x1400:05) or a TPDO inhibit time or event timer
  *   (0x1800..:03/05); their TPDOs go at each change (the manuals name no timer).
@@ -42,6 +44,8 @@
 #define CO_CONFIG_MPDO 0
 #define CO_SDO_BUF_SIZE 8U
 #define CO_CONFIG_SYNC 0
+#define CO_CONFIG_SYNC_PRODUCER 0
+#define CO_CONFIG_TPDO_RTR 0
 #define CO_CONFIG_NODE_GUARDING 0
 #define CO_CONFIG_PDO_DYNAMIC_MAPPING 0
 #define CO_CONFIG_PDO_TIMERS 0

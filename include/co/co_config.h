@@ -128,6 +128,15 @@
 #define CO_CONFIG_SYNC 1
 #endif
 
+/** 1 (with CO_CONFIG_SYNC): the SYNC producer (CiA 301 §7.2.5): a node whose 0x1005 has bit 30 (gen) set sends the
+ *  SYNC every 0x1006 µs, with a counter 1..0x1019 when 0x1019 is 2..240, and consumes it itself. 0: a 0x1005 with bit
+ *  30 is refused (0x06090030), written by a master and stored alike; a dictionary whose 0x1005 has it by default is
+ *  then refused by its own save (0x08000020). A generated <c_name>_od_config.h turns it off where 0x1005 cannot
+ *  have the bit. */
+#ifndef CO_CONFIG_SYNC_PRODUCER
+#define CO_CONFIG_SYNC_PRODUCER 1
+#endif
+
 /** 1: LSS fastscan (0x51) is compiled in. */
 #ifndef CO_CONFIG_LSS_FASTSCAN
 #define CO_CONFIG_LSS_FASTSCAN 1
@@ -138,6 +147,14 @@
  *  dispatching list 0x1FD0..0x1FFF. */
 #ifndef CO_CONFIG_MPDO
 #define CO_CONFIG_MPDO 1
+#endif
+
+/** 1: TPDOs answer remote requests (RTR) on their COB-ID, where the COB-ID allows it (bit 30 clear): transmission
+ *  types 252 (data sampled at the SYNC, sent on RTR) and 253 (sampled and sent on RTR) are taken, and an RTR asks an
+ *  event-driven TPDO (254/255) for a transmission. 0: types 252/253 are refused (0x06090030) and remote frames on
+ *  TPDO COB-IDs ignored. A generated <c_name>_od_config.h turns it off where no TPDO can allow RTR. */
+#ifndef CO_CONFIG_TPDO_RTR
+#define CO_CONFIG_TPDO_RTR 1
 #endif
 
 /** 1: writable PDO mapping (the CiA 301 mapping procedure) is compiled in. */

@@ -272,13 +272,18 @@ typedef struct co_sdo_server {
 } co_sdo_server_t;
 
 typedef struct co_sync {
-    co_time_us_t timeout_due;   /**< 1.5 x 0x1006 after the last SYNC (or a step towards it: rest_ms), or CO_NEVER. */
-    uint32_t rest_ms;           /**< Time still to wait after timeout_due (periods above 11 minutes). */
+    co_time_us_t due;           /**< A consumer's timeout, 1.5 x 0x1006 after the last SYNC; a producer's next SYNC (or
+                                     a step towards either: rest_ms); CO_NEVER: none (yet). */
+    uint32_t rest_ms;           /**< Time still to wait after due (periods above 11 minutes). */
     uint32_t period_us;         /**< 0x1006, kept here by the write path. */
     uint16_t can_id;            /**< CAN-ID of 0x1005, CO_NO_CAN_ID without the object. */
     uint8_t overflow;           /**< 0x1019 (0: SYNC without a counter). */
     bool timeout_error;
     bool length_error;
+#if CO_CONFIG_SYNC_PRODUCER
+    bool producer;              /**< 0x1005 bit 30: this node produces the SYNC (and takes none from the bus). */
+    uint8_t counter;            /**< The counter of the last SYNC produced (0x1019 > 0), 0 before the first. */
+#endif
 } co_sync_t;
 
 /** co_pdo_map_t.row of a dummy entry (RPDO): its bytes are skipped. */
@@ -343,7 +348,7 @@ typedef struct co_tpdo {
     uint32_t event_us;
 #endif
     co_pdo_map_t map[8];
-    uint8_t last[8];
+    uint8_t last[8];            /**< What was sent last; type 252: what the last SYNC sampled (sent_once: there is). */
 } co_tpdo_t;
 
 typedef struct co_lss_slave {
@@ -492,10 +497,12 @@ static inline bool co_node_settled(const co_node_t *node, co_time_us_t deadline)
 
 /**
  * The CAN-IDs of the frames this node takes, sorted: data frames of its services (LSS, NMT, SYNC, SDO servers,
- * RPDOs), the heartbeats it consumes, and its node-guarding request (a remote frame on 0x700 + node-ID, when the
- * OD has node guarding). co_node_rx() ignores every other frame, so a port may filter on these in hardware and a
- * runner of many nodes may give a frame only to the nodes that take it. Changes are reported with
- * CO_EV_RX_FILTER and change co_node_t.rx_ids_version. @return the number of IDs (at most 2 + 4 + route entries + 127); at most cap are written.
+ * RPDOs), the heartbeats it consumes, its node-guarding request (a remote frame on 0x700 + node-ID, when the
+ * OD has node guarding) and the remote requests of its TPDOs that answer them (CO_CONFIG_TPDO_RTR: valid, COB-ID bit
+ * 30 clear, type 252..255; only remote frames are taken on these). co_node_rx() ignores every other frame, so a port
+ * may filter on these in hardware and a runner of many nodes may give a frame only to the nodes that take it. Changes
+ * are reported with CO_EV_RX_FILTER and change co_node_t.rx_ids_version. @return the number of IDs (at most route
+ * entries + 127 + the TPDOs); at most cap are written.
  */
 uint16_t co_node_rx_ids(const co_node_t *node, uint16_t *ids, uint16_t cap);
 

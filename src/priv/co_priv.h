@@ -131,7 +131,8 @@ static inline co_time_us_t co_next_on_grid(co_time_us_t due, uint32_t period, co
 
 /* COB-ID bits (0x1005, 0x1014, 0x14xx/0x18xx sub 1). */
 #define CO_COBID_INVALID 0x80000000UL
-#define CO_COBID_NO_RTR 0x40000000UL   /* TPDO: no RTR; SYNC: bit 30 = "produce SYNC" */
+#define CO_COBID_NO_RTR 0x40000000UL   /* TPDO: no RTR */
+#define CO_COBID_SYNC_GEN 0x40000000UL /* 0x1005: this node produces the SYNC */
 #define CO_COBID_FRAME 0x20000000UL    /* 29-bit frame */
 #define CO_COBID_CAN_ID 0x000007FFUL
 
@@ -318,6 +319,18 @@ void co_sync_rx(co_node_t *node, const co_frame_t *f);
 co_time_us_t co_sync_process(co_node_t *node);
 uint32_t co_sync_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len, bool stored);
 void co_sync_written(co_node_t *node, const co_od_entry_t *e);
+#if CO_CONFIG_SYNC
+/* The CAN-ID of the SYNCs the node takes from the bus: 0x1005's, none without it or while the node produces them. */
+static inline uint16_t co_sync_rx_id(const co_node_t *node)
+{
+#if CO_CONFIG_SYNC_PRODUCER
+    if (node->sync.producer) {
+        return CO_NO_CAN_ID;
+    }
+#endif
+    return node->sync.can_id;
+}
+#endif
 
 /* ---- PDO (co_pdo.c) ---- */
 void co_pdo_reset(co_node_t *node);
@@ -326,6 +339,13 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f);
 co_time_us_t co_pdo_process(co_node_t *node);
 void co_pdo_on_sync(co_node_t *node, uint8_t counter);
 void co_pdo_on_state(co_node_t *node, co_nmt_state_t from, co_nmt_state_t to);
+#if CO_CONFIG_TPDO_RTR
+/* A remote frame on id: true when a TPDO answers remote requests there (valid, COB-ID bit 30 clear, type 252..255),
+ * which answers it in Operational: 252 with what the last SYNC sampled, 253 sampled now, 254/255 as an event. */
+bool co_tpdo_rtr(co_node_t *node, uint16_t id);
+/* The lowest CAN-ID >= from on which a TPDO answers remote requests, or 0x800 (co_node_rx_ids). */
+uint32_t co_tpdo_rtr_next(const co_node_t *node, uint32_t from);
+#endif
 uint32_t co_pdo_check_write(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, bool stored);
 void co_pdo_written(co_node_t *node, const co_od_entry_t *e);
 co_status_t co_pdo_count(co_node_t *node);

@@ -372,14 +372,23 @@ static void check_frame(fz_t *h, const co_frame_t *f)
         known = true;
         ok = ok || (f->len == 8U && sdo_or_op(st) && h->call == FZ_CALL_PROCESS);
     }
-    const uint32_t sync_id = od_u32(h, 0x1005U, 0U, 0x80U) & 0x7FFU;
+    const uint32_t sync_cob_id = od_u32(h, 0x1005U, 0U, 0x80U);
+    const uint32_t sync_id = sync_cob_id & 0x7FFU;
+#if CO_CONFIG_SYNC && CO_CONFIG_SYNC_PRODUCER
+    if ((sync_cob_id & 0x40000000UL) != 0U && sync_id == f->id) { /* a SYNC producer's SYNC */
+        known = true;
+        ok = ok || (f->len == (n->sync.overflow != 0U ? 1U : 0U) && sdo_or_op(st) && h->call == FZ_CALL_PROCESS);
+    }
+#endif
     for (uint8_t k = 0U; k < n->n_tpdo && k < CO_TPDO_MAX; k++) {
         const co_tpdo_t *p = &n->tpdo[k];
         if (!p->valid || (p->cob_id & 0x7FFU) != f->id) {
             continue;
         }
         known = true;
-        const bool from = h->call == FZ_CALL_PROCESS || (h->call == FZ_CALL_RX && h->rx.id == sync_id);
+        /* at a pass (a timer, a SYNC produced), at a SYNC taken, or at a remote request of it (types 252/253) */
+        const bool rtr = h->call == FZ_CALL_RX && (h->rx.flags & CO_FRAME_RTR) != 0U && h->rx.id == f->id;
+        const bool from = h->call == FZ_CALL_PROCESS || (h->call == FZ_CALL_RX && h->rx.id == sync_id) || rtr;
         ok = ok || (st == CO_NMT_OPERATIONAL && f->len == p->map_len && f->len >= 1U && from);
     }
     if (!known) {
@@ -750,7 +759,13 @@ static void deliver(fz_t *h, const co_frame_t *f, bool process_after)
     if (taken && !listed) {
         fz_fail(h, "co_node_rx took a frame on 0x%03lX, which co_node_rx_ids does not list", (unsigned long)f->id);
     }
-    if (!taken && listed && f->flags == 0U && f->len <= 8U && (f->id < 0x701U || f->id > 0x77FU)) {
+#if CO_CONFIG_TPDO_RTR
+    /* listed for the remote requests of a TPDO: only remote frames are taken on it */
+    const bool remote_only = listed && co_tpdo_rtr_next(h->node, f->id) == f->id;
+#else
+    const bool remote_only = false;
+#endif
+    if (!taken && listed && !remote_only && f->flags == 0U && f->len <= 8U && (f->id < 0x701U || f->id > 0x77FU)) {
         fz_fail(h, "co_node_rx ignored a data frame on 0x%03lX, which co_node_rx_ids lists", (unsigned long)f->id);
     }
     if (!pending && settled) {

@@ -261,6 +261,25 @@ def test_fitted_configuration_follows_the_objects(tmp_path):
     assert "CO_CONFIG_EMCY_INHIBIT" not in off
 
 
+def test_fitted_configuration_of_the_sync_producer_and_the_rtr_tpdos(tmp_path):
+    # The SYNC producer stays where 0x1005 may have bit 30 (gen): written, or by default; else it is compiled out.
+    def with_sync(access, value):
+        sync = (f"[1005]\nParameterName=COB-ID SYNC\nObjectType=0x7\nDataType=0x0007\nAccessType={access}\n"
+                f"DefaultValue={value}\nPDOMapping=0\n\n")
+        return replace_list(BASE_EDS.replace("[1000]\n", sync + "[1000]\n", 1), "OptionalObjects",
+                            sorted(optional_objects(BASE_EDS) + ["0x1005"], key=lambda o: int(o, 16)))
+    assert "CO_CONFIG_SYNC_PRODUCER" in fitted(tmp_path, with_sync("ro", "0x80"))[0]
+    assert "CO_CONFIG_SYNC_PRODUCER" not in fitted(tmp_path, with_sync("ro", "0x40000080"))[0]
+    assert "CO_CONFIG_SYNC_PRODUCER" not in fitted(tmp_path, with_sync("rw", "0x80"))[0]
+    # The SDS's TPDOs allow RTR (read-only COB-IDs with bit 30 clear, type 255): answered; with bit 30 set, not.
+    assert "CO_CONFIG_TPDO_RTR" not in fitted(tmp_path, BASE_EDS)[0]
+    no_rtr = BASE_EDS
+    for tpdo in ("1800", "1801"):
+        no_rtr = set_key(no_rtr, f"{tpdo}sub1", "DefaultValue", f"$NODEID+0x40000{int(tpdo, 16) - 0x1800 + 1}80")
+    assert "CO_CONFIG_TPDO_RTR" in fitted(tmp_path, no_rtr)[0]
+    assert "CO_CONFIG_TPDO_RTR" not in fitted(tmp_path, set_key(no_rtr, "1801sub1", "AccessType", "rw"))[0]
+
+
 def test_16_bit_limit_pairs_where_every_limit_fits(tmp_path):
     # The SDS limits UNSIGNED16 0x2000:02 to 0..365: 16-bit pairs, in the fitted configuration.
     def generated(eds_text):

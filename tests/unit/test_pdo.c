@@ -120,7 +120,9 @@ static void mapping_procedure_and_its_aborts(void)
     W_ABORT(0x06020000UL, 0x1A00, 1, 0x21000108UL, 4); /* no such object */
     W_ABORT(0x06040041UL, 0x1A00, 1, 0x60000110UL, 4); /* 16 bits of a U8 */
     W_ABORT(0x06040041UL, 0x1A00, 1, 0x60000104UL, 4); /* bit granularity not supported */
-    W_ABORT(0x06090030UL, 0x1800, 1, 0x00000185UL, 4); /* valid with an empty mapping */
+    W(0x1800, 1, 0x00000185UL, 4); /* valid with an empty mapping, as a file may give it: silent */
+    W_ABORT(0x06010000UL, 0x1A00, 1, 0x60000108UL, 4); /* mapped only while invalid */
+    W(0x1800, 1, 0x80000185UL, 4);
     W(0x1A00, 1, 0x60000108UL, 4);
     W(0x1A00, 2, 0x64010110UL, 4);
     W(0x1A00, 3, 0x63000120UL, 4);
@@ -168,8 +170,10 @@ static void mapping_sub_indices_inside_a_run(void)
 static void communication_parameter_rules(void)
 {
     W_ABORT(0x06090030UL, 0x1800, 2, 241, 1);
-    W_ABORT(0x06090030UL, 0x1800, 2, 253, 1);
+    W_ABORT(0x06090030UL, 0x1800, 2, 251, 1);
     W_ABORT(0x06090030UL, 0x1400, 2, 250, 1);
+    W_ABORT(0x06090030UL, 0x1400, 2, 252, 1); /* RTR-only: TPDOs only (test_pdo_rtr) */
+    W_ABORT(0x06090030UL, 0x1400, 2, 253, 1);
     W(0x1800, 2, 240, 1);
     W(0x1800, 2, 0, 1);
     W(0x1800, 2, 254, 1);

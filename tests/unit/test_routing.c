@@ -20,12 +20,13 @@ static uint32_t filter_events(void)
 
 static void rx_ids_are_the_services_cob_ids_sorted(void)
 {
-    /* NMT, SYNC 0x080, RPDO1 0x205 (RPDO2 is not valid), SDO 0x605, the guard request 0x705, LSS 0x7E5 */
-    TEST_ASSERT_EQUAL_UINT16(6U, rx_ids());
-    const uint16_t want[6] = {0x000U, 0x080U, 0x205U, 0x605U, 0x705U, 0x7E5U};
-    TEST_ASSERT_EQUAL_HEX16_ARRAY(want, ids, 6);
+    /* NMT, SYNC 0x080, TPDO1's remote request 0x185 (type 255, RTR allowed; TPDO2 is not valid), RPDO1 0x205 (RPDO2
+     * is not valid), SDO 0x605, the guard request 0x705, LSS 0x7E5 */
+    TEST_ASSERT_EQUAL_UINT16(7U, rx_ids());
+    const uint16_t want[7] = {0x000U, 0x080U, 0x185U, 0x205U, 0x605U, 0x705U, 0x7E5U};
+    TEST_ASSERT_EQUAL_HEX16_ARRAY(want, ids, 7);
     uint16_t few[2] = {0xFFFFU, 0xFFFFU};
-    TEST_ASSERT_EQUAL_UINT16(6U, co_node_rx_ids(&fx.node, few, 1U)); /* the count, however few are written */
+    TEST_ASSERT_EQUAL_UINT16(7U, co_node_rx_ids(&fx.node, few, 1U)); /* the count, however few are written */
     TEST_ASSERT_EQUAL_HEX16(0x000U, few[0]);
     TEST_ASSERT_EQUAL_HEX16(0xFFFFU, few[1]);
 }
@@ -54,19 +55,19 @@ static void the_list_follows_the_configuration(void)
     fx.n_events = 0U;
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1016, 2, 0x00070064UL, 4U)); /* monitor node 7, 100 ms */
     TEST_ASSERT_EQUAL_UINT32(1U, filter_events());
-    TEST_ASSERT_EQUAL_UINT16(7U, rx_ids());
-    TEST_ASSERT_EQUAL_HEX16(0x707U, ids[5]);
+    TEST_ASSERT_EQUAL_UINT16(8U, rx_ids());
+    TEST_ASSERT_EQUAL_HEX16(0x707U, ids[6]);
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1005, 0, 0x00000090UL, 4U)); /* SYNC on 0x090 */
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1400, 1, 0x80000205UL, 4U)); /* RPDO1 not valid */
     TEST_ASSERT_EQUAL_UINT32(3U, filter_events());
-    const uint16_t want[6] = {0x000U, 0x090U, 0x605U, 0x705U, 0x707U, 0x7E5U};
-    TEST_ASSERT_EQUAL_UINT16(6U, rx_ids());
-    TEST_ASSERT_EQUAL_HEX16_ARRAY(want, ids, 6);
+    const uint16_t want[7] = {0x000U, 0x090U, 0x185U, 0x605U, 0x705U, 0x707U, 0x7E5U};
+    TEST_ASSERT_EQUAL_UINT16(7U, rx_ids());
+    TEST_ASSERT_EQUAL_HEX16_ARRAY(want, ids, 7);
     TEST_ASSERT_EQUAL_HEX32(0U, fx_sdo_write_u32(0x1400, 2, 254U, 1U)); /* no COB-ID changed: no event */
     TEST_ASSERT_EQUAL_UINT32(3U, filter_events());
     fx_rx_rtr(0x000U); /* a remote frame on an NMT COB-ID is no command */
     RX(0x000, 0x82, 0x05);  /* reset communication: the defaults again */
-    TEST_ASSERT_EQUAL_UINT16(6U, rx_ids());
+    TEST_ASSERT_EQUAL_UINT16(7U, rx_ids());
     TEST_ASSERT_EQUAL_HEX16(0x080U, ids[1]);
 }
 
@@ -80,7 +81,7 @@ static void a_sync_cob_id_shared_with_an_rpdo_stays_sync(void)
     RX0(0x080); /* a SYNC of DLC 0: no RPDO length error (which would be EMCY 0x8210) */
     TEST_ASSERT_FALSE(co_emcy_is_active(&fx.node, 0x8210U));
     TEST_ASSERT_EQUAL_UINT32(0U, fx_count(0x085U));
-    TEST_ASSERT_EQUAL_UINT16(5U, rx_ids()); /* one entry for 0x080 */
+    TEST_ASSERT_EQUAL_UINT16(6U, rx_ids()); /* one entry for 0x080 */
 }
 
 static void a_pass_with_nothing_new_returns_the_same_deadline_and_sends_nothing(void)
@@ -196,7 +197,7 @@ static void a_communication_parameter_written_around_the_api_takes_effect_when_t
     co_od_changed(&fx.node, 0x7777U, 9U); /* no such object: nothing */
     fx.values.x1005_cob_id_sync = 0x91UL;
     co_od_changed(&fx.node, 0x1005U, 0U);
-    TEST_ASSERT_EQUAL_UINT16(6U, rx_ids());
+    TEST_ASSERT_EQUAL_UINT16(7U, rx_ids());
     TEST_ASSERT_EQUAL_HEX16(0x091U, ids[1]);
 }
 

@@ -318,7 +318,7 @@ static void no_spurious_timeout_after_stopped_while_syncs_continue(void)
 
 static void sync_cob_id_rules(void)
 {
-    TEST_ASSERT_EQUAL_HEX32(0x06090030UL, fx_sdo_write_u32(0x1005, 0, 0x40000080UL, 4U)); /* produce */
+    /* bit 30 (produce): test_sync_producer */
     TEST_ASSERT_EQUAL_HEX32(0x06090030UL, fx_sdo_write_u32(0x1005, 0, 0x20000080UL, 4U)); /* 29-bit */
     TEST_ASSERT_EQUAL_HEX32(0x06090030UL, fx_sdo_write_u32(0x1005, 0, 0x00000880UL, 4U)); /* bits 11..28 */
     TEST_ASSERT_EQUAL_HEX32(0x06090030UL, fx_sdo_write_u32(0x1005, 0, 0x00000001UL, 4U)); /* restricted */
