@@ -373,9 +373,68 @@ static uint32_t read_hook(co_node_t *node, const co_od_entry_t *e)
     return CO_ABORT_NONE;
 }
 
+#if CO_CONFIG_LARGE_OBJECTS
+uint32_t co_od_large_read(co_node_t *node, const co_od_entry_t *e, uint32_t offset, uint8_t *buf, size_t len,
+                          uint32_t *length)
+{
+    const co_hooks_t *h = node->hooks;
+    if (h == NULL || h->large_read == NULL) {
+        return CO_ABORT_UNSUPPORTED_ACCESS;
+    }
+    return h->large_read(node->hooks_ctx, node, e, offset, buf, len, length);
+}
+
+uint32_t co_od_large_write(co_node_t *node, const co_od_entry_t *e, co_large_step_t step, uint32_t at,
+                           const uint8_t *data, size_t len)
+{
+    const co_hooks_t *h = node->hooks;
+    if (h == NULL || h->large_write == NULL) {
+        return CO_ABORT_UNSUPPORTED_ACCESS;
+    }
+    return h->large_write(node->hooks_ctx, node, e, step, at, data, len);
+}
+
+/* A large object's value in one piece (co_od_read): its length, or CO_ABORT_LENGTH_HIGH when it exceeds cap. */
+static uint32_t read_large(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap, size_t *len)
+{
+    uint32_t length = 0U;
+    uint32_t r = co_od_large_read(node, e, 0U, buf, 0U, &length);
+    if (r == CO_ABORT_NONE && length > cap) {
+        r = CO_ABORT_LENGTH_HIGH;
+    }
+    if (r == CO_ABORT_NONE && length > 0U) {
+        r = co_od_large_read(node, e, 0U, buf, length, &length);
+    }
+    *len = r == CO_ABORT_NONE ? length : 0U;
+    return r;
+}
+
+/* A large object written in one piece (co_od_write): BEGIN, DATA, END; a refused DATA is followed by ABORT. */
+static uint32_t write_large(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    uint32_t r = co_od_large_write(node, e, CO_LARGE_BEGIN, (uint32_t)len, NULL, 0U);
+    if (r != CO_ABORT_NONE) {
+        return r;
+    }
+    if (len > 0U) {
+        r = co_od_large_write(node, e, CO_LARGE_DATA, 0U, data, len);
+        if (r != CO_ABORT_NONE) {
+            (void)co_od_large_write(node, e, CO_LARGE_ABORT, 0U, NULL, 0U);
+            return r;
+        }
+    }
+    return co_od_large_write(node, e, CO_LARGE_END, (uint32_t)len, NULL, 0U);
+}
+#endif
+
 /* Copies a row's current value in wire format (no hook): its length, or CO_ABORT_LENGTH_HIGH when it exceeds cap. */
 static uint32_t copy_wire(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap, size_t *len)
 {
+#if CO_CONFIG_LARGE_OBJECTS
+    if (e->size == 0U && is_bytes(e)) {
+        return read_large(node, e, buf, cap, len);
+    }
+#endif
     const size_t n = value_len(node, e);
     if (n > cap) {
         return CO_ABORT_LENGTH_HIGH;
@@ -678,6 +737,11 @@ uint32_t co_od_write_entry(co_node_t *node, const co_od_entry_t *e, const void *
     if (origin == CO_ORIGIN_RPDO && (e->flags & CO_OD_RPDO) == 0U) {
         return CO_ABORT_NOT_MAPPABLE;
     }
+#if CO_CONFIG_LARGE_OBJECTS
+    if (e->size == 0U && is_bytes(e)) {
+        return origin != CO_ORIGIN_NVM ? write_large(node, e, bytes, len) : CO_ABORT_UNSUPPORTED_ACCESS;
+    }
+#endif
     if (len > e->size) {
         return CO_ABORT_LENGTH_HIGH;
     }

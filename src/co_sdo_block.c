@@ -14,10 +14,11 @@
 #define BLK_LAST 0x80U     /* "c" bit of a segment: no more segments follow */
 
 /* CRC-16 of CiA 301 §7.2.4.3.16: polynomial x^16 + x^12 + x^5 + 1, start value 0 ("123456789" -> 0x31C3).
- * Bitwise rather than by table: it runs once per transfer, and 512 bytes of table would outweigh the service. */
-static uint16_t block_crc(const uint8_t *data, uint32_t len)
+ * Bitwise rather than by table: it runs once per transfer, and 512 bytes of table would outweigh the service.
+ * Continued from start: a large object's CRC is taken piece by piece. */
+uint16_t co_sdo_crc(uint16_t start, const uint8_t *data, uint32_t len)
 {
-    uint32_t crc = 0U; /* bits above 15 are shifted out of the CRC, never fed back: cut once, at the end */
+    uint32_t crc = start; /* bits above 15 are shifted out of the CRC, never fed back: cut once, at the end */
     for (uint32_t i = 0U; i < len; i++) {
         crc ^= (uint32_t)data[i] << 8;
         for (unsigned bit = 0U; bit < 8U; bit++) {
@@ -56,7 +57,15 @@ void co_sdo_block_initiate(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, con
         }
         co_sdo_start(s, CO_SDO_BLK_DOWNLOAD, size);
         s->crc = client_crc;
-        s->blksize = download_block_size(0U); /* a constant */
+#if CO_CONFIG_LARGE_OBJECTS
+        const uint32_t begun = co_sdo_large_begin(node, s, size);
+        if (begun != CO_ABORT_NONE) {
+            co_sdo_abort(node, s, begun);
+            return;
+        }
+#endif
+        /* a constant; a large object takes whole blocks, its buffer handed over as it fills */
+        s->blksize = CO_SDO_IS_LARGE(s) ? BLK_SIZE_MAX : download_block_size(0U);
         co_sdo_respond(node, s, 0xA4U, s->blksize); /* server CRC support: always */
         return;
     }
@@ -89,12 +98,21 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
     }
     const bool in_order = seqno == s->seq + 1U;
     if (in_order) {
-        if (s->pos >= sizeof s->buf) {
+#if CO_CONFIG_LARGE_OBJECTS
+        /* the segments held so far are not the last: handed over whole when this one would not fit */
+        const uint32_t refused = co_sdo_large_room(node, s, BLK_SEG_DATA);
+        if (refused != CO_ABORT_NONE) {
+            co_sdo_abort(node, s, refused);
+            return;
+        }
+#endif
+        const uint32_t held = s->pos - CO_SDO_DONE(s);
+        if (held >= sizeof s->buf) {
             co_sdo_abort(node, s, CO_ABORT_OUT_OF_MEMORY);
             return;
         }
-        const uint32_t room = (uint32_t)sizeof s->buf - s->pos;
-        memcpy(&s->buf[s->pos], &frame[1], (size_t)(room < BLK_SEG_DATA ? room : BLK_SEG_DATA));
+        const uint32_t room = (uint32_t)sizeof s->buf - held;
+        memcpy(&s->buf[held], &frame[1], (size_t)(room < BLK_SEG_DATA ? room : BLK_SEG_DATA));
         s->pos += BLK_SEG_DATA;
         s->seq = seqno;
     }
@@ -110,7 +128,7 @@ static void download_segment(co_node_t *node, co_sdo_server_t *s, const uint8_t 
         s->state = CO_SDO_BLK_DOWNLOAD_END;
     } else {
         s->seq = 0U;
-        s->blksize = download_block_size(s->pos);
+        s->blksize = CO_SDO_IS_LARGE(s) ? BLK_SIZE_MAX : download_block_size(s->pos);
     }
     const uint8_t confirmation[2] = {ackseq, s->blksize};
     co_sdo_send(node, s, 0xA2U, confirmation, 2U);
@@ -120,11 +138,22 @@ static void download_end(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const
 {
     const uint32_t unused = (uint32_t)(cmd >> 2) & 0x07U;
     const uint32_t len = s->pos - unused; /* pos >= 7: the last segment was taken */
+#if CO_CONFIG_LARGE_OBJECTS
+    if (s->large) { /* the rest to the application, then its CRC is complete */
+        const uint32_t refused = co_sdo_large_flush(node, s, len);
+        if (refused != CO_ABORT_NONE) {
+            co_sdo_abort(node, s, refused);
+            return;
+        }
+        co_sdo_download_end(node, s, len, !s->crc || co_get_u16(&frame[1]) == s->crc_value, 0xA1U);
+        return;
+    }
+#endif
     if (len > sizeof s->buf) {
         co_sdo_abort(node, s, CO_ABORT_OUT_OF_MEMORY);
         return;
     }
-    co_sdo_download_end(node, s, len, !s->crc || co_get_u16(&frame[1]) == block_crc(s->buf, len), 0xA1U);
+    co_sdo_download_end(node, s, len, !s->crc || co_get_u16(&frame[1]) == co_sdo_crc(0U, s->buf, len), 0xA1U);
 }
 
 /* Bytes of the upload, counted in segments: an empty object still takes one segment (with 7 unused bytes). */
@@ -144,9 +173,13 @@ static bool upload_send_block(co_node_t *node, co_sdo_server_t *s)
             return false;
         }
         const uint32_t left = s->size - offset;
+        const size_t n = (size_t)(left < BLK_SEG_DATA ? left : BLK_SEG_DATA);
+        const uint8_t *bytes = co_sdo_upload_bytes(node, s, offset, n);
+        if (bytes == NULL) {
+            return true; /* aborted: nothing more to send */
+        }
         s->seq++;
-        co_sdo_send(node, s, (uint8_t)(s->seq | (left <= BLK_SEG_DATA ? BLK_LAST : 0U)), &s->buf[offset],
-                    (size_t)(left < BLK_SEG_DATA ? left : BLK_SEG_DATA));
+        co_sdo_send(node, s, (uint8_t)(s->seq | (left <= BLK_SEG_DATA ? BLK_LAST : 0U)), bytes, n);
     }
 }
 
@@ -170,8 +203,19 @@ static void upload_confirmation(co_node_t *node, co_sdo_server_t *s, const uint8
     const bool all_taken = ackseq == s->seq && ackseq != 0U && upload_end_of_block(s) >= s->size;
     if (all_taken) {
         const uint32_t unused = upload_end_of_block(s) - s->size;
+        uint16_t value = 0U;
+#if CO_CONFIG_LARGE_OBJECTS
+        if (s->large && s->crc && !co_sdo_large_crc(node, s, &value)) {
+            return;
+        }
+        if (!s->large && s->crc) {
+            value = co_sdo_crc(0U, s->buf, s->size);
+        }
+#else
+        value = s->crc ? co_sdo_crc(0U, s->buf, s->size) : 0U;
+#endif
         uint8_t crc[2];
-        co_put_u16(crc, s->crc ? block_crc(s->buf, s->size) : 0U);
+        co_put_u16(crc, value);
         s->state = CO_SDO_BLK_UPLOAD_END; /* before the frame: only segments go out in CO_SDO_BLK_UPLOAD */
         co_sdo_send(node, s, (uint8_t)(0xC1U | (unused << 2)), crc, 2U);
         return;

@@ -43,7 +43,7 @@ void co_sdo_respond(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, uint
 
 void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint32_t code)
 {
-    s->state = SDO_IDLE; /* before the frame goes out: the port sees no transfer open behind an abort */
+    co_sdo_end(node, s); /* before the frame goes out: the port sees no transfer open behind an abort */
     co_sdo_respond(node, s, 0x80U, code);
     node->stats.sdo_aborts++;
     co_node_event(node, CO_EV_SDO_ABORT, s->index, s->sub, 0U, code);
@@ -56,6 +56,10 @@ void co_sdo_start(co_sdo_server_t *s, uint8_t state, uint32_t size)
     s->pos = 0U;
     s->toggle = 0U; /* the toggle bit of the next segment, in place: bit 4 of its command byte */
     s->seq = 0U;
+#if CO_CONFIG_LARGE_OBJECTS
+    s->done = 0U;
+    s->crc_value = 0U;
+#endif
 }
 
 static bool segmented_enabled(const co_node_t *node)
@@ -99,9 +103,9 @@ static inline bool read_object(co_node_t *node, co_sdo_server_t *s, size_t *len)
     *len = 0U;
     co_put_u32(s->buf, 0U); /* an expedited answer sends these 4 bytes: 0 past a shorter value */
     uint32_t r = co_od_read(node, s->index, s->sub, s->buf, sizeof s->buf, len, CO_ORIGIN_SDO);
-    if (r == CO_ABORT_LENGTH_HIGH) { /* larger than any transfer buffer */
+    if (r == CO_ABORT_LENGTH_HIGH) { /* larger than the transfer buffer: a large object's, or too large */
         const bool large_transfers = segmented_enabled(node) || (node->options & CO_OPT_SDO_BLOCK) != 0U;
-        r = large_transfers ? CO_ABORT_OUT_OF_MEMORY : CO_ABORT_UNSUPPORTED_ACCESS;
+        r = large_transfers ? co_sdo_large_upload(node, s, len) : CO_ABORT_UNSUPPORTED_ACCESS;
     }
     if (r != CO_ABORT_NONE) {
         co_sdo_abort(node, s, r);
@@ -138,8 +142,7 @@ void co_sdo_upload_answer(co_node_t *node, co_sdo_server_t *s, size_t len) { upl
  * the size indicated, if sized), also where the transfer type is off: they come first, so a missing object answers
  * 0x06020000 rather than 0x06010000 (docs/decisions.md). staged: the transfer goes through the SDO buffer, which
  * the object must fit (0x05040005). 0 or the abort code. */
-uint32_t co_sdo_download_checks(const co_node_t *node, const co_sdo_server_t *s, bool sized, uint32_t size,
-                                bool staged)
+uint32_t co_sdo_download_checks(const co_node_t *node, co_sdo_server_t *s, bool sized, uint32_t size, bool staged)
 {
     const co_od_entry_t *e = co_od_find_row(node->od, s->index, s->sub); /* flags and size are the sub-index's */
     if (e == NULL) {
@@ -148,6 +151,12 @@ uint32_t co_sdo_download_checks(const co_node_t *node, const co_sdo_server_t *s,
     if ((e->flags & CO_OD_WRITE) == 0U || (e->flags & CO_OD_CONST) != 0U) {
         return (e->flags & CO_OD_READ) != 0U ? CO_ABORT_READ_ONLY : CO_ABORT_UNSUPPORTED_ACCESS;
     }
+#if CO_CONFIG_LARGE_OBJECTS
+    s->large = co_od_is_large(e); /* its size the application's to judge (co_sdo_large_begin) */
+    if (s->large) {
+        return CO_ABORT_NONE;
+    }
+#endif
     if (sized && size > e->size) {
         return CO_ABORT_LENGTH_HIGH;
     }
@@ -163,6 +172,10 @@ void co_sdo_download_end(co_node_t *node, co_sdo_server_t *s, uint32_t len, bool
         r = len > s->size ? CO_ABORT_LENGTH_HIGH : CO_ABORT_LENGTH_LOW;
     } else if (!crc_ok) {
         r = CO_ABORT_CRC;
+    } else if (CO_SDO_IS_LARGE(s)) {
+#if CO_CONFIG_LARGE_OBJECTS
+        r = co_sdo_large_end(node, s, len); /* the rest, then END: the transfer is no longer the application's */
+#endif
     } else {
         r = co_od_write(node, s->index, s->sub, s->buf, (size_t)len, CO_ORIGIN_SDO);
     }
@@ -179,11 +192,19 @@ void co_sdo_download_end(co_node_t *node, co_sdo_server_t *s, uint32_t len, bool
 static void download_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd, const uint8_t *seg)
 {
     const uint32_t n = 7U - ((cmd >> 1) & 0x07U);
-    if (s->pos + n > sizeof s->buf) {
+#if CO_CONFIG_LARGE_OBJECTS
+    const uint32_t refused = co_sdo_large_room(node, s, n);
+    if (refused != CO_ABORT_NONE) {
+        co_sdo_abort(node, s, refused);
+        return;
+    }
+#endif
+    const uint32_t held = s->pos - CO_SDO_DONE(s);
+    if (held + n > sizeof s->buf) {
         co_sdo_abort(node, s, CO_ABORT_LENGTH_HIGH);
         return;
     }
-    memcpy(&s->buf[s->pos], seg, (size_t)n);
+    memcpy(&s->buf[held], seg, (size_t)n);
     s->pos += n;
     const uint8_t answer = (uint8_t)(0x20U | (cmd & 0x10U));
     if ((cmd & 0x01U) == 0U) {
@@ -199,7 +220,11 @@ static void upload_segment(co_node_t *node, co_sdo_server_t *s, uint8_t cmd)
     const uint32_t n = left < 7U ? left : 7U;
     const bool last = left <= 7U;
     const uint8_t answer = (uint8_t)((cmd & 0x10U) | ((7U - n) << 1) | (last ? 1U : 0U));
-    co_sdo_send(node, s, answer, &s->buf[s->pos], (size_t)n);
+    const uint8_t *bytes = co_sdo_upload_bytes(node, s, s->pos, (size_t)n);
+    if (bytes == NULL) {
+        return; /* aborted */
+    }
+    co_sdo_send(node, s, answer, bytes, (size_t)n);
     s->pos += n;
     if (last) {
         s->state = SDO_IDLE;
@@ -212,7 +237,7 @@ static void serve(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
 {
     const uint8_t cmd = f->data[0];
     if (cmd == 0x80U) {
-        s->state = SDO_IDLE; /* client abort: no answer */
+        co_sdo_end(node, s); /* client abort: no answer */
         return;
     }
 #if CO_CONFIG_SDO_BLOCK
@@ -236,7 +261,7 @@ static void serve(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
         return;
     }
 #endif
-    s->state = SDO_IDLE; /* a new initiate (or garbage) ends any transfer in progress */
+    co_sdo_end(node, s); /* a new initiate (or garbage) ends any transfer in progress */
     s->index = co_get_u16(&f->data[1]);
     s->sub = f->data[3];
     if ((cmd & 0xF0U) == 0x20U) {
@@ -250,11 +275,16 @@ static void serve(co_node_t *node, co_sdo_server_t *s, const co_frame_t *f)
         if (r == CO_ABORT_NONE && !segmented) {
             r = CO_ABORT_UNSUPPORTED_ACCESS;
         }
+        if (r == CO_ABORT_NONE) {
+            co_sdo_start(s, SDO_SEG_DOWNLOAD, size);
+#if CO_CONFIG_LARGE_OBJECTS
+            r = co_sdo_large_begin(node, s, size);
+#endif
+        }
         if (r != CO_ABORT_NONE) {
             co_sdo_abort(node, s, r);
             return;
         }
-        co_sdo_start(s, SDO_SEG_DOWNLOAD, size);
         co_sdo_respond(node, s, 0x60U, 0U);
         return;
     }
@@ -303,7 +333,7 @@ static co_time_us_t server_process(co_node_t *node, co_sdo_server_t *s)
         return CO_NEVER;
     }
     if (node->nmt_state != CO_NMT_PRE_OPERATIONAL && node->nmt_state != CO_NMT_OPERATIONAL) {
-        s->state = SDO_IDLE; /* Stopped: the transfer ends silently (SDO says nothing in Stopped) */
+        co_sdo_end(node, s); /* Stopped: the transfer ends silently (SDO says nothing in Stopped) */
         return CO_NEVER;
     }
     if (co_time_reached(node->now, s->deadline)) {
@@ -342,6 +372,9 @@ co_status_t co_sdo_count(co_node_t *node, co_sdo_server_t *servers, uint8_t capa
             return CO_ERR_RANGE;
         }
         servers[n].param_index = index;
+#if CO_CONFIG_LARGE_OBJECTS
+        servers[n].large = false; /* the caller's memory: no transfer to drop at the first reset */
+#endif
         n++;
     }
     node->sdo_extra = servers;
@@ -360,7 +393,7 @@ static void load_server(co_node_t *node, co_sdo_server_t *s)
     const bool valid = ((rx | tx) & CO_COBID_INVALID) == 0U;
     s->rx_id = valid ? (uint16_t)(rx & CO_COBID_CAN_ID) : CO_SDO_NO_ID;
     s->tx_id = (uint16_t)(tx & CO_COBID_CAN_ID);
-    s->state = SDO_IDLE;
+    co_sdo_end(node, s);
 }
 
 /* CiA 301 rules for the COB-IDs of an additional server (sub 1 client to server, sub 2 server to client), as for a
@@ -392,7 +425,7 @@ void co_sdo_written(co_node_t *node, const co_od_entry_t *e)
 
 void co_sdo_reset(co_node_t *node)
 {
-    node->sdo.state = SDO_IDLE;
+    co_sdo_end(node, &node->sdo);
     node->sdo.param_index = 0x1200U;
     node->sdo.rx_id = (uint16_t)(0x600U + node->node_id);
     node->sdo.tx_id = (uint16_t)(0x580U + node->node_id);

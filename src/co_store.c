@@ -168,8 +168,8 @@ void co_store_load_area(co_node_t *node, uint16_t first, uint16_t last)
         }
         co_od_entry_t one;
         const co_od_entry_t *e = co_od_find(node->od, index, (uint8_t)local.key, &one);
-        if (e == NULL || (e->flags & CO_OD_STORE) == 0U) {
-            continue;
+        if (e == NULL || (e->flags & CO_OD_STORE) == 0U || co_od_is_large(e)) {
+            continue; /* a large object is the application's to keep */
         }
         const uint16_t fixed = co_od_type_size(e->type);
         if ((fixed != 0U && len != fixed) || len > e->size) {
@@ -283,7 +283,7 @@ static uint32_t rewrite(co_node_t *node, const co_od_entry_t *req, bool save)
     (void)reader_open(&old, node); /* a damaged or foreign blob counts as empty */
     for (unsigned i = 0U; i < node->od->count; i++) {
         const co_od_entry_t *row = &node->od->entries[i];
-        if ((row->flags & CO_OD_STORE) == 0U) {
+        if ((row->flags & CO_OD_STORE) == 0U || co_od_is_large(row)) {
             continue;
         }
         for (uint8_t k = 0U; k < co_od_entry_subs(row); k++) {

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "eds.h"
+#include "eds_class/eds_large.h"
 #include "eds_class/rules.h"
 
 #if CO_CONFIG_OD_COMPACT
@@ -30,6 +31,7 @@ typedef struct eds_class {
     char *name;
     char *summary;
     rules_t *rules;          /* --rules, or NULL */
+    eds_large_t *large;      /* its DOMAINs and long strings (eds_large.h), or NULL */
     struct eds_class *next;
 } eds_class_t;
 
@@ -54,6 +56,9 @@ static uint16_t capacity(const eds_entry_t *e, FILE *log, const char *path, bool
     const size_t fixed = eds_type_size(e->type);
     if (fixed > 0U) {
         return (uint16_t)fixed;
+    }
+    if (CO_CONFIG_LARGE_OBJECTS && eds_large_entry(e)) {
+        return 0U; /* a large object: its value of any length is eds_large.c's (co_hooks_t.large_read) */
     }
     size_t len = start_value(e)->len;
     if (len > CO_SDO_BUF_SIZE) {
@@ -94,7 +99,7 @@ static uint8_t flags_of(const eds_entry_t *e)
     }
     /* 0x1010 saves every writable parameter but the command objects, the error history and program data. */
     if (w && e->index != 0x1010U && e->index != 0x1011U && e->index != 0x1003U && e->type != CO_T_DOMAIN &&
-        !(e->index >= 0x1F50U && e->index <= 0x1F5FU)) {
+        !(e->index >= 0x1F50U && e->index <= 0x1F5FU) && !(CO_CONFIG_LARGE_OBJECTS && eds_large_entry(e))) {
         f |= CO_OD_STORE;
     }
     return (uint8_t)f;
@@ -206,8 +211,16 @@ static void free_class(eds_class_t *c)
     free(c->name);
     free(c->summary);
     rules_free(c->rules);
+    eds_large_free(c->large);
     eds_free(c->file);
     free(c);
+}
+
+/* A node powers on: its large objects take their file values again (eds_large.c). */
+static void large_power_on(device_t *dev, co_time_us_t now)
+{
+    (void)now;
+    eds_large_power_on(((const eds_class_t *)(const void *)dev->cls)->large, dev);
 }
 
 /* Builds the table of a file read without errors. */
@@ -269,6 +282,12 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     snprintf(summary, sizeof summary, "%s%s%s (from %s)", f->vendor_name, f->vendor_name[0] != '\0' ? " " : "",
              f->product_name[0] != '\0' ? f->product_name : "device", c->name);
     c->summary = strdup(summary);
+    bool large_failed = false;
+    c->large = CO_CONFIG_LARGE_OBJECTS ? eds_large_create(&c->od, f, &large_failed) : NULL;
+    if (large_failed) {
+        free_class(c);
+        return NULL;
+    }
     c->file = f;
     c->od.name = c->name;
     c->od.entries = c->rows;
@@ -307,6 +326,7 @@ static eds_class_t *build(eds_file_t *f, const char *path, FILE *log, bool quiet
     cls->tpdo_count = pdo_count(f, 0x1800U);
     cls->sdo_server_count = sdo_server_count(f);
     cls->model_size = device_core_state_size(cls);
+    cls->power_on = c->large != NULL ? large_power_on : NULL;
     return c;
 }
 

@@ -107,6 +107,19 @@
 #define CO_SDO_BUF_SIZE 64U
 #endif
 
+/** 1: large objects (co_hooks_t.large_read/large_write): a string or DOMAIN row of size 0 whose value the application
+ *  keeps (a firmware image 0x1F50, a log), moved by segmented and block SDO transfer of any length in pieces of at
+ *  most CO_SDO_BUF_SIZE bytes, so the core holds no more. The default follows the target as CO_CONFIG_TIME32's: 1 on
+ *  a host with an operating system (canopen-emu's EDS devices keep their DOMAINs so), 0 on a microcontroller, whose
+ *  image and co_sdo_server_t then stay as they were. */
+#ifndef CO_CONFIG_LARGE_OBJECTS
+#if defined(__linux__) || defined(__unix__) || defined(__APPLE__) || defined(_WIN32)
+#define CO_CONFIG_LARGE_OBJECTS 1
+#else
+#define CO_CONFIG_LARGE_OBJECTS 0
+#endif
+#endif
+
 /** Segmented and block SDO transfer timeout (no frame from the client), in µs. */
 #ifndef CO_SDO_TIMEOUT_US
 #define CO_SDO_TIMEOUT_US 1000000U

@@ -82,6 +82,15 @@ typedef struct co_event {
  * then the confirmation from the new node-ID) and the written value would land in the freshly reset OD.
  * Defer such work to the next co_node_process() call (a device model does it in its step()).
  */
+/** The steps of a download of a large object (co_hooks_t.large_write). */
+typedef enum co_large_step {
+    CO_LARGE_BEGIN = 0, /**< A download starts: at = the size the client indicated, 0 when it gave none. */
+    CO_LARGE_DATA = 1,  /**< len bytes of it at offset at, in order, from the start. */
+    CO_LARGE_END = 2,   /**< It is complete: at = its length. Accept it (0: it is now the value) or refuse it. */
+    CO_LARGE_ABORT = 3  /**< It ended without END (an abort, a timeout, a bad CRC, a reset): drop what came; the old
+                             value stays. The answer is ignored. */
+} co_large_step_t;
+
 typedef struct co_hooks {
     /**
      * An object is about to be written (by SDO, RPDO or a co_od_write with CO_ORIGIN_LOCAL), after all of
@@ -121,6 +130,29 @@ typedef struct co_hooks {
      * Stored values being loaded are checked by on_write the same way (from this index on).
      */
     uint16_t first_index;
+    /**
+     * Large objects (CO_CONFIG_LARGE_OBJECTS): a row of type VISIBLE_STRING, OCTET_STRING, UNICODE_STRING or DOMAIN
+     * whose size is 0 holds nothing in the values block; the application keeps its value, of any length, and these
+     * two calls move it. An SDO transfer of it (segmented or block, with CRC) goes through them in pieces of at most
+     * CO_SDO_BUF_SIZE bytes; co_od_read()/co_od_write() (an expedited transfer, the application's own access) in one
+     * piece. on_read is called before a read as for any object; on_write is not (large_write takes the data and
+     * decides). Such a row is not stored by 0x1010 and cannot be mapped. NULL: its reads and writes are refused
+     * (0x06010000).
+     * large_read: copies len bytes of the value from offset into buf and gives its length in *length; len 0: only the
+     * length. Return 0 or an abort code (an upload ends with it), e.g. 0x08000024 when offset + len is past the end
+     * (the value changed during an upload).
+     */
+    uint32_t (*large_read)(void *ctx, co_node_t *node, const co_od_entry_t *entry, uint32_t offset, uint8_t *buf,
+                           size_t len, uint32_t *length);
+    /**
+     * large_write: a download in steps (co_large_step_t): BEGIN, DATA in order, then END or ABORT. Return 0, or an
+     * abort code that ends the download: 0x06070012 for more than the object takes (at BEGIN when the size is
+     * indicated, else at the DATA that goes beyond), 0x05040005 when there is no room. After a refused DATA, ABORT
+     * follows; a refused BEGIN or END has dropped the download itself. A new value takes effect at END only: until
+     * then reads give the old one.
+     */
+    uint32_t (*large_write)(void *ctx, co_node_t *node, const co_od_entry_t *entry, co_large_step_t step,
+                            uint32_t at, const uint8_t *data, size_t len);
 } co_hooks_t;
 
 /** Options, per node (usually per device type). */
@@ -267,6 +299,12 @@ typedef struct co_sdo_server {
     uint8_t seq;                /**< Block: last sequence number received (download) or sent (upload). */
     uint8_t blksize;            /**< Block: segments per block, 1..127. */
     bool crc;                   /**< Block: both sides use the CRC. */
+#if CO_CONFIG_LARGE_OBJECTS
+    bool large;                 /**< The transfer's object is a large one (co_hooks_t.large_read): the buffer holds
+                                     a piece of it. */
+    uint16_t crc_value;         /**< Large block download: the CRC of the bytes handed over so far. */
+    uint32_t done;              /**< Large download: bytes handed to large_write so far. */
+#endif
     co_time_us_t deadline;
     uint8_t buf[CO_SDO_BUF_SIZE];
 } co_sdo_server_t;

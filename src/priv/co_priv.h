@@ -168,6 +168,18 @@ size_t co_od_sample(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_
 uint32_t co_od_check_stored(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 /* Sets the values of [first, last] to their defaults (node-ID-relative rows with the node-ID added). */
 void co_od_defaults_area(co_node_t *node, uint16_t first, uint16_t last);
+/* A large object's row (co_hooks_t.large_read): a string or domain of size 0, whose value the application keeps. */
+static inline bool co_od_is_large(const co_od_entry_t *e)
+{
+    return CO_CONFIG_LARGE_OBJECTS && e->size == 0U && co_od_type_has_length(e->type);
+}
+#if CO_CONFIG_LARGE_OBJECTS
+/* The hooks of a large object, or 0x06010000 without them. */
+uint32_t co_od_large_read(co_node_t *node, const co_od_entry_t *e, uint32_t offset, uint8_t *buf, size_t len,
+                          uint32_t *length);
+uint32_t co_od_large_write(co_node_t *node, const co_od_entry_t *e, co_large_step_t step, uint32_t at,
+                           const uint8_t *data, size_t len);
+#endif
 
 /* ---- node (co_node.c) ---- */
 /* The services of co_node_process(), in the order it runs them: bits of co_node_t.wake. A module that changes a
@@ -289,9 +301,65 @@ void co_sdo_send(co_node_t *node, const co_sdo_server_t *s, uint8_t cmd, const u
 void co_sdo_abort(co_node_t *node, co_sdo_server_t *s, uint32_t code);
 /* Starts a transfer of the request's object (co_sdo_rx then starts its timeout). */
 void co_sdo_start(co_sdo_server_t *s, uint8_t state, uint32_t size);
-uint32_t co_sdo_download_checks(const co_node_t *node, const co_sdo_server_t *s, bool sized, uint32_t size,
-                                bool staged);
+uint32_t co_sdo_download_checks(const co_node_t *node, co_sdo_server_t *s, bool sized, uint32_t size, bool staged);
 void co_sdo_download_end(co_node_t *node, co_sdo_server_t *s, uint32_t len, bool crc_ok, uint8_t answer);
+/* CRC-16 of CiA 301 block transfer (x^16 + x^12 + x^5 + 1), continued from crc over len more bytes. */
+uint16_t co_sdo_crc(uint16_t crc, const uint8_t *data, uint32_t len);
+
+/* ---- Large objects over SDO (co_sdo_large.c; CO_CONFIG_LARGE_OBJECTS): the buffer holds a piece of the value, the
+ * application's hooks the rest. Without them these are what an ordinary transfer does, and cost nothing. ---- */
+#if CO_CONFIG_LARGE_OBJECTS
+#define CO_SDO_IS_LARGE(s) ((s)->large)
+#define CO_SDO_DONE(s) ((s)->done)
+/* An upload whose object did not fit the buffer (co_od_read: 0x06070012): a large object's length in *len, the
+ * transfer then reads it piece by piece; 0x05040005 for an object too large for the buffer that is not one. */
+uint32_t co_sdo_large_upload(co_node_t *node, co_sdo_server_t *s, size_t *len);
+const uint8_t *co_sdo_large_bytes(co_node_t *node, co_sdo_server_t *s, uint32_t offset, size_t n);
+/* A large download: BEGIN with the indicated size; before n more bytes go into the buffer, what it holds goes to the
+ * application when they would not fit (room); at the end, the rest (flush). 0 or the abort code. */
+uint32_t co_sdo_large_begin(co_node_t *node, co_sdo_server_t *s, uint32_t size);
+uint32_t co_sdo_large_room(co_node_t *node, co_sdo_server_t *s, uint32_t n);
+uint32_t co_sdo_large_flush(co_node_t *node, co_sdo_server_t *s, uint32_t len);
+uint32_t co_sdo_large_end(co_node_t *node, co_sdo_server_t *s, uint32_t len);
+/* The CRC of a large upload's len bytes (read piece by piece); false when a read failed (and the abort was sent). */
+bool co_sdo_large_crc(co_node_t *node, co_sdo_server_t *s, uint16_t *crc);
+/* A large download that ends without its END: ABORT to the application. */
+void co_sdo_large_drop(co_node_t *node, co_sdo_server_t *s);
+#else
+#define CO_SDO_IS_LARGE(s) false
+#define CO_SDO_DONE(s) 0U
+static inline uint32_t co_sdo_large_upload(co_node_t *node, co_sdo_server_t *s, size_t *len)
+{
+    (void)node;
+    (void)s;
+    (void)len;
+    return CO_ABORT_OUT_OF_MEMORY;
+}
+#endif
+/* n bytes of the upload from offset: in the buffer, or a large object's read into it (NULL: failed, abort sent). */
+static inline const uint8_t *co_sdo_upload_bytes(co_node_t *node, co_sdo_server_t *s, uint32_t offset, size_t n)
+{
+#if CO_CONFIG_LARGE_OBJECTS
+    if (s->large) {
+        return co_sdo_large_bytes(node, s, offset, n);
+    }
+#endif
+    (void)node;
+    (void)n;
+    return &s->buf[offset];
+}
+/* The transfer is over (any way): a large download not completed is dropped. */
+static inline void co_sdo_end(co_node_t *node, co_sdo_server_t *s)
+{
+#if CO_CONFIG_LARGE_OBJECTS
+    if (s->large) {
+        co_sdo_large_drop(node, s);
+    }
+#else
+    (void)node;
+#endif
+    s->state = CO_SDO_IDLE;
+}
 #if CO_CONFIG_SDO_BLOCK
 /* The upload initiate's read and answer, for the block upload (which may switch to it). */
 bool co_sdo_read_object(co_node_t *node, co_sdo_server_t *s, size_t *len);

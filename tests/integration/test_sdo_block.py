@@ -2,6 +2,7 @@
 Bürkert profile and a device from an EDS, with the CRC; the frames on the bus are the CiA 301 block protocol; a
 client that asks for a block upload with a protocol switch threshold (CANopenNode's client does) gets an
 ordinary upload; the Eltex devices, expedited only by their manuals, still refuse block initiates with 0x05040001."""
+import hashlib
 import struct
 import time
 from pathlib import Path
@@ -90,3 +91,64 @@ def test_expedited_only_devices_still_refuse_block_initiates(emulator, capture, 
     network.send_message(0x600 + node_id, bytes.fromhex("A41810017F150000"))
     answer = capture.wait_for(0x580 + node_id, since=since, timeout=2)[0]
     assert bytes(answer.data) == bytes.fromhex("8018100101000405")
+
+
+def firmware_eds(tmp_path):
+    """all-types.eds with a program data object 0x1F50:01 (CiA 302: a firmware image, a DOMAIN), as a bootloader
+    has: a large object of the file device, whose value lives beside the core (devices/eds_class/eds_large.c)."""
+    text = (SOURCE / "tests" / "eds" / "files" / "all-types.eds").read_text()
+    text = text.replace("[OptionalObjects]\nSupportedObjects=0\n", "[OptionalObjects]\nSupportedObjects=1\n1=0x1F50\n")
+    text += ("\n[1F50]\nParameterName=Program data\nObjectType=0x8\nSubNumber=2\n\n"
+             "[1F50sub0]\nParameterName=Number of entries\nObjectType=0x7\nDataType=0x0005\nAccessType=ro\n"
+             "DefaultValue=1\nPDOMapping=0\n\n"
+             "[1F50sub1]\nParameterName=Program number 1\nObjectType=0x7\nDataType=0x000F\nAccessType=rw\n"
+             "PDOMapping=0\n")
+    path = tmp_path / "firmware.eds"
+    path.write_text(text)
+    return path
+
+
+def image_of(size, seed):
+    """size bytes that repeat nowhere a lost or repeated segment would go unnoticed."""
+    out = bytearray()
+    counter = 0
+    while len(out) < size:
+        out += hashlib.sha256(b"%d:%d" % (seed, counter)).digest()
+        counter += 1
+    return bytes(out[:size])
+
+
+def test_bootloader_download_of_256_kib_by_block_transfer(emulator, network, capture, tmp_path):
+    """A bootloader-style download (issue 35, rule 5): 256 KiB into 0x1F50:01 by python-canopen's block client with
+    the CRC, then read back by a block upload with the CRC, byte for byte; the core's SDO buffer stays 64 bytes."""
+    node_id = 0x23
+    eds = firmware_eds(tmp_path)
+    emulator(f"{eds}:{node_id}")
+    capture.wait_for(0x700 + node_id, data=b"\x00", timeout=3)
+    node = remote(network, "buerkert", node_id, od=str(eds))
+    image = image_of(256 * 1024, 1)
+    since = time.time()
+    with node.sdo.open(0x1F50, 1, "wb", block_transfer=True, size=len(image)) as stream:
+        stream.write(image)
+    initiate = capture.wait_for(0x580 + node_id, since=since, timeout=2)[0]
+    assert bytes(initiate.data) == bytes([0xA4, 0x50, 0x1F, 0x01, 127, 0, 0, 0])  # whole blocks of 127 segments
+    with node.sdo.open(0x1F50, 1, "rb", block_transfer=True) as stream:
+        assert stream.read() == image  # python-canopen checks the server's CRC
+    assert node.sdo.upload(0x200D, 0) == bytes.fromhex("DEADBEEF")  # the file's DOMAIN: its own 4 bytes
+
+
+
+def test_a_domain_larger_than_the_sdo_buffer_by_segmented_transfer(emulator, network, capture):
+    """64 KiB (a thousand SDO buffers) into a file device's DOMAIN by a segmented download, and back by a segmented
+    upload; the 1 MiB block transfers: test_sdo_large.py."""
+    node_id = 0x24
+    eds = SOURCE / "tests" / "eds" / "files" / "all-types.eds"
+    emulator(f"{eds}:{node_id}")
+    capture.wait_for(0x700 + node_id, data=b"\x00", timeout=3)
+    node = remote(network, "buerkert", node_id, od=str(eds))
+    blob = image_of(64 * 1024, 2)
+    since = time.time()
+    node.sdo.download(0x200D, 0, blob)  # segmented: python-canopen's for more than 4 bytes
+    initiate = capture.wait_for(0x600 + node_id, since=since, timeout=2)[0]
+    assert bytes(initiate.data) == bytes([0x21, 0x0D, 0x20, 0x00]) + struct.pack("<I", len(blob))
+    assert node.sdo.upload(0x200D, 0) == blob
