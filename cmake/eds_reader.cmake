@@ -1,7 +1,7 @@
 # The EDS/DCF reader: library co_eds and the host program canopen-eds (eds/, docs/eds.md).
 # Sets CO_EDS_TOOL (the canopen-eds the build runs) and CO_EDS_TOOL_TARGET (what generation depends on).
-set(CO_EDS_SOURCES eds/eds.c eds/eds_ini.c eds/eds_diag.c eds/eds_value.c eds/eds_objects.c eds/eds_dcf.c
-                   eds/eds_pdo.c eds/eds_write.c)
+set(CO_EDS_SOURCES eds/eds.c eds/eds_ini.c eds/eds_diag.c eds/eds_value.c eds/eds_info.c eds/eds_entries.c
+                   eds/eds_objects.c eds/eds_dcf.c eds/eds_pdo.c eds/eds_write.c)
 if(NOT CMAKE_CROSSCOMPILING)
   add_library(co_eds STATIC ${CO_EDS_SOURCES})
   target_include_directories(co_eds PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/eds>)

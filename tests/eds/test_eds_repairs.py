@@ -204,3 +204,25 @@ def test_the_first_of_every_kind_is_given(tmp_path):
     notes = [line for line in lines if ": note: " in line]
     assert len(notes) == 200 and all(" more like this, lines " in line for line in notes)
     assert sum(int(line.split("... and ")[1].split(" ")[0]) for line in notes) == 400
+
+
+
+def test_compact_without_object_type_is_an_array_and_a_dcf_mapping_is_counted_from_its_values(tmp_path):
+    """CompactSubObj without ObjectType: an ARRAY (CompactSubObj is for ARRAYs only). A DCF's mapping without sub-index
+    0: its value counted from the entries' ParameterValues, the default from their DefaultValues."""
+    text = (FILES / "diagnostics.eds").read_text()
+    text = text.replace("[ManufacturerObjects]\nSupportedObjects=2\n1=0x2000\n2=0x2001\n",
+                        "[ManufacturerObjects]\nSupportedObjects=3\n1=0x2000\n2=0x2001\n3=0x2002\n")
+    at = text.index("[1A00sub3]")
+    text = text[:at] + text[at:].replace("DefaultValue=0\n", "DefaultValue=0\nParameterValue=0x20000010\n", 1)
+    text += "\n[2002]\nParameterName=Gain\nDataType=0x0006\nAccessType=rw\nCompactSubObj=3\nDefaultValue=7\n"
+    dcf = tmp_path / "mapping.dcf"
+    dcf.write_text(text)
+    m = model(dcf)
+    assert [o["object_type"] for o in m["objects"] if o["index"] == 0x2002] == [8]
+    assert [e["default"] for e in m["entries"] if e["index"] == 0x2002] == [3, 7, 7, 7]
+    count = entry(m, 0x1A00, 0)
+    assert (count["default"], count["param"]) == (2, 3)
+    line = text.splitlines().index("[2002]") + 1
+    assert f"mapping.dcf:{line}: warning: [2002] has no ObjectType but CompactSubObj; read as an ARRAY (0x8)" in \
+        stderr_lines(dcf)

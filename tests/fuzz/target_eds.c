@@ -315,7 +315,9 @@ static void check_current_values(const eds_file_t *f, const text_t *t)
 static char *size_case(const uint8_t *data, size_t size, size_t *out_len)
 {
     const unsigned copies = 1U << (size > 1U ? data[1] % 17U : 0U);
-    const char *p = size > 2U ? (const char *)data + 2 : "", *end = (const char *)data + size;
+    /* p in the input, also when it is shorter than its header: "" was another object, so p < end compared
+     * unrelated pointers and memchr read past the literal (input 01 5B). */
+    const char *p = (const char *)data + (size > 2U ? 2U : size), *end = (const char *)data + size;
     const char *parts[3];
     size_t lens[3];
     for (int i = 0; i < 3; i++) {
