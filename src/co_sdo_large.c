@@ -11,6 +11,40 @@
 
 #if CO_CONFIG_LARGE_OBJECTS
 
+/* A large object's value in one piece (co_od_read; here, out of the read path every number takes): its length, or
+ * CO_ABORT_LENGTH_HIGH when it exceeds cap. */
+uint32_t co_od_read_large(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap, size_t *len)
+{
+    uint32_t length = 0U;
+    uint32_t r = co_od_large_read(node, e, 0U, buf, 0U, &length);
+    if (r == CO_ABORT_NONE && length > cap) {
+        r = CO_ABORT_LENGTH_HIGH;
+    }
+    if (r == CO_ABORT_NONE && length > 0U) {
+        r = co_od_large_read(node, e, 0U, buf, length, &length);
+    }
+    *len = r == CO_ABORT_NONE ? length : 0U;
+    return r;
+}
+
+/* A large object written in one piece (co_od_write; here, out of its write path): BEGIN, DATA, END; a refused DATA
+ * is followed by ABORT. */
+uint32_t co_od_write_large(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len)
+{
+    uint32_t r = co_od_large_write(node, e, CO_LARGE_BEGIN, (uint32_t)len, NULL, 0U);
+    if (r != CO_ABORT_NONE) {
+        return r;
+    }
+    if (len > 0U) {
+        r = co_od_large_write(node, e, CO_LARGE_DATA, 0U, data, len);
+        if (r != CO_ABORT_NONE) {
+            (void)co_od_large_write(node, e, CO_LARGE_ABORT, 0U, NULL, 0U);
+            return r;
+        }
+    }
+    return co_od_large_write(node, e, CO_LARGE_END, (uint32_t)len, NULL, 0U);
+}
+
 /* The transfer's object: a large one is a row of its own (strings and domains are never runs). */
 static const co_od_entry_t *object_of(const co_node_t *node, const co_sdo_server_t *s)
 {
