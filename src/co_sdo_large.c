@@ -80,6 +80,7 @@ const uint8_t *co_sdo_large_bytes(co_node_t *node, co_sdo_server_t *s, uint32_t 
     return s->buf;
 }
 
+#if CO_CONFIG_SDO_BLOCK
 bool co_sdo_large_crc(co_node_t *node, co_sdo_server_t *s, uint16_t *crc)
 {
     uint16_t value = 0U;
@@ -94,6 +95,7 @@ bool co_sdo_large_crc(co_node_t *node, co_sdo_server_t *s, uint16_t *crc)
     *crc = value;
     return true;
 }
+#endif
 
 uint32_t co_sdo_large_begin(co_node_t *node, co_sdo_server_t *s, uint32_t size)
 {
@@ -113,9 +115,11 @@ static uint32_t hand_over(co_node_t *node, co_sdo_server_t *s, uint32_t n)
     if (n == 0U) {
         return CO_ABORT_NONE;
     }
+#if CO_CONFIG_SDO_BLOCK
     if (s->crc) {
         s->crc_value = co_sdo_crc(s->crc_value, s->buf, n);
     }
+#endif
     const uint32_t at = s->done;
     s->done += n;
     return co_od_large_write(node, object_of(node, s), CO_LARGE_DATA, at, s->buf, n);
