@@ -119,7 +119,7 @@ def test_sdo_block_download_and_upload_with_crc(tmp_path, emulators, buses, mast
     blob = bytes(range(7, 7 + 64))  # the whole 64-byte domain: ten segments, the last with 1 byte
     other = remote(network, 33, ALL_TYPES)
     with other.sdo.open(0x200D, 0, "rb", block_transfer=True) as stream:
-        assert stream.read() == bytes.fromhex("DEADBEEF") + bytes(60)  # its default, the domain's whole 64 bytes
+        assert stream.read() == bytes.fromhex("DEADBEEF")  # its default, with its length (4 bytes, not 64)
     with other.sdo.open(0x200D, 0, "wb", block_transfer=True, size=len(blob)) as stream:
         stream.write(blob)
     assert get(emu, 33, "0x200D") == blob.hex().upper()
