@@ -65,7 +65,7 @@ if(CO_DEVICES)
   endforeach()
 
   target_include_directories(co_devices INTERFACE $<INSTALL_INTERFACE:${co_devices_include_dir}>)
-  install(FILES devices/device.h DESTINATION ${co_devices_include_dir})
+  install(FILES devices/device.h devices/device_words.h DESTINATION ${co_devices_include_dir})
   foreach(model pro_ionizer sds buerkert)
     install(FILES devices/${model}/${model}.h DESTINATION ${co_devices_include_dir}/${model})
   endforeach()
