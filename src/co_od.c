@@ -395,8 +395,10 @@ static uint32_t copy_wire(co_node_t *node, const co_od_entry_t *e, uint8_t *buf,
     size_t n = e->size; /* a number's length */
     if (is_bytes(e)) {
 #if CO_CONFIG_LARGE_OBJECTS
-        if (n == 0U) {
-            return co_od_read_large(node, e, buf, cap, len); /* co_sdo_large.c */
+        if (n == 0U) { /* by value, not through len: its address given away kept a caller's length in memory */
+            const uint64_t got = co_od_read_large(node, e, buf, cap); /* co_sdo_large.c */
+            *len = (size_t)(got & 0xFFFFFFFFU);
+            return (uint32_t)(got >> 32);
         }
 #endif
         n = bytes_len(node, e);

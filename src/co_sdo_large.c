@@ -11,9 +11,9 @@
 
 #if CO_CONFIG_LARGE_OBJECTS
 
-/* A large object's value in one piece (co_od_read; here, out of the read path every number takes): its length, or
- * CO_ABORT_LENGTH_HIGH when it exceeds cap. */
-uint32_t co_od_read_large(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap, size_t *len)
+/* A large object's value in one piece (co_od_read; here, out of the read path every number takes): the abort code
+ * (CO_ABORT_LENGTH_HIGH when it exceeds cap) << 32 | its length. */
+uint64_t co_od_read_large(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap)
 {
     uint32_t length = 0U;
     uint32_t r = co_od_large_read(node, e, 0U, buf, 0U, &length);
@@ -23,8 +23,7 @@ uint32_t co_od_read_large(co_node_t *node, const co_od_entry_t *e, uint8_t *buf,
     if (r == CO_ABORT_NONE && length > 0U) {
         r = co_od_large_read(node, e, 0U, buf, length, &length);
     }
-    *len = r == CO_ABORT_NONE ? length : 0U;
-    return r;
+    return ((uint64_t)r << 32) | (r == CO_ABORT_NONE ? length : 0U);
 }
 
 /* A large object written in one piece (co_od_write; here, out of its write path): BEGIN, DATA, END; a refused DATA

@@ -179,8 +179,9 @@ uint32_t co_od_large_read(co_node_t *node, const co_od_entry_t *e, uint32_t offs
                           uint32_t *length);
 uint32_t co_od_large_write(co_node_t *node, const co_od_entry_t *e, co_large_step_t step, uint32_t at,
                            const uint8_t *data, size_t len);
-/* co_od_read/co_od_write of a large object, in one piece (co_sdo_large.c: out of the paths of the numbers). */
-uint32_t co_od_read_large(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap, size_t *len);
+/* co_od_read/co_od_write of a large object, in one piece (co_sdo_large.c: out of the paths of the numbers). The read
+ * returns the abort code in its high 32 bits and the length in its low ones. */
+uint64_t co_od_read_large(co_node_t *node, const co_od_entry_t *e, uint8_t *buf, size_t cap);
 uint32_t co_od_write_large(co_node_t *node, const co_od_entry_t *e, const uint8_t *data, size_t len);
 #endif
 
