@@ -426,7 +426,8 @@ bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now)
     return co_node_take(node, frame);
 }
 
-/* Not static, so that the compiler keeps it out of co_node_rx: the early return there then saves no registers. */
+/* Out of co_node_rx (CO_NOINLINE: since RTR TPDOs GCC inlined it there though it is not static), so that the early
+ * return there saves no registers. */
 bool co_node_take(co_node_t *node, const co_frame_t *frame)
 {
     if (frame->flags != 0U || frame->len > 8U || frame->id > 0x7FFU) {

@@ -221,8 +221,16 @@ void co_node_send(co_node_t *node, const co_frame_t *frame);
 void co_node_event(co_node_t *node, co_event_kind_t kind, uint16_t index, uint8_t sub, uint32_t value,
                    uint32_t code);
 void co_node_set_state(co_node_t *node, co_nmt_state_t state);
+/* Keeps a function out of its callers where the compiler can be told (GCC, Clang): the early return of a hot function
+ * (co_node_rx: a frame for other nodes) then saves no registers for the rest of its work. */
+#if defined(__GNUC__)
+#define CO_NOINLINE __attribute__((noinline))
+#else
+#define CO_NOINLINE
+#endif
+
 /* co_node_rx() of a frame that may be the node's (after its early return). */
-bool co_node_take(co_node_t *node, const co_frame_t *frame);
+CO_NOINLINE bool co_node_take(co_node_t *node, const co_frame_t *frame);
 /* The processing pass of co_node_process() (after its early return). */
 co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now);
 /* Rebuilds the frame router's table (after a reset and whenever a COB-ID the node takes changes); reports
