@@ -3,7 +3,8 @@
  * @brief PDO checks of the EDS reader: communication and mapping objects pair up, every mapping entry names an
  * existing mappable object of the right size and direction (dummy entries only where [DummyUsage] allows),
  * at most 64 bits; sub-index 0 = 0xFE (both ways) or 0xFF (receive) is an MPDO. A PDO whose mapping is wrong is
- * disabled with an empty mapping, so the device still loads.
+ * disabled with an empty mapping, so the device still loads. An entry above the count is kept as it is, with a
+ * warning where a master could not write it back.
  */
 #include "eds_internal.h"
 
@@ -100,6 +101,31 @@ static void disable(eds_file_t *f, uint16_t comm, uint16_t map)
     }
 }
 
+/* Entries above the count of a mapping the node takes: CiA 301 checks the entries up to the count only, so the node
+ * keeps them as the file has them, but a master's write of an entry is checked when written (step 3 of the mapping
+ * procedure, as CANopenNode and Lely do: docs/decisions.md): one that names what cannot be mapped here could not be
+ * written back (issue 35, rule 3: the reader says so at load, by line). */
+static void check_above_count(eds_file_t *f, const dropped_t *dropped, uint16_t map, bool receive)
+{
+    eds_entry_t *count = eds_find_mut(f, map, 0U);
+    const eds_value_t *n = effective(count);
+    if (n->kind != EDS_V_UINT || n->u == 0xFEU || (n->u == 0xFFU && receive)) {
+        return;
+    }
+    for (unsigned sub = (unsigned)n->u + 1U; sub <= 0x40U; sub++) {
+        eds_entry_t *e = eds_find_mut(f, map, (uint8_t)sub);
+        const eds_value_t *v = e != NULL ? effective(e) : NULL;
+        char why[128];
+        if (v == NULL || v->kind != EDS_V_UINT || v->nodeid || e->type != 0x07U || v->u == 0U ||
+            entry_bits(f, dropped, v->u, receive, why, sizeof why) >= 0) {
+            continue;
+        }
+        eds_warn(f, e->line, "[%04Xsub%X] 0x%08llX, above the count %llu, %s, which a master cannot write back; "
+                 "kept (CiA 301 checks the entries up to the count)", (unsigned)map, sub, (unsigned long long)v->u,
+                 (unsigned long long)n->u, why);
+    }
+}
+
 static void check_mapping(eds_file_t *f, const dropped_t *dropped, uint16_t comm, uint16_t map, bool receive)
 {
     eds_entry_t *count = eds_find_mut(f, map, 0U);
@@ -161,6 +187,7 @@ static void check_mapping(eds_file_t *f, const dropped_t *dropped, uint16_t comm
             return;
         }
     }
+    check_above_count(f, dropped, map, receive);
 }
 
 /* Leaves the dropped objects out of the model (entries and objects), in one pass. */

@@ -164,6 +164,23 @@ def test_a_mapping_without_sub_index_0_is_repaired_from_its_entries():
     assert entry(m, 0x1800, 1)["default"] & 0x80000000 == 0                     # the PDO is not disabled
 
 
+def test_what_a_master_could_not_write_back_is_said_at_load():
+    """Rule 3: a mapping entry above the count is kept as the file has it (CiA 301 checks the entries up to the
+    count), but one a master's write would be refused for (here a missing object: 0x06020000) is warned at its line;
+    a mapping of more than 64 bits (a master's count: 0x06040042) disables the PDO with a warning at its count."""
+    path = FILES / "mapping-limits.eds"
+    m = model(path)
+    above = entry(m, 0x1A00, 2)
+    assert any(d.startswith(f"{path}:{above['line']}: warning: [1A00sub2] 0x21000108, above the count 1")
+               for d in m["diagnostics"]), m["diagnostics"]
+    assert (above["default"], entry(m, 0x1A00, 0)["default"]) == (0x21000108, 1)  # kept, the PDO not disabled
+    assert entry(m, 0x1800, 1)["default"] & 0x80000000 == 0
+    count = entry(m, 0x1A01, 0)
+    assert any(d.startswith(f"{path}:{count['line']}: warning: [1A01sub0] the mapping (DefaultValue) has 96 bits")
+               for d in m["diagnostics"]), m["diagnostics"]
+    assert (count["default"], entry(m, 0x1801, 1)["default"] & 0x80000000) == (0, 0x80000000)
+
+
 def test_repeated_warnings_are_grouped_and_hide_no_other(tmp_path):
     """300 objects with one defect and one with another: the first 200 lines of the one kind hid the other."""
     listed = "".join(f"{i + 1}=0x{0x2000 + i:04X}\n" for i in range(301))
