@@ -201,6 +201,14 @@ bool eds_value_fits(uint8_t type, const eds_value_t *v);
  */
 bool eds_value_follows_node_id(const eds_entry_t *e, const eds_value_t *value, uint8_t node_id, eds_value_t *relative);
 
+/**
+ * What the file holds that a node at node_id takes but a master could not write (issue 35, rule 3), known only once
+ * the node-ID is: a valid COB-ID of the EMCY, SYNC, an additional SDO server (0x1201..0x127F) or a PDO that is a
+ * restricted CAN-ID of CiA 301 there ($NODEID+0x6A0 at node-ID 0x40..0x5F). One "FILE:LINE: warning: ..." line to
+ * out for each; returns how many.
+ */
+unsigned eds_node_id_warnings(const eds_file_t *f, uint8_t node_id, FILE *out);
+
 /** Formats a value as CiA 306 text (hex for unsigned, decimal for signed, %.9g/%.17g for reals, hex bytes). */
 void eds_format_value(char *buf, size_t cap, uint8_t type, const eds_value_t *value);
 

@@ -97,3 +97,50 @@ void eds_relative_params(eds_file_t *f)
         }
     }
 }
+
+/* CiA 301 §7.3.5: the CAN-IDs no configurable COB-ID may use, as the core refuses them from a master
+ * (co_cob_id_restricted in src/co_node.c). */
+static bool can_id_restricted(uint64_t id)
+{
+    return id <= 0x07FU || (id >= 0x101U && id <= 0x180U) || (id >= 0x581U && id <= 0x5FFU) ||
+           (id >= 0x601U && id <= 0x67FU) || (id >= 0x6E0U && id <= 0x6FFU) || id >= 0x701U;
+}
+
+/* The COB-IDs the core checks so when a master writes them (the default SDO server 0x1200 has CiA 301's own). */
+static bool configurable_cob_id(const eds_entry_t *e)
+{
+    if (e->type != 0x07U) {
+        return false;
+    }
+    if (e->index == 0x1005U || e->index == 0x1014U) {
+        return e->sub == 0U;
+    }
+    if (e->index >= 0x1201U && e->index <= 0x127FU) {
+        return e->sub == 1U || e->sub == 2U;
+    }
+    return ((e->index >= 0x1400U && e->index <= 0x15FFU) || (e->index >= 0x1800U && e->index <= 0x19FFU)) &&
+           e->sub == 1U;
+}
+
+unsigned eds_node_id_warnings(const eds_file_t *f, uint8_t node_id, FILE *out)
+{
+    unsigned count = 0U;
+    for (uint32_t i = 0; i < f->n_entries; i++) {
+        const eds_entry_t *e = &f->entries[i];
+        const eds_value_t *v = e->param.kind != EDS_V_NONE ? &e->param : &e->def;
+        if (!configurable_cob_id(e) || v->kind != EDS_V_UINT || !v->nodeid) {
+            continue;
+        }
+        const uint64_t cob_id = v->u + node_id;
+        if ((cob_id & 0x80000000U) != 0U || !can_id_restricted(cob_id & CAN_ID_11)) {
+            continue;
+        }
+        char name[24];
+        section_name(f, e, name, sizeof name);
+        fprintf(out, "%s:%lu: warning: %s $NODEID+0x%" PRIX64 " is 0x%" PRIX64 " at node-ID %u, a restricted CAN-ID "
+                "(CiA 301): the node uses it as the file says, a master's write of it is refused (0x06090030)\n",
+                f->path, (unsigned long)e->line, name, v->u, cob_id, (unsigned)node_id);
+        count++;
+    }
+    return count;
+}

@@ -364,6 +364,13 @@ const device_class_t *eds_class_load(const char *path, FILE *log, bool quiet)
 }
 
 /* The current value of an entry: what an SDO upload would give, without access rights. */
+void eds_class_warn_node_id(const device_class_t *cls, uint8_t node_id, FILE *log, bool quiet)
+{
+    if (!quiet) {
+        (void)eds_node_id_warnings(((const eds_class_t *)(const void *)cls)->file, node_id, log);
+    }
+}
+
 static long current_value(void *ctx, const eds_entry_t *e, uint8_t *buf, size_t cap)
 {
     device_t *dev = ctx;

@@ -21,6 +21,12 @@ bool eds_class_is_file(const char *name);
 const device_class_t *eds_class_load(const char *path, FILE *log, bool quiet);
 
 /**
+ * Says, for a node of the class at node_id, what its file holds that such a node takes but a master could not
+ * write (eds_node_id_warnings: a restricted COB-ID at that node-ID), to log unless quiet.
+ */
+void eds_class_warn_node_id(const device_class_t *cls, uint8_t node_id, FILE *log, bool quiet);
+
+/**
  * Writes a node of a class read from a file as a DCF (export-dcf): the file's objects, each with its current value
  * as ParameterValue, [DeviceComissioning] with the node's node-ID. The file appears whole or not at all (written
  * beside, then renamed). false with the reason in why (also for a built-in device: it has no file model here).

@@ -113,7 +113,11 @@ bool parse_spec(const char *arg, node_spec_t *spec, bool quiet)
                     arg, name);
             return false;
         }
-        return colon == NULL || parse_node_id(colon + 1, arg, spec);
+        if (colon != NULL && !parse_node_id(colon + 1, arg, spec)) {
+            return false;
+        }
+        eds_class_warn_node_id(spec->cls, spec->id, stderr, quiet);
+        return true;
     }
     char *slash = strchr(name, '/');
     if (slash != NULL) {
