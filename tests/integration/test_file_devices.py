@@ -22,7 +22,7 @@ import canopen
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from conftest import EMU, SRC, Capture, Deadline, Emulator, deep_receive_buffer, open_bus
+from conftest import EMU, SRC, Capture, Emulator, deep_receive_buffer, open_bus
 
 FILES = SRC / "tests" / "eds" / "files"
 EDS_TOOL = os.environ.get("CO_EDS_TOOL", str(Path(EMU).parent / "canopen-eds"))
