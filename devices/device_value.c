@@ -186,14 +186,18 @@ static bool integer_of(const device_value_t *v, bool *negative, unsigned long lo
         *magnitude = v->as.b ? 1U : 0U;
         (void)snprintf(shown, shown_size, "%s", v->as.b ? "true" : "false");
         return true;
-    case DEVICE_VALUE_REAL:
+    case DEVICE_VALUE_REAL: {
+        /* Whole when its magnitude converts to an integer and back unchanged (NaN and infinities fail the range
+         * test): no libm call, as devices/ links no math library. */
         (void)snprintf(shown, shown_size, "%.17g", v->as.r);
-        if (!(v->as.r == floor(v->as.r)) || fabs(v->as.r) >= 18446744073709551616.0) {
-            return refuse(why, why_size, "%s is not a whole number", shown); /* NaN and infinities too */
+        const double size = v->as.r < 0.0 ? -v->as.r : v->as.r;
+        if (!(size < 18446744073709551616.0) || (double)(unsigned long long)size != size) {
+            return refuse(why, why_size, "%s is not a whole number", shown);
         }
         *negative = v->as.r < 0.0;
-        *magnitude = (unsigned long long)fabs(v->as.r);
+        *magnitude = (unsigned long long)size;
         return true;
+    }
     case DEVICE_VALUE_TEXT: {
         (void)snprintf(shown, shown_size, "%.*s", (int)(v->len < 64U ? v->len : 64U), (const char *)v->bytes);
         if (v->len < shown_size && strlen(shown) == v->len && device_parse_magnitude(shown, negative, magnitude)) {
@@ -277,7 +281,7 @@ static bool encode(const co_od_entry_t *e, const device_value_t *v, uint8_t *wir
         }
         uint64_t bits;
         if (e->type == CO_T_REAL32) {
-            if (isfinite(d) && fabs(d) > (double)FLT_MAX) { /* an explicit "inf" is taken as it is */
+            if (isfinite(d) && (d > (double)FLT_MAX || d < -(double)FLT_MAX)) { /* "inf" is taken as it is */
                 return refuse(why, why_size, "%g is out of range: 0x%04X:%02X (REAL32) holds -3.4e38..3.4e38", d, index,
                               sub);
             }
