@@ -84,9 +84,13 @@ endif()
 # One ctest test per unit test, <label>/test_*, that runs <dir>/test_*.elf with RUNNER --run ELF [ARGS...] and,
 # where the host build has the same test, --host <its binary> (the per-case results must be the host's).
 function(co_add_cross_unit_tests label dir runner)
+  include(${PROJECT_SOURCE_DIR}/tests/unit/host_only_tests.cmake)
   file(GLOB co_unit_test_sources ${PROJECT_SOURCE_DIR}/tests/unit/test_*.c)
   foreach(src IN LISTS co_unit_test_sources)
     get_filename_component(t ${src} NAME_WE)
+    if(t IN_LIST CO_HOST_ONLY_UNIT_TESTS)
+      continue()
+    endif()
     set(co_host_arg "")
     if(TARGET ${t})
       set(co_host_arg --host $<TARGET_FILE:${t}>)

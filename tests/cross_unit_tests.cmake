@@ -42,11 +42,12 @@ function(co_cross_unit_tests)
     target_compile_options(co_test_support_${v} PRIVATE ${CO_WARNINGS})
   endforeach()
 
-  # Same list as the host build: every tests/unit/test_*.c but the host-only ones: test_sdo_large tests large objects
-  # (CO_CONFIG_LARGE_OBJECTS, co_config.h), which a microcontroller build leaves out, and moves megabytes that an
-  # AVR's memory does not hold; on a target it would run no test at all.
+  # Same list as the host build: every tests/unit/test_*.c but the host-only ones (tests/unit/host_only_tests.cmake).
+  include(${CO_ROOT}/tests/unit/host_only_tests.cmake)
   file(GLOB co_unit_test_sources CONFIGURE_DEPENDS ${CO_ROOT}/tests/unit/test_*.c)
-  list(REMOVE_ITEM co_unit_test_sources ${CO_ROOT}/tests/unit/test_sdo_large.c)
+  foreach(t IN LISTS CO_HOST_ONLY_UNIT_TESTS)
+    list(REMOVE_ITEM co_unit_test_sources ${CO_ROOT}/tests/unit/${t}.c)
+  endforeach()
   file(WRITE ${CMAKE_BINARY_DIR}/tests.txt "${arg_FIRST_LINE}\n")
   foreach(src IN LISTS co_unit_test_sources)
     get_filename_component(t ${src} NAME_WE)
