@@ -1,0 +1,193 @@
+"""Object dictionary checks: the node holds what its EDS describes (CiA 301 §7.4, CiA 306), and answers the
+abort codes of CiA 301 §7.2.4.3.17 for what it does not hold or may not do."""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, List, Optional, Tuple
+
+from . import eds as eds_module
+from .registry import Failed, Findings, NotApplicable, check
+from .sdo import SdoAbort, SdoError, abort_text
+
+if TYPE_CHECKING:
+    from .runner import Context
+
+ABORT_WRITE_ONLY, ABORT_READ_ONLY = 0x06010001, 0x06010002
+ABORT_NO_OBJECT, ABORT_NO_SUBINDEX = 0x06020000, 0x06090011
+#: "No data available": an entry that exists and holds nothing now (an error history entry above 0x1003:00, an
+#: empty DOMAIN). It answers, so it exists.
+ABORT_NO_DATA = 0x08000024
+
+#: Read-only entries of the communication area whose value is the device's, not the type's: the error register,
+#: the manufacturer status register, the error history, and the serial number (an EDS describes a type of device,
+#: every unit has its own serial number).
+INSTANCE_VALUES = {(0x1001, None), (0x1002, None), (0x1003, None), (0x1018, 4)}
+#: Indexes tried, in this order, as an object the EDS does not list (the ends of the manufacturer-specific and the
+#: profile areas, where devices seldom put objects).
+UNLISTED_CANDIDATES = (0x5FFE, 0x2FFE, 0x3FFE, 0x4FFE, 0x5FFD)
+
+
+def _upload_all(ctx: "Context", entries: List[eds_module.Entry], findings: Findings) \
+        -> List[Tuple[eds_module.Entry, bytes]]:
+    """The entries that upload, with their bytes; the others are findings, except those that answer
+    ABORT_NO_DATA (they exist, and have no value to compare)."""
+    got = []
+    for entry in entries:
+        try:
+            got.append((entry, ctx.upload(entry.index, entry.sub)))
+        except SdoAbort as e:
+            if e.code != ABORT_NO_DATA:
+                findings.add(f"{entry}: {e}", e.frames)
+        except SdoError as e:
+            findings.add(f"{entry}: {e}", e.frames)
+    return got
+
+
+@check("od.mandatory-objects", clause="CiA 301 v4.2.0 §7.4.8.1 (table 48: 0x1000, 0x1001, 0x1018 mandatory)",
+       summary="the EDS lists 0x1000, 0x1001 and 0x1018:01..04 and the node answers them")
+def mandatory_objects(ctx: "Context") -> Optional[str]:
+    findings = Findings()
+    for index, sub in ((0x1000, 0), (0x1001, 0), (0x1018, 0), (0x1018, 1)):
+        if ctx.eds.entry(index, sub) is None:
+            findings.add(f"0x{index:04X}:{sub:02X} is mandatory and the EDS does not describe it")
+        try:
+            ctx.upload(index, sub)
+        except SdoError as e:
+            findings.add(f"0x{index:04X}:{sub:02X} is mandatory: {e}", e.frames)
+    findings.raise_if_any("mandatory entries missing")
+    return None
+
+
+@check("od.readable-entries", clause="CiA 306 §4.6 (object descriptions), CiA 301 v4.2.0 §7.4.7.1 (data type sizes)",
+       summary="every readable entry the EDS lists uploads, with the size of its data type (abort 0x08000024, no "
+               "data available, counts as existing: an error history entry above 0x1003:00)")
+def readable_entries(ctx: "Context") -> Optional[str]:
+    entries = [e for e in ctx.eds.entries() if e.readable]
+    if not entries:
+        raise NotApplicable("the EDS lists no readable entry")
+    findings = Findings()
+    for entry, data in _upload_all(ctx, entries, findings):
+        if entry.size is not None and len(data) != entry.size:
+            findings.add(f"{entry}: {len(data)} byte(s) uploaded, its type has {entry.size}", ctx.sdo.frames)
+    findings.raise_if_any(f"of {len(entries)} readable entries wrong")
+    return f"{len(entries)} entries"
+
+
+def _compared(entry: eds_module.Entry) -> bool:
+    if entry.value is None or not entry.readable or entry.data_type == 0x0F:
+        return False
+    if (entry.index, None) in INSTANCE_VALUES or (entry.index, entry.sub) in INSTANCE_VALUES:
+        return False
+    return entry.access == "const" or (entry.access == "ro" and 0x1000 <= entry.index <= 0x1FFF)
+
+
+@check("od.default-values", clause="CiA 306 §4.6.3 (DefaultValue, ParameterValue, $NODEID)",
+       summary="const entries, and read-only entries of the communication area (0x1000..0x1FFF), hold the EDS "
+               "value (a DCF's ParameterValue, else DefaultValue; $NODEID at the node-ID)")
+def default_values(ctx: "Context") -> Optional[str]:
+    entries = [e for e in ctx.eds.entries() if _compared(e)]
+    if not entries:
+        raise NotApplicable("the EDS gives no value of a const or read-only communication entry")
+    findings = Findings()
+    for entry, data in _upload_all(ctx, entries, findings):
+        actual = eds_module.decode(data, entry.data_type)
+        assert entry.value is not None
+        if not eds_module.same_value(entry.value, actual):
+            relative = f" ($NODEID = {ctx.node})" if entry.node_relative else ""
+            findings.add(f"{entry}: holds {_show(actual)}, the EDS says {entry.value_text!r}{relative} = "
+                         f"{_show(entry.value)}", ctx.sdo.frames)
+    findings.raise_if_any(f"of {len(entries)} entries differ from the EDS")
+    return f"{len(entries)} entries compared"
+
+
+def _show(value: object) -> str:
+    if isinstance(value, int) and not isinstance(value, bool):
+        return f"{value} (0x{value & 0xFFFFFFFFFFFFFFFF:X})" if value >= 0 else str(value)
+    return repr(value)
+
+
+def _expect_abort(ctx: "Context", index: int, sub: int, code: int, findings: Findings, what: str,
+                  data: Optional[bytes] = None) -> None:
+    try:
+        if data is None:
+            ctx.upload(index, sub)
+        else:
+            ctx.sdo.download(index, sub, data)
+        findings.add(f"0x{index:04X}:{sub:02X} ({what}): {'written' if data is not None else 'uploaded'} "
+                     f"without an abort, expected {abort_text(code)}", ctx.sdo.frames)
+    except SdoAbort as e:
+        if e.code != code:
+            findings.add(f"0x{index:04X}:{sub:02X} ({what}): aborted with {abort_text(e.code)}, expected "
+                         f"{abort_text(code)}", e.frames)
+    except SdoError as e:
+        findings.add(f"0x{index:04X}:{sub:02X} ({what}): {e}", e.frames)
+
+
+@check("od.missing-object", clause="CiA 301 v4.2.0 §7.2.4.3.17 (abort 0x06020000)",
+       summary="an object the EDS does not list answers abort 0x06020000")
+def missing_object(ctx: "Context") -> Optional[str]:
+    index = next((i for i in UNLISTED_CANDIDATES if i not in ctx.eds.objects), None)
+    if index is None:
+        raise NotApplicable("the EDS lists every candidate index")
+    findings = Findings()
+    _expect_abort(ctx, index, 0, ABORT_NO_OBJECT, findings, "not in the EDS")
+    findings.raise_if_any("wrong answers")
+    return f"0x{index:04X}"
+
+
+@check("od.missing-subindex", clause="CiA 301 v4.2.0 §7.2.4.3.17 (abort 0x06090011)",
+       summary="a sub-index the EDS does not list answers abort 0x06090011: one past the highest of a record or "
+               "array, and sub-index 1 of a variable")
+def missing_subindex(ctx: "Context") -> Optional[str]:
+    findings = Findings()
+    tried = []
+    record = ctx.eds.objects.get(0x1018)
+    if record is None or record.is_var:
+        record = next((o for o in ctx.eds.objects.values() if not o.is_var and o.entries), None)
+    if record is not None and max(record.entries) < 0xFE:
+        tried.append((record.index, max(record.entries) + 1, "a record's sub-index past its highest"))
+    var = ctx.eds.objects.get(0x1000)
+    if var is None or not var.is_var:
+        var = next((o for o in ctx.eds.objects.values() if o.is_var and o.entries[0].readable), None)
+    if var is not None:
+        tried.append((var.index, 1, "sub-index 1 of a variable"))
+    if not tried:
+        raise NotApplicable("the EDS has no object to try")
+    for index, sub, what in tried:
+        _expect_abort(ctx, index, sub, ABORT_NO_SUBINDEX, findings, what)
+    findings.raise_if_any("wrong answers")
+    return ", ".join(f"0x{i:04X}:{s:02X}" for i, s, _ in tried)
+
+
+@check("od.write-only-refuses-read", clause="CiA 301 v4.2.0 §7.2.4.3.17 (abort 0x06010001)",
+       summary="every write-only entry refuses an upload with abort 0x06010001")
+def write_only_refuses_read(ctx: "Context") -> Optional[str]:
+    entries = [e for e in ctx.eds.entries() if e.access == "wo"]
+    if not entries:
+        raise NotApplicable("the EDS lists no write-only entry")
+    findings = Findings()
+    for entry in entries:
+        _expect_abort(ctx, entry.index, entry.sub, ABORT_WRITE_ONLY, findings, "write-only")
+    findings.raise_if_any(f"of {len(entries)} write-only entries answer wrong")
+    return f"{len(entries)} entries"
+
+
+@check("od.read-only-refuses-write", clause="CiA 301 v4.2.0 §7.2.4.3.17 (abort 0x06010002)",
+       summary="every read-only and const entry refuses a download of its own current value with abort 0x06010002 "
+               "(its own value: a device that wrongly takes it is left as it was)", writes=True)
+def read_only_refuses_write(ctx: "Context") -> Optional[str]:
+    entries = [e for e in ctx.eds.entries() if e.access in ("ro", "const")]
+    if not entries:
+        raise NotApplicable("the EDS lists no read-only entry")
+    findings = Findings()
+    for entry, data in _upload_all(ctx, entries, findings):
+        _expect_abort(ctx, entry.index, entry.sub, ABORT_READ_ONLY, findings, "read-only", data)
+    findings.raise_if_any(f"of {len(entries)} read-only entries answer wrong")
+    return f"{len(entries)} entries"
+
+
+def first_entry(ctx: "Context", want) -> Optional[eds_module.Entry]:  # type: ignore[no-untyped-def]
+    """The first entry of the EDS that ``want(entry)`` takes."""
+    return next((e for e in ctx.eds.entries() if want(e)), None)
+
+
+__all__ = ["first_entry", "Failed"]

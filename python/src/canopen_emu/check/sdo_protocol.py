@@ -1,0 +1,224 @@
+"""SDO protocol checks (CiA 301 v4.2.0 §7.2.4): the transfers, their error answers, and the SDO server's COB-IDs."""
+from __future__ import annotations
+
+import struct
+from typing import TYPE_CHECKING, Optional, Tuple
+
+from . import eds as eds_module
+from .registry import Failed, Findings, NotApplicable, check
+from .sdo import SdoAbort, SdoClient, SdoError, SdoProtocolError, abort_text
+
+if TYPE_CHECKING:
+    from .runner import Context
+
+ABORT_TOGGLE, ABORT_COMMAND = 0x05030000, 0x05040001
+#: How long a server that must stay silent is given to answer anyway.
+SILENCE_S = 0.2
+
+
+def long_readable_entry(ctx: "Context") -> Tuple[eds_module.Entry, bytes]:
+    """A readable entry whose value is over 4 bytes (a segmented upload), with that value; NotApplicable when the
+    EDS has none (up to 16 candidates are read: strings and types over 4 bytes)."""
+    tried = 0
+    for entry in ctx.eds.entries():
+        if not entry.readable or (entry.size is not None and entry.size <= 4):
+            continue
+        if entry.size is None and isinstance(entry.value, (str, bytes)) and 0 < len(entry.value) <= 4:
+            continue
+        tried += 1
+        if tried > 16:
+            break
+        try:
+            data = ctx.upload(entry.index, entry.sub)
+        except SdoError:
+            continue
+        if len(data) > 4:
+            return entry, data
+    raise NotApplicable("no readable entry of more than 4 bytes (no segmented transfer to check)")
+
+
+@check("sdo.expedited-upload", clause="CiA 301 v4.2.0 §7.2.4.3.6 (initiate SDO upload, expedited)",
+       summary="0x1000 uploads expedited: scs 2, e=1 and s=1 with n for 4 bytes, the multiplexer echoed")
+def expedited_upload(ctx: "Context") -> Optional[str]:
+    with ctx.exchange():
+        answer = ctx.sdo.request(struct.pack("<BHB", 0x40, 0x1000, 0))
+    command = answer.data[0]
+    if command >> 5 == 4:
+        raise Failed(f"0x1000:00 aborted with {abort_text(struct.unpack_from('<I', answer.data, 4)[0])}",
+                     ctx.sdo.frames)
+    if command != 0x43:
+        raise Failed(f"answer command byte 0x{command:02X}, expected 0x43 (scs 2, expedited, size indicated, "
+                     "4 bytes): 0x1000 is an UNSIGNED32", ctx.sdo.frames)
+    if answer.data[1:4] != bytes([0x00, 0x10, 0x00]):
+        raise Failed("the answer does not name 0x1000:00", ctx.sdo.frames)
+    return None
+
+
+@check("sdo.segmented-upload", clause="CiA 301 v4.2.0 §7.2.4.3.6-7 (initiate SDO upload, upload SDO segment)",
+       summary="a value over 4 bytes uploads segmented: size indicated, toggle bit alternating from 0, c=1 on "
+               "the last segment, as many bytes as indicated")
+def segmented_upload(ctx: "Context") -> Optional[str]:
+    entry, _ = long_readable_entry(ctx)
+    with ctx.exchange():
+        size = ctx.sdo.start_segmented_upload(entry.index, entry.sub)
+        data = ctx.sdo._upload_segments(entry.index, entry.sub, size)  # noqa: SLF001: the same client's steps
+    if size is None:
+        raise Failed(f"{entry}: the segmented upload does not indicate its size (s=0): allowed, but a client "
+                     "cannot check it", ctx.sdo.frames)
+    return f"{entry} ({len(data)} bytes)"
+
+
+@check("sdo.upload-toggle-error", clause="CiA 301 v4.2.0 §7.2.4.3.7, abort 0x05030000 (§7.2.4.3.17)",
+       summary="an upload segment request with the toggle bit not alternated (1 on the first) is aborted with "
+               "0x05030000")
+def upload_toggle_error(ctx: "Context") -> Optional[str]:
+    entry, _ = long_readable_entry(ctx)
+    with ctx.exchange():
+        ctx.sdo.start_segmented_upload(entry.index, entry.sub)
+        answer = ctx.sdo.request(bytes([0x70]))  # toggle 1: the first segment's must be 0
+    if answer.data[0] >> 5 != 4:
+        ctx.sdo.send_abort(entry.index, entry.sub, 0x08000000)  # end the transfer it went on with
+        raise Failed(f"{entry}: a segment request with the wrong toggle bit was answered, not aborted",
+                     ctx.sdo.frames)
+    code = struct.unpack_from("<I", answer.data, 4)[0]
+    if code != ABORT_TOGGLE:
+        raise Failed(f"{entry}: aborted with {abort_text(code)}, expected {abort_text(ABORT_TOGGLE)}",
+                     ctx.sdo.frames)
+    return str(entry)
+
+
+@check("sdo.unknown-command", clause="CiA 301 v4.2.0 §7.2.4.3.17 (abort 0x05040001)",
+       summary="a request with client command specifier 7 (none in CiA 301) is aborted with 0x05040001, and the "
+               "server answers the next request")
+def unknown_command(ctx: "Context") -> Optional[str]:
+    with ctx.exchange():
+        answer = ctx.sdo.request(struct.pack("<BHB", 0xE0, 0x1000, 0))
+    if answer.data[0] != 0x80:
+        raise Failed(f"answered with command byte 0x{answer.data[0]:02X}, expected an abort (0x80)", ctx.sdo.frames)
+    code = struct.unpack_from("<I", answer.data, 4)[0]
+    if code != ABORT_COMMAND:
+        raise Failed(f"aborted with {abort_text(code)}, expected {abort_text(ABORT_COMMAND)}", ctx.sdo.frames)
+    frames = list(ctx.sdo.frames)
+    with ctx.exchange():
+        ctx.upload(0x1000, 0)
+    ctx.sdo.frames[:0] = frames
+    return None
+
+
+@check("sdo.client-abort", clause="CiA 301 v4.2.0 §7.2.4.3.16 (abort SDO transfer: unconfirmed)",
+       summary="an abort from the client is not answered, whether a transfer is open (a segmented upload) or not, "
+               "and the server then takes a new request")
+def client_abort(ctx: "Context") -> Optional[str]:
+    findings = Findings()
+    ctx.sdo.frames = []
+    ctx.sdo.send_abort(0x1000, 0, 0x08000000)
+    if ctx.sdo.silence(SILENCE_S) is not None:
+        findings.add("an abort with no transfer open was answered", ctx.sdo.frames)
+    try:
+        entry, _ = long_readable_entry(ctx)
+    except NotApplicable:
+        entry = None
+    if entry is not None:
+        try:
+            ctx.sdo.start_segmented_upload(entry.index, entry.sub)
+            ctx.sdo.send_abort(entry.index, entry.sub, 0x08000000)
+            if ctx.sdo.silence(SILENCE_S) is not None:
+                findings.add(f"{entry}: the abort of an open segmented upload was answered", ctx.sdo.frames)
+        except SdoError as e:
+            findings.add(f"{entry}: {e}", e.frames)
+    try:
+        ctx.upload(0x1000, 0)
+    except SdoError as e:
+        findings.add(f"after the abort: {e}", e.frames)
+    findings.raise_if_any("wrong answers")
+    return "with an open segmented upload" if entry is not None else "no transfer open (no entry over 4 bytes)"
+
+
+@check("sdo.server-cob-ids", clause="CiA 301 v4.2.0 §7.5.2.33 (0x1200..0x127F SDO server parameter), §7.3.4 "
+                                    "(predefined connection set)",
+       summary="0x1200:01/02 hold 0x600/0x580 + node-ID, and every SDO server with valid COB-IDs answers an "
+               "upload of 0x1000 on its own COB-ID")
+def server_cob_ids(ctx: "Context") -> Optional[str]:
+    findings = Findings()
+    servers = [i for i in sorted(ctx.eds.objects) if 0x1200 <= i <= 0x127F]
+    if 0x1200 in servers:
+        for sub, expected in ((1, 0x600 + ctx.node), (2, 0x580 + ctx.node)):
+            try:
+                value = int.from_bytes(ctx.upload(0x1200, sub), "little")
+            except SdoError as e:
+                findings.add(f"0x1200:{sub:02X}: {e}", e.frames)
+                continue
+            if value != expected:
+                findings.add(f"0x1200:{sub:02X} is 0x{value:08X}, expected 0x{expected:03X} (0x{expected & 0x780:03X}"
+                             f" + node-ID)", ctx.sdo.frames)
+    checked = []
+    for index in servers[1:]:
+        try:
+            request_id = int.from_bytes(ctx.upload(index, 1), "little")
+            response_id = int.from_bytes(ctx.upload(index, 2), "little")
+        except SdoError as e:
+            findings.add(f"0x{index:04X}: {e}", e.frames)
+            continue
+        if request_id & 0x80000000 or response_id & 0x80000000 or request_id & 0x20000000:
+            continue  # not valid (or extended): the server is off
+        client = SdoClient(ctx.log, ctx.node, ctx.options.timeout, request_id & 0x7FF, response_id & 0x7FF)
+        try:
+            client.upload(0x1000, 0)
+            checked.append(f"0x{index:04X} (0x{request_id & 0x7FF:03X}/0x{response_id & 0x7FF:03X})")
+        except SdoError as e:
+            findings.add(f"SDO server 0x{index:04X} on 0x{request_id & 0x7FF:03X}/0x{response_id & 0x7FF:03X}: {e}",
+                         e.frames)
+    if not servers:
+        raise NotApplicable("the EDS lists no SDO server parameter (0x1200..0x127F)")
+    findings.raise_if_any("wrong SDO server COB-IDs")
+    return ", ".join(["0x1200"] + checked) if 0x1200 in servers else ", ".join(checked)
+
+
+def writable_entry(ctx: "Context", long: bool) -> Tuple[eds_module.Entry, bytes]:
+    """A readable and writable entry with its current value: of more than 4 bytes (``long``) or of 1 to 4; one of
+    the application's (0x2000 and up) first, so that writing back its own value touches no communication."""
+    candidates = [e for e in ctx.eds.entries() if e.readable and e.writable and e.data_type != 0x0F]
+    candidates.sort(key=lambda e: e.index < 0x2000)
+    for entry in candidates[:32]:
+        if not long and (entry.size is None or entry.size > 4):
+            continue
+        if long and entry.size is not None and entry.size <= 4:
+            continue
+        try:
+            data = ctx.upload(entry.index, entry.sub)
+        except SdoError:
+            continue
+        if (len(data) > 4) == long and data:
+            return entry, data
+    raise NotApplicable(f"no readable and writable entry of {'more than 4' if long else '1 to 4'} bytes")
+
+
+@check("sdo.expedited-download", clause="CiA 301 v4.2.0 §7.2.4.3.3 (initiate SDO download, expedited)",
+       summary="a writable entry of 1..4 bytes takes its own value expedited (scs 3, the multiplexer echoed) and "
+               "reads it back", writes=True)
+def expedited_download(ctx: "Context") -> Optional[str]:
+    entry, data = writable_entry(ctx, long=False)
+    with ctx.exchange():
+        ctx.sdo.download(entry.index, entry.sub, data)
+        frames = list(ctx.sdo.frames)
+        back = ctx.upload(entry.index, entry.sub)
+    if back != data:
+        raise Failed(f"{entry}: wrote {data.hex(' ')}, read back {back.hex(' ')}", frames + ctx.sdo.frames)
+    return str(entry)
+
+
+@check("sdo.segmented-download", clause="CiA 301 v4.2.0 §7.2.4.3.3-4 (initiate SDO download, download SDO segment)",
+       summary="a writable entry of more than 4 bytes takes its own value segmented (toggle bit alternating, "
+               "c=1 last) and reads it back", writes=True)
+def segmented_download(ctx: "Context") -> Optional[str]:
+    entry, data = writable_entry(ctx, long=True)
+    with ctx.exchange():
+        ctx.sdo.download(entry.index, entry.sub, data, segmented=True)
+        frames = list(ctx.sdo.frames)
+        back = ctx.upload(entry.index, entry.sub)
+    if back != data:
+        raise Failed(f"{entry}: wrote {data.hex(' ')}, read back {back.hex(' ')}", frames + ctx.sdo.frames)
+    return f"{entry} ({len(data)} bytes)"
+
+
+__all__ = ["long_readable_entry", "writable_entry", "SdoAbort", "SdoProtocolError"]
