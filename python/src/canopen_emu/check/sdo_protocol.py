@@ -175,22 +175,21 @@ def server_cob_ids(ctx: "Context") -> Optional[str]:
 
 
 def writable_entry(ctx: "Context", long: bool) -> Tuple[eds_module.Entry, bytes]:
-    """A readable and writable entry with its current value: of more than 4 bytes (``long``) or of 1 to 4; one of
-    the application's (0x2000 and up) first, so that writing back its own value touches no communication."""
-    candidates = [e for e in ctx.eds.entries() if e.readable and e.writable and e.data_type != 0x0F]
+    """A readable and writable entry with its current value (not empty): of a string type or over 4 bytes
+    (``long``: a segmented download, which CiA 301 allows for any length) or of 1 to 4 bytes; one of the
+    application's (0x2000 and up) first, so that writing back its own value touches no communication."""
+    candidates = [e for e in ctx.eds.entries() if e.readable and e.writable and e.data_type != 0x0F
+                  and ((e.size is None or e.size > 4) if long else (e.size is not None and e.size <= 4))]
     candidates.sort(key=lambda e: e.index < 0x2000)
-    for entry in candidates[:32]:
-        if not long and (entry.size is None or entry.size > 4):
-            continue
-        if long and entry.size is not None and entry.size <= 4:
-            continue
+    for entry in candidates[:16]:
         try:
             data = ctx.upload(entry.index, entry.sub)
         except SdoError:
             continue
-        if (len(data) > 4) == long and data:
+        if data and (long or len(data) <= 4):
             return entry, data
-    raise NotApplicable(f"no readable and writable entry of {'more than 4' if long else '1 to 4'} bytes")
+    raise NotApplicable(f"no readable and writable entry {'of a string type or over 4 bytes' if long else 'of 1 to 4 bytes'}"
+                        " with a value")
 
 
 @check("sdo.expedited-download", clause="CiA 301 v4.2.0 §7.2.4.3.3 (initiate SDO download, expedited)",
@@ -208,8 +207,8 @@ def expedited_download(ctx: "Context") -> Optional[str]:
 
 
 @check("sdo.segmented-download", clause="CiA 301 v4.2.0 §7.2.4.3.3-4 (initiate SDO download, download SDO segment)",
-       summary="a writable entry of more than 4 bytes takes its own value segmented (toggle bit alternating, "
-               "c=1 last) and reads it back", writes=True)
+       summary="a writable entry of a string type or over 4 bytes takes its own value segmented (size indicated, "
+               "toggle bit alternating, c=1 last; any length may go segmented) and reads it back", writes=True)
 def segmented_download(ctx: "Context") -> Optional[str]:
     entry, data = writable_entry(ctx, long=True)
     with ctx.exchange():

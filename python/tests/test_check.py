@@ -1,0 +1,176 @@
+"""canopen-check (canopen_emu.check, docs/conformance.md) against canopen-emu: the three built-in devices pass every
+check, with --write too; a node made wrong on purpose (protocol faults, a file device whose EDS says another value)
+fails the check that should catch it, with the frames; the command line's exit status and JUnit XML; the EDS reader.
+
+On the session's bus (udp_multicast inside tests/udp/netns-run in run-tests.sh's udp pass)."""
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from canopen_emu import Emulator
+from canopen_emu.check import CHECKS, Status, eds as eds_module, run
+from canopen_emu.check.testing import assert_result, check_names, run_on
+
+from conftest import EDS, SOURCE_DIR
+
+BUILT_IN = (("sds", 16), ("buerkert", 17), ("pro-ionizer", 18))
+#: Not applicable on each device, and why: the Eltex devices' SDO server is expedited only and their values fit
+#: in 4 bytes (sds.eds "Comments", pro-ionizer.eds); the Bürkert device has no write-only entry and keeps no error
+#: history (no 0x1003).
+NOT_APPLICABLE = {
+    "sds": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.segmented-download"},
+    "buerkert": {"od.write-only-refuses-read", "emcy.error-history"},
+    "pro-ionizer": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.segmented-download"},
+}
+
+
+@pytest.fixture
+def three_devices(canopen_emu_factory):
+    return canopen_emu_factory(*(f"{device}:{node}" for device, node in BUILT_IN))
+
+
+def test_the_built_in_devices_pass_every_check(three_devices, canopen_emu_bus):
+    # one run per node, at the same time (each its own python-can bus): the SDS's heartbeat is 5 s
+    with ThreadPoolExecutor(len(BUILT_IN)) as pool:
+        reports = dict(zip((d for d, _ in BUILT_IN), pool.map(
+            lambda dn: run(canopen_emu_bus.can_kwargs(), dn[1], EDS[dn[0]], write=True, heartbeat_intervals=2),
+            BUILT_IN)))
+    for device, report in reports.items():
+        failed = "\n".join(f"{r.name}: {r.message}" for r in report.failed)
+        assert report.ok, f"{device}:\n{failed}"
+        assert {r.name for r in report.results if r.status is Status.NOT_APPLICABLE} == NOT_APPLICABLE[device]
+        assert [r.name for r in report.results] == check_names()
+    # what they looked at: every readable entry of the Bürkert's 341 sections, its 12-byte device name segmented
+    assert reports["buerkert"]["od.readable-entries"].message == "307 entries"
+    assert "0x1008:00" in reports["buerkert"]["sdo.segmented-upload"].message
+
+
+def test_read_only_runs_send_no_download_and_no_nmt_command(three_devices, canopen_emu_bus):
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], skip=["heartbeat"])
+    assert report.ok
+    writers = {name for name in check_names() if CHECKS[name].writes}
+    assert writers and {r.name for r in report.results if r.status is Status.NOT_APPLICABLE} >= writers
+    assert all(r.message == "changes the device: needs --write" for r in report.results if r.name in writers)
+    # and the node did not move: still pre-operational, nothing written
+    assert three_devices.client.nodes()[1].state == "PRE-OPERATIONAL"
+
+
+def test_an_sdo_abort_fault_fails_the_object_dictionary_checks_with_the_frames(three_devices, canopen_emu_bus):
+    three_devices.client.inject_fault(17, "sdo-abort", "0x1018:01", "0x06020000")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["od"])
+    failed = {r.name: r for r in report.failed}
+    # 0x1018:01 is mandatory, readable, and read-only with a value in the EDS
+    assert set(failed) == {"od.mandatory-objects", "od.readable-entries", "od.default-values"}, failed
+    result = failed["od.readable-entries"]
+    assert "0x1018:01 'Vendor ID' (UNSIGNED32, ro): 0x1018:01: aborted with" in result.message, result.message
+    assert "0x06020000 (object does not exist in the object dictionary)" in result.message
+    # the frames that show it: the request and the abort in the node's place
+    assert [(f.can_id, f.data.hex()) for f in result.frames] == [
+        (0x611, "4018100100000000"), (0x591, "8018100100000206")]
+
+
+def test_a_wrong_state_in_the_heartbeat_fails_the_heartbeat_and_nmt_checks(three_devices, canopen_emu_bus):
+    client = three_devices.client
+    client.inject_fault(17, "heartbeat-state", "0x12")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["heartbeat.state"])
+    assert report["heartbeat.state"].status is Status.FAILED
+    assert "state 0x12, not 0x04, 0x05 or 0x7F" in report["heartbeat.state"].message
+    assert all(f.can_id == 0x711 and f.data == b"\x12" for f in report["heartbeat.state"].frames)
+    # a valid state, but always operational: only the NMT commands show it is not the node's
+    client.inject_fault(17, "heartbeat-state", "0x05")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["heartbeat.state", "nmt.state-changes"],
+                 write=True)
+    assert report["heartbeat.state"].status is Status.PASSED
+    assert report["nmt.state-changes"].status is Status.FAILED
+    assert "after NMT stop: no heartbeat with state 0x04 (stopped)" in report["nmt.state-changes"].message
+
+
+def test_a_stopped_heartbeat_fails_the_period_check(three_devices, canopen_emu_bus):
+    three_devices.client.inject_fault(17, "heartbeat-stop")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["heartbeat.period"])
+    assert report["heartbeat.period"].status is Status.FAILED
+    assert report["heartbeat.period"].message.startswith("no heartbeat within")
+
+
+def test_an_eds_whose_default_differs_from_the_device_fails_default_values(canopen_emu_factory, canopen_emu_bus,
+                                                                          tmp_path):
+    device = SOURCE_DIR / "tests/eds/files/minimal.eds"
+    canopen_emu_factory(f"{device}:20")
+    assert run(canopen_emu_bus.can_kwargs(), 20, device, only=["od"]).ok
+    wrong = tmp_path / "minimal-wrong.eds"
+    wrong.write_text(device.read_text().replace("DefaultValue=0x00000ABC", "DefaultValue=0x00000ABD"))
+    report = run(canopen_emu_bus.can_kwargs(), 20, wrong, only=["od"])
+    assert [r.name for r in report.failed] == ["od.default-values"]
+    assert ("0x1018:01 'Vendor-ID' (UNSIGNED32, ro): holds 2748 (0xABC), the EDS says '0x00000ABD' = 2749 (0xABD)"
+            in report["od.default-values"].message)
+
+
+def canopen_check_program():
+    found = Path(sys.executable).parent / "canopen-check"  # installed with the package, beside its python
+    return str(found) if found.exists() else shutil.which("canopen-check")
+
+
+def test_the_command_line_exit_status_and_junit_xml(three_devices, canopen_emu_bus, tmp_path):
+    program = canopen_check_program()
+    assert program, "the canopen-check console script is not installed"
+    kwargs = canopen_emu_bus.can_kwargs()
+    if kwargs["interface"] != "udp_multicast":
+        pytest.skip("the command line is exercised on udp_multicast (the udp pass)")
+    bus = ["--interface", "udp_multicast", "--bus", kwargs["channel"], "--port", str(kwargs["port"])]
+    junit = tmp_path / "check.xml"
+    good = subprocess.run([program, *bus, "--node", "17", str(EDS["buerkert"]), "--only", "od", "sdo",
+                           "--junit", str(junit)], capture_output=True, text=True, timeout=60)
+    assert good.returncode == 0, good.stdout + good.stderr
+    assert "PASS  od.readable-entries" in good.stdout and "0 failed" in good.stdout
+    suite = ET.parse(junit).getroot().find("testsuite")
+    assert suite is not None and suite.get("failures") == "0" and int(suite.get("tests")) == len(check_names(only=["od", "sdo"]))
+    assert suite.find("testcase[@name='sdo.expedited-download']/skipped") is not None  # read-only: n/a
+
+    three_devices.client.inject_fault(17, "sdo-abort", "0x1000", "0x08000000")
+    bad = subprocess.run([program, *bus, "--node", "17", str(EDS["buerkert"]), "--only", "od.readable-entries",
+                          "--junit", str(junit)], capture_output=True, text=True, timeout=60)
+    assert bad.returncode == 1, bad.stdout + bad.stderr
+    assert "FAIL  od.readable-entries" in bad.stdout and "tx  611  [8]  40 00 10 00" in bad.stdout
+    failure = ET.parse(junit).getroot().find("testsuite/testcase[@name='od.readable-entries']/failure")
+    assert failure is not None and "0x08000000 (general error)" in failure.get("message") + failure.text
+
+    unusable = subprocess.run([program, *bus, "--node", "17", str(tmp_path / "none.eds")], capture_output=True,
+                              text=True, timeout=60)
+    assert unusable.returncode == 2 and "cannot read the EDS" in unusable.stderr
+    typo = subprocess.run([program, *bus, "--node", "17", str(EDS["buerkert"]), "--only", "od.nonsense"],
+                          capture_output=True, text=True, timeout=60)
+    assert typo.returncode == 2 and "no check is named 'od.nonsense'" in typo.stderr
+
+
+@pytest.fixture(scope="module")
+def pro_ionizer_report(canopen_emu_bus):
+    """The documented way to make each check a test of its own (canopen_emu.check.testing), on an emulator of the
+    module."""
+    with Emulator(interface=canopen_emu_bus, nodes=["pro-ionizer:18"]) as emu:
+        yield run_on(emu, 18, EDS["pro-ionizer"], skip=["heartbeat.period"])
+
+
+@pytest.mark.parametrize("name", check_names(skip=["heartbeat.period"]))
+def test_each_check_as_a_test(pro_ionizer_report, name):
+    assert_result(pro_ionizer_report[name])
+
+
+def test_the_eds_reader(tmp_path):
+    eds = tmp_path / "device.eds"
+    eds.write_text("\ufeff[DeviceInfo]\nLSS_Supported=1\n[OptionalObjects]\nSupportedObjects=2\n1=0x1014\n2=0x2000\n"
+                   "[1014]\nParameterName=COB-ID EMCY\nDataType=0x0007\nAccessType=RO\nDefaultValue=$NODEID+0x80\n"
+                   "[2000]\nParameterName=Gain\nObjectType=0x8\nDataType=0x0002\nAccessType=rw\n"
+                   "DefaultValue=0xFD ; minus three\nCompactSubObj=2\n[2000Name]\nNrOfEntries=1\n1=Left\n"
+                   "[2000Value]\nNrOfEntries=1\n2=010\n", encoding="utf-8")
+    model = eds_module.load(eds, 5)
+    assert model.info_flag("LSS_Supported")
+    cob = model.entry(0x1014)
+    assert (cob.value, cob.node_relative, cob.access) == (0x85, True, "ro")
+    gain = model.objects[0x2000]
+    assert [(e.sub, e.name, e.value) for e in gain.entries.values()] == [
+        (0, "Highest sub-index supported", 2), (1, "Left", -3), (2, "Gain2", 8)]  # 0xFD of an INTEGER8; 010 octal
