@@ -71,14 +71,28 @@ static enum MHD_Result exchange(emu_web_t *w, struct MHD_Connection *c, const we
     }
     size_t len = 0U;
     char *out = web_session_take_output(s, &len);
-    struct MHD_Response *r = out != NULL ? MHD_create_response_from_buffer(len, out, MHD_RESPMEM_MUST_FREE)
-                                         : MHD_create_response_from_buffer(0U, (void *)"", MHD_RESPMEM_PERSISTENT);
+    if (out == NULL) { /* what an idle page gets four times a second: the answer made once, with its headers */
+        return MHD_queue_response(c, MHD_HTTP_OK, w->empty_exchange);
+    }
+    struct MHD_Response *r = MHD_create_response_from_buffer(len, out, MHD_RESPMEM_MUST_FREE);
     if (r == NULL) {
         free(out);
         return MHD_NO;
     }
     (void)MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, "application/x-ndjson");
     return web_send(c, MHD_HTTP_OK, r, true);
+}
+
+/* The answer of an exchange with nothing to give (no body, every API header), made once by web_start. */
+static struct MHD_Response *make_empty_exchange(void)
+{
+    struct MHD_Response *r = MHD_create_response_from_buffer(0U, (void *)"", MHD_RESPMEM_PERSISTENT);
+    if (r != NULL && (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, "application/x-ndjson") != MHD_YES ||
+                      !web_add_headers(r, true))) {
+        MHD_destroy_response(r);
+        r = NULL;
+    }
+    return r;
 }
 
 /* /api/session or /api/session/ID (32 lowercase hex digits); false for any other path. */
@@ -107,7 +121,9 @@ static enum MHD_Result begin(emu_web_t *w, struct MHD_Connection *c, const char 
                              void **state)
 {
     const bool api = strcmp(path, "/api") == 0 || strncmp(path, "/api/", 5U) == 0;
-    if (!web_host_ok(w, c, MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST))) {
+    web_request_headers_t h;
+    web_read_headers(c, &h);
+    if (!web_host_ok(w, c, h.host)) {
         return web_send_error(c, MHD_HTTP_MISDIRECTED_REQUEST, api, "the Host header does not name this server",
                               NULL);
     }
@@ -121,7 +137,7 @@ static enum MHD_Result begin(emu_web_t *w, struct MHD_Connection *c, const char 
     if (strcmp(method, MHD_HTTP_METHOD_POST) != 0) {
         return web_send_error(c, MHD_HTTP_METHOD_NOT_ALLOWED, true, "the API takes POST only", MHD_HTTP_METHOD_POST);
     }
-    if (!web_token_ok(w, c)) {
+    if (!web_token_ok(w, h.token)) {
         return web_send_error(c, MHD_HTTP_FORBIDDEN, true,
                               "missing or wrong " WEB_TOKEN_HEADER " token: load the page again", NULL);
     }
@@ -130,11 +146,12 @@ static enum MHD_Result begin(emu_web_t *w, struct MHD_Connection *c, const char 
     if (!api_route(path, &route, id)) {
         return web_send_error(c, MHD_HTTP_NOT_FOUND, true, "no such API path", NULL);
     }
-    const char *length = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+    const char *length = h.content_length;
     if (length != NULL && (strlen(length) > 9U || strtoul(length, NULL, 10) > WEB_BODY_MAX)) {
         return web_send_error(c, MHD_HTTP_CONTENT_TOO_LARGE, true, "a request body has at most 16384 bytes", NULL);
     }
-    web_request_t *q = malloc(sizeof *q);
+    /* A state of an ended request if one is kept (at most one per connection is in use: no malloc per request). */
+    web_request_t *q = w->n_spare_requests > 0U ? w->spare_requests[--w->n_spare_requests] : malloc(sizeof *q);
     if (q == NULL) {
         return MHD_NO;
     }
@@ -181,10 +198,15 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 
 static void on_completed(void *cls, struct MHD_Connection *c, void **state, enum MHD_RequestTerminationCode why)
 {
+    emu_web_t *w = (emu_web_t *)cls;
     (void)c;
     (void)why;
-    if (*state != cls) { /* an API request's (a GET's is the web itself) */
-        free(*state);
+    if (*state != NULL && *state != w) { /* an API request's (a GET's is the web itself): kept for the next one */
+        if (w->n_spare_requests < WEB_CONNECTIONS_MAX) {
+            w->spare_requests[w->n_spare_requests++] = (web_request_t *)*state;
+        } else {
+            free(*state);
+        }
     }
     *state = NULL;
 }
@@ -245,6 +267,11 @@ int web_start(emu_t *emu, emu_web_t *w, const char *host_port, char *err, size_t
         return EIO;
     }
     if (!make_index(w, err, errlen)) {
+        return ENOMEM;
+    }
+    w->empty_exchange = make_empty_exchange();
+    if (w->empty_exchange == NULL) {
+        (void)snprintf(err, errlen, "--web: out of memory");
         return ENOMEM;
     }
     if (MHD_is_feature_supported(MHD_FEATURE_EPOLL) != MHD_YES) {
@@ -326,6 +353,13 @@ void web_stop(emu_t *emu, emu_web_t *w)
         MHD_stop_daemon(w->daemon); /* closes its connections and the listening socket */
         w->daemon = NULL;
         w->listener.fd = -1;
+    }
+    if (w->empty_exchange != NULL) {
+        MHD_destroy_response(w->empty_exchange); /* after the daemon: no connection holds it any more */
+        w->empty_exchange = NULL;
+    }
+    while (w->n_spare_requests > 0U) {
+        free(w->spare_requests[--w->n_spare_requests]);
     }
     free(w->index_html);
     w->index_html = NULL;

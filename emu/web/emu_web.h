@@ -28,6 +28,8 @@
 
 struct emu;
 struct MHD_Daemon;
+struct MHD_Response;
+struct web_request;
 struct web_session;
 
 /** Web sessions at once; one more gets 503. */
@@ -59,6 +61,9 @@ typedef struct emu_web {
     char token[WEB_ID_HEX + 1];
     char *index_html;               /* web/index.html with the token in it */
     size_t index_len;
+    struct MHD_Response *empty_exchange; /* the answer of an exchange with nothing to give, made once */
+    struct web_request *spare_requests[WEB_CONNECTIONS_MAX]; /* API requests' states ended, kept for the next */
+    size_t n_spare_requests;
     struct web_session *sessions[WEB_SESSIONS_MAX];
     size_t n_sessions;
     unsigned long next_number;      /* sessions are numbered from 1 in the log */

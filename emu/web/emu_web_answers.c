@@ -10,16 +10,23 @@
 /* ---- Answers ----------------------------------------------------------------------------------------------------- */
 
 /* Every answer: the page runs only its own files and is framed by nobody; API answers are never stored. */
+bool web_add_headers(struct MHD_Response *r, bool api)
+{
+    return MHD_add_response_header(r, "Content-Security-Policy", "default-src 'self'; frame-ancestors 'none'") ==
+               MHD_YES &&
+           MHD_add_response_header(r, "X-Content-Type-Options", "nosniff") == MHD_YES &&
+           MHD_add_response_header(r, "Referrer-Policy", "no-referrer") == MHD_YES &&
+           (!api || MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store") == MHD_YES);
+}
+
 enum MHD_Result web_send(struct MHD_Connection *c, unsigned status, struct MHD_Response *r, bool api)
 {
     if (r == NULL) {
         return MHD_NO; /* out of memory: the connection is closed */
     }
-    (void)MHD_add_response_header(r, "Content-Security-Policy", "default-src 'self'; frame-ancestors 'none'");
-    (void)MHD_add_response_header(r, "X-Content-Type-Options", "nosniff");
-    (void)MHD_add_response_header(r, "Referrer-Policy", "no-referrer");
-    if (api) {
-        (void)MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    if (!web_add_headers(r, api)) {
+        MHD_destroy_response(r);
+        return MHD_NO; /* an answer without its headers is never sent */
     }
     const enum MHD_Result result = MHD_queue_response(c, status, r);
     MHD_destroy_response(r);

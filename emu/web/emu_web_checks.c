@@ -4,12 +4,41 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
-#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <sys/socket.h>
 
 /* ---- Checks every request passes --------------------------------------------------------------------------------- */
+
+/* Whether a header's name (key_size bytes) is name, in any case. */
+static bool is_header(const char *key, size_t key_size, const char *name, size_t name_size)
+{
+    return key_size == name_size && strncasecmp(key, name, name_size) == 0;
+}
+
+/* MHD_KeyValueIteratorN: each header of the request in turn; the first of a name counts. */
+static enum MHD_Result take_header(void *cls, enum MHD_ValueKind kind, const char *key, size_t key_size,
+                                   const char *value, size_t value_size)
+{
+    web_request_headers_t *h = (web_request_headers_t *)cls;
+    (void)kind;
+    (void)value_size;
+    if (h->host == NULL && is_header(key, key_size, MHD_HTTP_HEADER_HOST, sizeof MHD_HTTP_HEADER_HOST - 1U)) {
+        h->host = value;
+    } else if (h->token == NULL && is_header(key, key_size, WEB_TOKEN_HEADER, sizeof WEB_TOKEN_HEADER - 1U)) {
+        h->token = value;
+    } else if (h->content_length == NULL &&
+               is_header(key, key_size, MHD_HTTP_HEADER_CONTENT_LENGTH, sizeof MHD_HTTP_HEADER_CONTENT_LENGTH - 1U)) {
+        h->content_length = value;
+    }
+    return MHD_YES;
+}
+
+void web_read_headers(struct MHD_Connection *c, web_request_headers_t *h)
+{
+    h->host = h->token = h->content_length = NULL;
+    (void)MHD_get_connection_values_n(c, MHD_HEADER_KIND, take_header, h);
+}
 
 /* The numeric address a socket address holds (an IPv4-mapped IPv6 address as IPv4), or "". */
 static void numeric_address(const struct sockaddr_storage *a, char *out, size_t size)
@@ -51,7 +80,10 @@ bool web_host_ok(const emu_web_t *w, struct MHD_Connection *c, const char *host)
         if (digits == 0U || digits > 5U || port_text[1 + digits] != '\0') {
             return false;
         }
-        port = strtoul(port_text + 1, NULL, 10);
+        port = 0UL;
+        for (size_t i = 1U; i <= digits; i++) { /* at most 5 digits: no overflow */
+            port = port * 10UL + (unsigned long)(port_text[i] - '0');
+        }
     } else if (port_text[0] != '\0') {
         return false;
     }
@@ -79,9 +111,8 @@ bool web_host_ok(const emu_web_t *w, struct MHD_Connection *c, const char *host)
 }
 
 /* The token header of an API request, compared in constant time. */
-bool web_token_ok(const emu_web_t *w, struct MHD_Connection *c)
+bool web_token_ok(const emu_web_t *w, const char *token)
 {
-    const char *token = MHD_lookup_connection_value(c, MHD_HEADER_KIND, WEB_TOKEN_HEADER);
     if (token == NULL || strlen(token) != WEB_ID_HEX) {
         return false;
     }

@@ -15,11 +15,25 @@
 /** The header every /api request must carry, with the token of the page. */
 #define WEB_TOKEN_HEADER "X-Canopen-Emu"
 
+/** The request headers the checks read (NULL: absent). */
+typedef struct web_request_headers {
+    const char *host;
+    const char *token;          /* WEB_TOKEN_HEADER */
+    const char *content_length;
+} web_request_headers_t;
+
+/** Finds them in one pass over the request's headers; of a name given twice, the first counts (as
+ *  MHD_lookup_connection_value's). */
+void web_read_headers(struct MHD_Connection *c, web_request_headers_t *h);
+
 /** Whether the Host header (NULL: none) names this server (emu_web_checks.c says which names do). */
 bool web_host_ok(const emu_web_t *w, struct MHD_Connection *c, const char *host);
 
-/** Whether the request carries this run's token (compared in constant time). */
-bool web_token_ok(const emu_web_t *w, struct MHD_Connection *c);
+/** Whether token (the request's WEB_TOKEN_HEADER, NULL: none) is this run's (compared in constant time). */
+bool web_token_ok(const emu_web_t *w, const char *token);
+
+/** Adds the headers every answer carries (the API's: also Cache-Control: no-store); false: out of memory. */
+bool web_add_headers(struct MHD_Response *r, bool api);
 
 /** Queues r (NULL: out of memory, the connection is closed) with the headers of every answer; api adds
  *  Cache-Control: no-store. r is released. */
