@@ -15,7 +15,10 @@ it):
 - a DCF's ``ParameterValue`` is the value the device holds (it wins over ``DefaultValue``);
 - UTF-8 with or without a byte-order mark, else Latin-1.
 
-DEFTYPE and DEFSTRUCT objects (0x0001..0x025F) describe data types, not entries a device must answer: left out.
+DEFTYPE and DEFSTRUCT objects (0x0001..0x025F) describe data types, not entries a device must answer: left out; so
+is an entry of a data type that is not one of CiA 301's basic types (a manufacturer's 0x0040..0x005F: neither its
+size nor its value can be judged), and an ARRAY or RECORD left without sub-indexes (as canopen-emu's reader does).
+``Eds.warnings`` says what was left out.
 """
 from __future__ import annotations
 
@@ -120,6 +123,7 @@ class Eds:
     device_info: Dict[str, str]
     dummy_usage: Dict[int, bool]
     warnings: List[str] = field(default_factory=list)
+    file_node_id: Optional[int] = None  # a DCF's [DeviceComissioning] NodeID
 
     def entries(self) -> Iterator[Entry]:
         """Every entry, by index and sub-index."""
@@ -145,8 +149,10 @@ def load(path: Union[str, Path], node_id: int) -> Eds:
     """Reads the file; ``$NODEID`` is resolved at ``node_id``. EdsError when it is not an EDS."""
     path = Path(path)
     raw = path.read_bytes()
+    if raw.startswith(b"\xef\xbb\xbf"):
+        raw = raw[3:]  # a byte-order mark, also before Latin-1 text (a Windows tool's)
     try:
-        text = raw.decode("utf-8-sig")
+        text = raw.decode("utf-8")
     except UnicodeDecodeError:
         text = raw.decode("latin-1")
     parser = configparser.ConfigParser(strict=False, interpolation=None, comment_prefixes=(";", "#"),
@@ -157,6 +163,8 @@ def load(path: Union[str, Path], node_id: int) -> Eds:
         raise EdsError(f"{path}: not an EDS: {e}") from None
     sections = {name.lower(): name for name in parser.sections()}
     eds = Eds(path, node_id, {}, {}, {})
+    if "devicecomissioning" in sections:
+        eds.file_node_id = _int_or_none(parser.get(sections["devicecomissioning"], "nodeid", fallback=None), 0)
     if "deviceinfo" in sections:
         eds.device_info = {k.lower(): _strip_comment(v) for k, v in parser.items(sections["deviceinfo"])}
     if "dummyusage" in sections:
@@ -198,6 +206,9 @@ def _read_object(parser: configparser.ConfigParser, sections: Dict[str, str], se
     keys = {k.lower(): v for k, v in parser.items(section)}
     name = keys.get("parametername", "")
     compact = _int_or_none(keys.get("compactsubobj"), eds.node_id)
+    if compact is not None and not 0 <= compact <= 254:
+        eds.warnings.append(f"[{section}] CompactSubObj {compact} is not 0..254: 0 used")
+        compact = 0
     default_type = OBJECT_RECORD if subs or compact else OBJECT_VAR
     object_type = _int_or_none(keys.get("objecttype"), eds.node_id) or default_type
     if object_type in (0x5, 0x6) or index <= 0x025F:
@@ -207,6 +218,9 @@ def _read_object(parser: configparser.ConfigParser, sections: Dict[str, str], se
         data_type = _int_or_none(keys.get("datatype"), eds.node_id)
         if data_type is None:
             data_type = 0x0F if object_type == OBJECT_DOMAIN else 0
+        if data_type not in TYPE_SIZES:
+            eds.warnings.append(f"[{section}] DataType 0x{data_type:04X} is not a CiA 301 basic type: left out")
+            return None
         obj.entries[0] = _entry(index, 0, name, data_type, keys, eds)
         return obj
     if compact:
@@ -224,7 +238,13 @@ def _read_object(parser: configparser.ConfigParser, sections: Dict[str, str], se
     for sub, sub_section in sorted(subs.items()):
         sub_keys = {k.lower(): v for k, v in parser.items(sub_section)}
         data_type = _int_or_none(sub_keys.get("datatype"), eds.node_id) or 0
+        if data_type not in TYPE_SIZES:
+            eds.warnings.append(f"[{sub_section}] DataType 0x{data_type:04X} is not a CiA 301 basic type: left out")
+            continue
         obj.entries[sub] = _entry(index, sub, sub_keys.get("parametername", ""), data_type, sub_keys, eds)
+    if not obj.entries:
+        eds.warnings.append(f"[{section}] an ARRAY or RECORD without sub-indexes: left out")
+        return None
     return obj
 
 
@@ -238,8 +258,17 @@ def _entry(index: int, sub: int, name: str, data_type: int, keys: Dict[str, str]
     access = keys.get("accesstype", "ro").strip().lower()
     entry = Entry(index, sub, name, data_type, access, _int_or_none(keys.get("pdomapping"), 0) == 1)
     text = keys.get("parametervalue")
+    default = keys.get("defaultvalue")
+    if text is not None and default is not None and _NODEID.search(default) and eds.file_node_id is not None:
+        # a DCF's value that is its node-ID-relative default at the file's NodeID is that default as configured:
+        # it follows the node-ID the device runs at (docs/eds.md, "A DCF at another node-ID")
+        try:
+            if parse_value(text, data_type, eds.file_node_id) == parse_value(default, data_type, eds.file_node_id):
+                text = default
+        except ValueError:
+            pass
     if text is None or text.strip() == "":
-        text = keys.get("defaultvalue")
+        text = default
     if text is not None and text.strip() != "":
         entry.value_text = text
         entry.node_relative = bool(_NODEID.search(text))

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Callable, Iterable, List, Optional
+from typing import Callable, Iterable, List, Optional, Set
 
 import can
 
@@ -46,6 +46,9 @@ class FrameLog:
         self.bus = bus
         self.relevant = relevant or (lambda can_id: True)
         self.trace: List[Frame] = []
+        # The CAN-IDs this side sends on (NMT, SDO requests, LSS master...): a slave never does, so a frame
+        # received on one is this bus's own coming back (udp_multicast on loopback may deliver it) and is dropped.
+        self.own_ids: Set[int] = set()
 
     def start_trace(self) -> None:
         """Throws away what is waiting (frames from before the check) and starts an empty record."""
@@ -60,6 +63,7 @@ class FrameLog:
         message = can.Message(arbitration_id=can_id, data=bytes(data), is_extended_id=False,
                               is_remote_frame=rtr, dlc=dlc if dlc is not None else len(data))
         sent_at = time.time()  # before the send: an answer's receive time stamp is then never earlier
+        self.own_ids.add(can_id)
         self.bus.send(message)
         frame = Frame(sent_at, can_id, bytes(data), True, rtr)
         self._keep(frame)
@@ -74,7 +78,7 @@ class FrameLog:
             message = self.bus.recv(left)
             if message is None:
                 return None
-            if message.is_error_frame or message.is_extended_id:
+            if message.is_error_frame or message.is_extended_id or message.arbitration_id in self.own_ids:
                 continue
             frame = Frame(message.timestamp or time.time(), message.arbitration_id, bytes(message.data), False,
                           message.is_remote_frame)

@@ -111,7 +111,7 @@ def _expect_abort(ctx: "Context", index: int, sub: int, code: int, findings: Fin
         if data is None:
             ctx.upload(index, sub)
         else:
-            ctx.sdo.download(index, sub, data)
+            ctx.sdo.download(index, sub, data, segmented=not data)  # nothing cannot go expedited
         findings.add(f"0x{index:04X}:{sub:02X} ({what}): {'written' if data is not None else 'uploaded'} "
                      f"without an abort, expected {abort_text(code)}", ctx.sdo.frames)
     except SdoAbort as e:
