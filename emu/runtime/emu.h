@@ -29,6 +29,7 @@
 #include "device.h"
 #include "control/emu_control.h"
 #include "faults/emu_faults.h"
+#include "runtime/emu_schedule.h"
 #include "scripts/emu_script.h"
 #include "control/emu_session.h"
 #include "control/emu_socket.h"
@@ -36,7 +37,7 @@
 #include "web/emu_web.h"
 
 /** Nodes on one bus: node-IDs 1..127. */
-#define MAX_NODES 127
+#define MAX_NODES 127 /* per bus: SCHEDULE_NODES_MAX */
 /** CAN interfaces one process serves. */
 #define MAX_BUSES 8
 /** Nodes of one process, all buses. */
@@ -60,8 +61,6 @@ typedef struct emu_node {
     size_t index;           /* position in its bus's nodes */
     char key[160];          /* NVM file name stem: DEVICE-ID, or DEVICE-ID@BUS on every bus but the first */
     node_faults_t faults;   /* protocol faults injected (emu_faults.h) */
-    co_time_us_t deadline;  /* what device_process last returned, or earlier when a fault must run */
-    bool dirty;             /* a frame concerned the node or a command ran on it: process before sleeping */
     co_time_us_t last_heartbeat; /* when it last sent its heartbeat or boot-up (emulator clock), 0: never */
     struct {
         co_time_us_t at;    /* 0: no EMCY yet */
@@ -95,12 +94,10 @@ typedef struct emu_bus {
     unsigned long local_lost;
     int log_level;
     uint64_t takes[0x800][2]; /* bit i (word i / 64): node i takes frames on this CAN-ID (co_node_rx_ids) */
-    /* Deadline gating (bus_run): a node is dirty (any_dirty), or nodes_next (the earliest deadline of the nodes, as
-     * the last full pass left them) has come; otherwise a pass leaves the nodes alone. tx_pending: the last full
-     * pass found a node with frames the interface refused. */
-    bool any_dirty;
-    co_time_us_t nodes_next;
-    bool tx_pending;
+    /* The nodes' deadlines (what device_process last returned, or earlier when a fault must run), the nodes marked
+     * to run (a frame concerned them, a command or a fault changed them) and those with refused frames: a pass runs
+     * only the nodes marked or due. */
+    emu_schedule_t schedule;
     heard_node_t heard[128];  /* by node-ID; frames of this program's own nodes never come back to its socket */
     size_t socketcand_readers; /* socketcand clients in rawmode on this bus: its frames go to them (emu_socketcand.h) */
 } emu_bus_t;
@@ -128,8 +125,7 @@ typedef struct emu {
 /** The node is to be processed before the loop sleeps: a frame concerned it, a command or a fault changed it. */
 static inline void node_mark_dirty(emu_node_t *n)
 {
-    n->dirty = true;
-    n->bus->any_dirty = true;
+    schedule_mark(&n->bus->schedule, (uint32_t)n->index);
 }
 
 /** A time of the monotonic clock on the events' clock: µs since the emulator started (0 for a time before it). */

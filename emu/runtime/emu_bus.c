@@ -23,9 +23,7 @@ int bus_open(emu_bus_t *b, const can_channel_spec_t *spec, int log_level, char *
     b->local_count = 0U;
     b->local_lost = 0UL;
     b->log_level = log_level;
-    b->any_dirty = false;
-    b->nodes_next = 0U; /* the first pass is a full one */
-    b->tx_pending = false;
+    schedule_init(&b->schedule);
     const int e = can_channel_open(&b->can, spec, can_log, b, err, errlen);
     char about[320];
     if (e == 0 && can_channel_describe(&b->can, about, sizeof about)) {
@@ -39,6 +37,14 @@ void bus_add_node(emu_bus_t *b, emu_node_t *n)
     n->bus = b;
     n->index = b->n_nodes;
     b->nodes[b->n_nodes++] = n;
+    schedule_add(&b->schedule, (uint32_t)n->index, 0U); /* due at once: its first pass runs it */
+}
+
+void bus_remove_last_node(emu_bus_t *b, emu_node_t *n)
+{
+    bus_routes_remove(b, n);
+    schedule_remove_last(&b->schedule, (uint32_t)n->index);
+    b->n_nodes--;
 }
 
 void bus_routes_remove(emu_bus_t *b, const emu_node_t *n)

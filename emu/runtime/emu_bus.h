@@ -22,10 +22,13 @@ int bus_open(emu_bus_t *b, const can_channel_spec_t *spec, int log_level, char *
 /** Adds a node (at most MAX_NODES); sets its bus and index. */
 void bus_add_node(emu_bus_t *b, emu_node_t *n);
 
+/** The node added last leaves the bus (its start failed): its routes, its place in the schedule. */
+void bus_remove_last_node(emu_bus_t *b, emu_node_t *n);
+
 /** The node's CAN-IDs changed (CO_EV_RX_FILTER, and once it is added): the routing table follows. */
 void bus_routes_update(emu_bus_t *b, const emu_node_t *n);
 
-/** The node leaves the routing table (its start failed). */
+/** The node leaves the routing table. */
 void bus_routes_remove(emu_bus_t *b, const emu_node_t *n);
 
 /** A node's frame: onto the interface, and, once sent, queued for the bus's other nodes. */

@@ -61,13 +61,41 @@ void bus_frame_in(emu_bus_t *b, const co_frame_t *f, co_time_us_t now)
     frame_in(b, f, now);
 }
 
-/* Offers the local frames to the other nodes and processes every node that is dirty or due, until no local frame
- * waits: the pass bus_run's gating lets through. */
-static inline __attribute__((always_inline)) co_time_us_t run_nodes(emu_bus_t *b, co_time_us_t now)
+/* Runs one node, marked or due: its device, then its faults (frames held back, this run's too; a bus-off's end). */
+static inline void run_node(emu_bus_t *b, emu_node_t *n, co_time_us_t now)
 {
-    co_time_us_t next = CO_NEVER;
-    bool tx_pending = false;
-    b->any_dirty = false; /* a node marked during the pass keeps it set: the next pass is a full one again */
+    const uint32_t i = (uint32_t)n->index;
+    schedule_set_ran(&b->schedule, i);
+    co_time_us_t d = device_process(&n->dev, now);
+    const co_time_us_t held = faults_none(&n->faults) ? CO_NEVER : faults_run(n, now);
+    if (schedule_take_mark(&b->schedule, i)) {
+        d = device_process(&n->dev, now); /* the faults changed the node: a recovery EMCY goes out now */
+    }
+    schedule_set(&b->schedule, i, held < d ? held : d);
+    schedule_set_tx_waiting(&b->schedule, i, n->dev.node.txq.count > 0U);
+}
+
+/* The marked nodes, in the order of the bus; an entry whose mark was taken already (a node its faults marked again
+ * while it ran) is skipped. */
+static void run_marked(emu_bus_t *b, co_time_us_t now)
+{
+    emu_schedule_t *s = &b->schedule;
+    schedule_sort_marked(s);
+    for (size_t k = 0U; k < s->n_marked; k++) {
+        const uint32_t i = s->marked[k];
+        if (schedule_take_mark(s, i)) {
+            run_node(b, b->nodes[i], now);
+        }
+    }
+    s->n_marked = 0U;
+}
+
+/* Offers the local frames to the other nodes and runs the nodes marked or due, until no local frame waits: the pass
+ * bus_run's gating lets through. Only these nodes run, found without a scan (emu_schedule.h): with 127 nodes on one
+ * bus, a scan of every node at every wake-up cost more than the node's own work (docs/performance.md "Scale"). */
+static inline __attribute__((always_inline)) void run_nodes(emu_bus_t *b, co_time_us_t now)
+{
+    emu_schedule_t *s = &b->schedule;
     do {
         while (b->local_count > 0U) {
             const local_frame_t l = b->local[b->local_head];
@@ -75,39 +103,27 @@ static inline __attribute__((always_inline)) co_time_us_t run_nodes(emu_bus_t *b
             b->local_count--;
             deliver(b, &l.frame, l.sender, now);
         }
-        /* Only nodes that are due or were concerned by a frame or a command run: with 127 nodes on one bus,
-         * processing every node at every wake-up cost O(nodes^2) per second (docs/performance.md). */
-        next = CO_NEVER;
-        tx_pending = false;
-        for (size_t i = 0U; i < b->n_nodes; i++) {
-            emu_node_t *n = b->nodes[i];
-            if (n->dirty || now >= n->deadline) {
-                n->dirty = false;
-                co_time_us_t d = device_process(&n->dev, now);
-                /* frames held back (this pass's too), a bus-off's end */
-                const co_time_us_t held = faults_none(&n->faults) ? CO_NEVER : faults_run(n, now);
-                if (n->dirty) {
-                    n->dirty = false;
-                    d = device_process(&n->dev, now); /* the faults changed the node: a recovery EMCY goes out now */
-                }
-                n->deadline = held < d ? held : d;
-            }
-            next = n->deadline < next ? n->deadline : next;
-            tx_pending = tx_pending || n->dev.node.txq.count > 0U;
+        schedule_new_round(s);
+        if (s->n_marked > 0U || s->marked_overflow) {
+            run_marked(b, now);
+        }
+        for (int i = schedule_due(s, now); i >= 0; i = schedule_due(s, now)) {
+            run_node(b, b->nodes[i], now);
+        }
+        if (s->n_marked > 0U) { /* the rare case of schedule_due: the rest of those due, once each */
+            run_marked(b, now);
         }
     } while (b->local_count > 0U); /* the others may have answered: loop until quiet */
-    b->nodes_next = next;
-    b->tx_pending = tx_pending;
-    return next;
 }
 
 static inline __attribute__((always_inline)) co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
 {
-    /* Deadline gating: with no local frame waiting, no node dirty and none due, a pass over the nodes would change
-     * nothing (a node's deadline moves only when it is processed) and find what the last one found. */
-    const co_time_us_t next = b->local_count == 0U && !b->any_dirty && now < b->nodes_next ? b->nodes_next
-                                                                                          : run_nodes(b, now);
-    *tx_pending = b->tx_pending;
+    /* With no local frame waiting and no node marked or due, a pass would change nothing. */
+    if (b->local_count > 0U || schedule_has_work(&b->schedule, now)) {
+        run_nodes(b, now);
+    }
+    const co_time_us_t next = schedule_next(&b->schedule);
+    *tx_pending = schedule_any_tx_waiting(&b->schedule);
     const co_time_us_t r = can_channel_service(&b->can, now);
     return r < next ? r : next;
 }
@@ -143,9 +159,9 @@ static inline __attribute__((always_inline)) co_time_us_t bus_receive(emu_bus_t 
  * poll again, get POLLOUT at once, and spin until the nodes' retry deadline. */
 static void tx_ready(emu_bus_t *b)
 {
-    for (size_t i = 0U; i < b->n_nodes; i++) {
-        if (b->nodes[i]->dev.node.txq.count > 0U) {
-            node_mark_dirty(b->nodes[i]);
+    for (uint32_t w = 0U; w < 2U; w++) {
+        for (uint64_t bits = b->schedule.tx_waiting[w]; bits != 0U; bits &= bits - 1U) {
+            schedule_mark(&b->schedule, 64U * w + (uint32_t)__builtin_ctzll(bits));
         }
     }
 }

@@ -88,8 +88,7 @@ emu_node_t *node_create(emu_bus_t *bus, bool first_bus, const node_spec_t *spec,
     const co_status_t st = device_init(&n->dev, cls, n->values, n->model, &cfg, power_on);
     if (st != CO_OK) {
         output_error("%s:%u: the node could not start (%d)", cls->name, spec->id, (int)st);
-        bus_routes_remove(bus, n);
-        bus->n_nodes--;
+        bus_remove_last_node(bus, n);
         node_destroy(n);
         return NULL;
     }
