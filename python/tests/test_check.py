@@ -110,6 +110,25 @@ def test_an_eds_whose_default_differs_from_the_device_fails_default_values(canop
             in report["od.default-values"].message)
 
 
+FILE_DEVICES = sorted(p.name for p in (SOURCE_DIR / "tests/eds/files").iterdir() if p.suffix in (".eds", ".dcf"))
+
+
+@pytest.fixture(scope="module")
+def file_devices(canopen_emu_bus):
+    """Every file of tests/eds/files as a node of one emulator, node-IDs 20 and up in the files' order."""
+    nodes = [f"{SOURCE_DIR / 'tests/eds/files' / name}:{20 + i}" for i, name in enumerate(FILE_DEVICES)]
+    with Emulator(interface=canopen_emu_bus, nodes=nodes) as emu:
+        yield emu
+
+
+@pytest.mark.parametrize("name", FILE_DEVICES)
+def test_every_file_device_passes(file_devices, canopen_emu_bus, name):
+    # the files the EDS reader's tests hold to canopen-emu's reader: the check reads them as the emulator does
+    report = run(canopen_emu_bus.can_kwargs(), 20 + FILE_DEVICES.index(name), SOURCE_DIR / "tests/eds/files" / name,
+                 write=True, heartbeat_intervals=2)
+    assert report.ok, "\n".join(f"{r.name}: {r.message}" for r in report.failed)
+
+
 def canopen_check_program():
     found = Path(sys.executable).parent / "canopen-check"  # installed with the package, beside its python
     return str(found) if found.exists() else shutil.which("canopen-check")

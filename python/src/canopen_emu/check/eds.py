@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, Iterator, List, Optional, Union
 
-# CiA 301 §7.4.7.1 (table 44): the static data types by their index; size in bytes, None for the variable ones.
+# CiA 301 v4.2.0 §7.1 and the data type entries 0x0001..0x001B: the static data types by their index; size in bytes, None for the variable ones.
 TYPE_NAMES = {
     0x01: "BOOLEAN", 0x02: "INTEGER8", 0x03: "INTEGER16", 0x04: "INTEGER32", 0x05: "UNSIGNED8", 0x06: "UNSIGNED16",
     0x07: "UNSIGNED32", 0x08: "REAL32", 0x09: "VISIBLE_STRING", 0x0A: "OCTET_STRING", 0x0B: "UNICODE_STRING",

@@ -1,4 +1,5 @@
-"""EMCY checks (CiA 301 v4.2.0 §7.2.7 emergency object, §7.5.2.2-4 error register and history, §7.5.2.17 0x1014).
+"""EMCY checks (CiA 301 v4.2.0 §7.2.7 emergency object, §7.5.2.2 and §7.5.2.4 error register and history, §7.5.2.17
+0x1014).
 
 Read-only so far. Left for later (docs/conformance.md "Not yet checked"): an EMCY seen on the COB-ID of 0x1014 with
 the error register of 0x1001, the error-reset EMCY after a cleared error, writing 0x1003:00 = 0 with --write."""
@@ -13,7 +14,7 @@ if TYPE_CHECKING:
     from .runner import Context
 
 
-@check("emcy.cob-id", clause="CiA 301 v4.2.0 §7.5.2.17 (0x1014 COB-ID EMCY), §7.3.4 (predefined connection set)",
+@check("emcy.cob-id", clause="CiA 301 v4.2.0 §7.5.2.17 (0x1014 COB-ID EMCY), the predefined connection set (§7.3)",
        summary="0x1014 is a valid 11-bit COB-ID (bits 29 and 30 clear); where the EDS default is $NODEID+0x80, "
                "it is 0x80 + node-ID")
 def cob_id(ctx: "Context") -> Optional[str]:
@@ -31,7 +32,7 @@ def cob_id(ctx: "Context") -> Optional[str]:
     return f"0x{value:08X}"
 
 
-@check("emcy.error-history", clause="CiA 301 v4.2.0 §7.5.2.3 (0x1003 pre-defined error field)",
+@check("emcy.error-history", clause="CiA 301 v4.2.0 §7.5.2.4 (0x1003 pre-defined error field)",
        summary="0x1003:00 (the number of errors) is at most the highest sub-index the EDS lists, and each of "
                "0x1003:01..count uploads")
 def error_history(ctx: "Context") -> Optional[str]:

@@ -1,4 +1,4 @@
-"""NMT and error control checks (CiA 301 v4.2.0 §7.2.8 NMT, §7.2.8.3.2 heartbeat, §7.3.2 NMT states).
+"""NMT and error control checks (CiA 301 v4.2.0 §7.2.8 NMT, §7.2.8.3.2.2 heartbeat, §7.3.2 NMT states).
 
 The heartbeat checks only listen. The NMT checks send commands to the node (start, stop, pre-operational, resets):
 they change what a machine does, so they run only with --write, and each puts the node back into the state it found
@@ -22,8 +22,8 @@ STATES = {0x04: "stopped", 0x05: "operational", 0x7F: "pre-operational"}
 BACK_TO = {0x04: "stop", 0x05: "start", 0x7F: "pre-operational"}
 FAST_HEARTBEAT_MS = 100
 #: Heartbeat period tolerance: each interval within the period +- this share of it, and never less than +-
-#: TOLERANCE_MIN_S. CiA 301 gives the producer no tolerance (§7.2.8.3.2.1 defines the producer heartbeat time as the
-#: cycle time, and a consumer's time only "should be higher" than it); 10 % is this tool's choice (docs/conformance.md).
+#: TOLERANCE_MIN_S. CiA 301 sets the producer no tolerance (§7.2.8.3.2.2, 0x1017: the cycle time); how late a
+#: heartbeat may be is what each consumer's 0x1016 time allows. 10 % is this tool's choice (docs/conformance.md).
 TOLERANCE_SHARE = 0.10
 TOLERANCE_MIN_S = 0.010
 
@@ -45,7 +45,7 @@ def current_state(ctx: "Context", period_s: float) -> int:
         raise Failed(f"no heartbeat on 0x{0x700 + ctx.node:03X} within {period_s * 1.5 + ctx.options.timeout:.1f} s "
                      f"(0x1017 = {period_s * 1000:.0f} ms)", list(ctx.log.trace))
     if len(frame.data) != 1:
-        raise Failed(f"a heartbeat of {len(frame.data)} bytes, CiA 301 §7.2.8.3.2.1 has 1", [frame])
+        raise Failed(f"a heartbeat of {len(frame.data)} bytes, CiA 301 §7.2.8.3.2.2 has 1", [frame])
     return frame.data[0] & 0x7F
 
 
@@ -74,7 +74,7 @@ def restore_state(ctx: "Context", state: int) -> None:
     ctx.on_exit(lambda: ctx.nmt(BACK_TO[state]) and None)
 
 
-@check("heartbeat.state", clause="CiA 301 v4.2.0 §7.2.8.3.2.1 (heartbeat protocol, table 35 state values)",
+@check("heartbeat.state", clause="CiA 301 v4.2.0 §7.2.8.3.2.2 (heartbeat protocol: the state values)",
        summary="a heartbeat: one data byte, a state of 0x04, 0x05 or 0x7F (0x00 only in the boot-up)")
 def heartbeat_state(ctx: "Context") -> Optional[str]:
     period_s = heartbeat_ms(ctx) / 1000
@@ -95,8 +95,8 @@ def heartbeat_state(ctx: "Context") -> Optional[str]:
     return ", ".join(seen)
 
 
-@check("heartbeat.period", clause="CiA 301 v4.2.0 §7.2.8.3.2.1 and §7.5.2.25 (0x1017 producer heartbeat time); "
-                                  "tolerance: this tool's (10 %, at least 10 ms)",
+@check("heartbeat.period", clause="CiA 301 v4.2.0 §7.2.8.3.2.2 (heartbeat protocol), §7.5.2.20 (0x1017 producer "
+                                  "heartbeat time); the tolerance is this tool's (10 %, at least 10 ms)",
        summary="heartbeat intervals, by the frames' bus time stamps, within 10 % (at least 10 ms) of 0x1017")
 def heartbeat_period(ctx: "Context") -> Optional[str]:
     period_s = heartbeat_ms(ctx) / 1000
@@ -137,8 +137,8 @@ def _command_and_watch(ctx: "Context", command: str, state: int, period_s: float
                  "heartbeats", frames)
 
 
-@check("nmt.state-changes", clause="CiA 301 v4.2.0 §7.3.2.2 (NMT state diagram), §7.2.8.3.1 (NMT node control), "
-                                   "§7.2.8.3.2.1 (the state in the heartbeat)",
+@check("nmt.state-changes", clause="CiA 301 v4.2.0 §7.2.8.3.1 (NMT node control), §7.3.2 (NMT state machine), "
+                                   "§7.2.8.3.2.2 (the state in the heartbeat)",
        summary="after NMT stop, start and enter pre-operational the heartbeat carries 0x04, 0x05 and 0x7F",
        writes=True)
 def state_changes(ctx: "Context") -> Optional[str]:
@@ -152,7 +152,7 @@ def state_changes(ctx: "Context") -> Optional[str]:
     return None
 
 
-@check("nmt.stopped-no-sdo", clause="CiA 301 v4.2.0 §7.3.2.2.2 (table 45: no SDO in Stopped)",
+@check("nmt.stopped-no-sdo", clause="CiA 301 v4.2.0 §7.3.2 (NMT state machine: no SDO in Stopped)",
        summary="a stopped node does not answer an SDO upload, and answers it again once pre-operational",
        writes=True)
 def stopped_no_sdo(ctx: "Context") -> Optional[str]:
@@ -188,7 +188,7 @@ def _reset(ctx: "Context", command: str) -> Optional[str]:
         raise Failed(f"no boot-up (0x{0x700 + ctx.node:03X} [1] 00) within {ctx.options.timeout + 2.0:.1f} s of NMT "
                      f"{command}", list(ctx.log.trace))
     if len(boot.data) != 1:
-        raise Failed(f"a boot-up of {len(boot.data)} bytes, CiA 301 §7.2.8.3.2.2 has 1", list(ctx.log.trace))
+        raise Failed(f"a boot-up of {len(boot.data)} bytes, CiA 301 §7.2.8.3.2 has 1", list(ctx.log.trace))
     # after the reset 0x1017 is the node's default again (made fast once more where it may be): its heartbeat
     # says the state
     if entry is not None:
@@ -204,15 +204,15 @@ def _reset(ctx: "Context", command: str) -> Optional[str]:
     return f"boot-up {(boot.time - ctx.log.trace[0].time) * 1000:.0f} ms after the command" if ctx.log.trace else None
 
 
-@check("nmt.reset-communication", clause="CiA 301 v4.2.0 §7.2.8.3.1.5 (reset communication), §7.2.8.3.2.2 "
-                                         "(boot-up protocol), §7.3.2.2.1",
+@check("nmt.reset-communication", clause="CiA 301 v4.2.0 §7.2.8.3.1 (NMT reset communication), §7.2.8.3.2 "
+                                         "(boot-up protocol), §7.3.2 (NMT state machine)",
        summary="after NMT reset communication the node sends its boot-up (one byte 0x00) and is pre-operational",
        writes=True)
 def reset_communication(ctx: "Context") -> Optional[str]:
     return _reset(ctx, "reset-communication")
 
 
-@check("nmt.reset-node", clause="CiA 301 v4.2.0 §7.2.8.3.1.4 (reset node), §7.2.8.3.2.2 (boot-up protocol)",
+@check("nmt.reset-node", clause="CiA 301 v4.2.0 §7.2.8.3.1 (NMT reset node), §7.2.8.3.2 (boot-up protocol)",
        summary="after NMT reset node the node sends its boot-up (one byte 0x00) and is pre-operational",
        writes=True)
 def reset_node(ctx: "Context") -> Optional[str]:

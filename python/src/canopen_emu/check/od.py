@@ -42,7 +42,7 @@ def _upload_all(ctx: "Context", entries: List[eds_module.Entry], findings: Findi
     return got
 
 
-@check("od.mandatory-objects", clause="CiA 301 v4.2.0 §7.4.8.1 (table 48: 0x1000, 0x1001, 0x1018 mandatory)",
+@check("od.mandatory-objects", clause="CiA 301 v4.2.0 §7.5.2.1, §7.5.2.2, §7.5.2.21 (0x1000, 0x1001, 0x1018: mandatory)",
        summary="the EDS lists 0x1000, 0x1001 and 0x1018:01..04 and the node answers them")
 def mandatory_objects(ctx: "Context") -> Optional[str]:
     findings = Findings()
@@ -57,7 +57,7 @@ def mandatory_objects(ctx: "Context") -> Optional[str]:
     return None
 
 
-@check("od.readable-entries", clause="CiA 306 §4.6 (object descriptions), CiA 301 v4.2.0 §7.4.7.1 (data type sizes)",
+@check("od.readable-entries", clause="CiA 306 (object descriptions), CiA 301 v4.2.0 §7.1 (data types and their encoding)",
        summary="every readable entry the EDS lists uploads, with the size of its data type (abort 0x08000024, no "
                "data available, counts as existing: an error history entry above 0x1003:00)")
 def readable_entries(ctx: "Context") -> Optional[str]:
@@ -80,7 +80,7 @@ def _compared(entry: eds_module.Entry) -> bool:
     return entry.access == "const" or (entry.access == "ro" and 0x1000 <= entry.index <= 0x1FFF)
 
 
-@check("od.default-values", clause="CiA 306 §4.6.3 (DefaultValue, ParameterValue, $NODEID)",
+@check("od.default-values", clause="CiA 306 (DefaultValue, ParameterValue, $NODEID)",
        summary="const entries, and read-only entries of the communication area (0x1000..0x1FFF), hold the EDS "
                "value (a DCF's ParameterValue, else DefaultValue; $NODEID at the node-ID)")
 def default_values(ctx: "Context") -> Optional[str]:

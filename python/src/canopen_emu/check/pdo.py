@@ -17,8 +17,8 @@ if TYPE_CHECKING:
 MAPPING_AREAS = ((0x1600, "RPDO"), (0x1A00, "TPDO"))
 
 
-@check("pdo.mappings", clause="CiA 301 v4.2.0 §7.5.2.36 / §7.5.2.38 (PDO mapping parameter), §7.2.2.3 "
-                              "(at most 64 bits)",
+@check("pdo.mappings", clause="CiA 301 v4.2.0 §7.5.2.36 / §7.5.2.38 (RPDO / TPDO mapping parameter), §7.2.2 "
+                              "(PDO: at most 8 bytes)",
        summary="every PDO mapping the node holds names an entry of the EDS that may be mapped (PDOMapping=1, or a "
                "dummy of [DummyUsage]) with its type's length, 64 bits at most in all")
 def mappings(ctx: "Context") -> Optional[str]:

@@ -24,7 +24,7 @@ from . import od, sdo_protocol, nmt, pdo, emcy, lss  # noqa: E402,F401  (importe
 
 NMT_COMMANDS = {"start": 0x01, "stop": 0x02, "pre-operational": 0x80, "reset-node": 0x81,
                 "reset-communication": 0x82}
-#: Heartbeat state bytes (CiA 301 §7.2.8.3.2.1, table 35).
+#: Heartbeat state bytes (CiA 301 v4.2.0 §7.2.8.3.2.2).
 STATE_NAMES = {0x00: "boot-up", 0x04: "stopped", 0x05: "operational", 0x7F: "pre-operational"}
 
 

@@ -37,7 +37,7 @@ def long_readable_entry(ctx: "Context") -> Tuple[eds_module.Entry, bytes]:
     raise NotApplicable("no readable entry of more than 4 bytes (no segmented transfer to check)")
 
 
-@check("sdo.expedited-upload", clause="CiA 301 v4.2.0 §7.2.4.3.6 (initiate SDO upload, expedited)",
+@check("sdo.expedited-upload", clause="CiA 301 v4.2.0 §7.2.4.3 (SDO upload initiate, expedited)",
        summary="0x1000 uploads expedited: scs 2, e=1 and s=1 with n for 4 bytes, the multiplexer echoed")
 def expedited_upload(ctx: "Context") -> Optional[str]:
     with ctx.exchange():
@@ -54,7 +54,7 @@ def expedited_upload(ctx: "Context") -> Optional[str]:
     return None
 
 
-@check("sdo.segmented-upload", clause="CiA 301 v4.2.0 §7.2.4.3.6-7 (initiate SDO upload, upload SDO segment)",
+@check("sdo.segmented-upload", clause="CiA 301 v4.2.0 §7.2.4.3 (SDO upload initiate, SDO upload segment)",
        summary="a value over 4 bytes uploads segmented: size indicated, toggle bit alternating from 0, c=1 on "
                "the last segment, as many bytes as indicated")
 def segmented_upload(ctx: "Context") -> Optional[str]:
@@ -68,7 +68,7 @@ def segmented_upload(ctx: "Context") -> Optional[str]:
     return f"{entry} ({len(data)} bytes)"
 
 
-@check("sdo.upload-toggle-error", clause="CiA 301 v4.2.0 §7.2.4.3.7, abort 0x05030000 (§7.2.4.3.17)",
+@check("sdo.upload-toggle-error", clause="CiA 301 v4.2.0 §7.2.4.3 (SDO upload segment), §7.2.4.3.17 (abort 0x05030000)",
        summary="an upload segment request with the toggle bit not alternated (1 on the first) is aborted with "
                "0x05030000")
 def upload_toggle_error(ctx: "Context") -> Optional[str]:
@@ -105,7 +105,7 @@ def unknown_command(ctx: "Context") -> Optional[str]:
     return None
 
 
-@check("sdo.client-abort", clause="CiA 301 v4.2.0 §7.2.4.3.16 (abort SDO transfer: unconfirmed)",
+@check("sdo.client-abort", clause="CiA 301 v4.2.0 §7.2.4.3.17 (SDO abort transfer: unconfirmed)",
        summary="an abort from the client is not answered, whether a transfer is open (a segmented upload) or not, "
                "and the server then takes a new request")
 def client_abort(ctx: "Context") -> Optional[str]:
@@ -134,8 +134,8 @@ def client_abort(ctx: "Context") -> Optional[str]:
     return "with an open segmented upload" if entry is not None else "no transfer open (no entry over 4 bytes)"
 
 
-@check("sdo.server-cob-ids", clause="CiA 301 v4.2.0 §7.5.2.33 (0x1200..0x127F SDO server parameter), §7.3.4 "
-                                    "(predefined connection set)",
+@check("sdo.server-cob-ids", clause="CiA 301 v4.2.0 §7.5.2.33 (0x1200..0x127F SDO server parameter), the "
+                                    "predefined connection set (§7.3)",
        summary="0x1200:01/02 hold 0x600/0x580 + node-ID, and every SDO server with valid COB-IDs answers an "
                "upload of 0x1000 on its own COB-ID")
 def server_cob_ids(ctx: "Context") -> Optional[str]:
@@ -192,7 +192,7 @@ def writable_entry(ctx: "Context", long: bool) -> Tuple[eds_module.Entry, bytes]
                         " with a value")
 
 
-@check("sdo.expedited-download", clause="CiA 301 v4.2.0 §7.2.4.3.3 (initiate SDO download, expedited)",
+@check("sdo.expedited-download", clause="CiA 301 v4.2.0 §7.2.4.3 (SDO download initiate, expedited)",
        summary="a writable entry of 1..4 bytes takes its own value expedited (scs 3, the multiplexer echoed) and "
                "reads it back", writes=True)
 def expedited_download(ctx: "Context") -> Optional[str]:
@@ -206,7 +206,7 @@ def expedited_download(ctx: "Context") -> Optional[str]:
     return str(entry)
 
 
-@check("sdo.segmented-download", clause="CiA 301 v4.2.0 §7.2.4.3.3-4 (initiate SDO download, download SDO segment)",
+@check("sdo.segmented-download", clause="CiA 301 v4.2.0 §7.2.4.3 (SDO download initiate, SDO download segment)",
        summary="a writable entry of a string type or over 4 bytes takes its own value segmented (size indicated, "
                "toggle bit alternating, c=1 last; any length may go segmented) and reads it back", writes=True)
 def segmented_download(ctx: "Context") -> Optional[str]:
