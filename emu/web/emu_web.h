@@ -48,8 +48,11 @@ struct web_session;
 #define WEB_CONNECTIONS_PER_ADDRESS 8U
 /** Seconds an idle HTTP connection stays open. */
 #define WEB_CONNECTION_TIMEOUT_S 30U
-/** Memory of one HTTP connection (request line, headers, the body as it arrives). */
-#define WEB_CONNECTION_MEMORY (64U * 1024U)
+/** Memory of one HTTP connection (request line, headers, the body as it arrives, the answer's headers):
+ *  libmicrohttpd zeroes all of it for every request, the largest part of an idle exchange's cost. 8 KiB hold a
+ *  browser's headers (about 700 bytes) and about 2 KiB of cookies; more gets 431 (docs/decisions.md, "The idle
+ *  web exchange"). */
+#define WEB_CONNECTION_MEMORY (8U * 1024U)
 /** Hex digits of a session id and of the token (128 random bits each). */
 #define WEB_ID_HEX 32
 
