@@ -2,14 +2,13 @@
 #define _GNU_SOURCE /* PATH_MAX, ssize_t and POSIX calls, as in every file of the Linux program */
 #include "runtime/emu_events.h"
 
-#include <jansson.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "runtime/emu_bus.h"
-#include "control/emu_json_request.h" /* hex_string: the events write bytes as the answers do */
+#include "runtime/emu_event_writer.h"
 #include "runtime/emu_output.h"
 #include "text_escape.h"
 
@@ -30,88 +29,154 @@ void events_remove_session(emu_t *emu, emu_session_t *s)
     }
 }
 
-static bool anyone_wants(const emu_t *emu, event_kind_t kind, uint8_t id, const emu_bus_t *bus, uint32_t cob_id)
+/* The sessions an event is for, into to[] (at most MAX_SESSIONS); their number. */
+static size_t sessions_wanting(const emu_t *emu, event_kind_t kind, uint8_t id, const emu_bus_t *bus, uint32_t cob_id,
+                               emu_session_t **to)
 {
+    size_t n = 0U;
     for (size_t i = 0U; i < emu->n_sessions; i++) {
         if (session_wants(emu->sessions[i], kind, id, bus, cob_id)) {
-            return true;
+            to[n++] = emu->sessions[i];
         }
     }
-    return false;
+    return n;
 }
 
-/* One event to every session that wants it: JSON built once, text formatted once. fields is consumed. */
-static void publish(emu_t *emu, event_kind_t kind, const emu_node_t *n, const emu_bus_t *bus, co_time_us_t at,
-                    uint32_t cob_id, const char *text, json_t *fields)
+/* One event, as publish writes it. */
+typedef struct event {
+    event_kind_t kind;
+    const emu_node_t *node;         /* NULL: an event of no node (an interface's, a frame received) */
+    const emu_bus_t *bus;           /* NULL: of no bus */
+    co_time_us_t time_us;           /* the emulator's clock (emu_since_start) */
+    const char *text;               /* NULL: none */
+    const event_writer_t *fields;   /* NULL, or the members of its kind (",\"from\":...", writer_member_*) */
+} event_t;
+
+/* Room for an event's JSON line on the stack: a device name and a text of a few hundred bytes even if each of
+ * their bytes is escaped (6 bytes: \u001B). A longer one is written into a block of its worst case. */
+#define EVENT_JSON_ROOM 4096U
+/* Room for the fields of one event (the longest, a store's, is about 80 bytes). */
+#define EVENT_FIELDS_ROOM 192U
+
+static void write_json_event(event_writer_t *w, const event_t *ev)
 {
-    const uint8_t id = n != NULL ? co_node_id(&n->dev.node) : 0U;
-    char *json_line = NULL;
+    writer_bytes(w, "{\"event\":", 9U);
+    writer_json_string(w, event_kind_name(ev->kind));
+    writer_member_uint(w, "time_us", ev->time_us);
+    if (ev->bus != NULL) {
+        writer_member_string(w, "bus", ev->bus->can.name);
+    }
+    if (ev->node != NULL) {
+        writer_member_uint(w, "node", co_node_id(&ev->node->dev.node));
+        writer_member_string(w, "device", ev->node->dev.cls->name); /* an EDS file's name: any bytes */
+    }
+    if (ev->fields != NULL) {
+        writer_bytes(w, ev->fields->buf, ev->fields->len);
+    }
+    if (ev->text != NULL) {
+        writer_member_string(w, "text", ev->text);
+    }
+    writer_bytes(w, "}\n", 2U);
+}
+
+/* The JSON line of an event larger than EVENT_JSON_ROOM: written into a block that holds its worst case (each byte
+ * of its strings escaped). NULL when memory ran out. */
+static char *write_json_event_large(const event_t *ev, size_t *len)
+{
+    size_t strings = strlen(ev->bus != NULL ? ev->bus->can.name : "") + strlen(ev->text != NULL ? ev->text : "") +
+                     strlen(ev->node != NULL ? ev->node->dev.cls->name : "");
+    const size_t cap = 256U + (ev->fields != NULL ? ev->fields->len : 0U) + 6U * strings;
+    char *block = malloc(cap);
+    if (block == NULL) {
+        return NULL;
+    }
+    event_writer_t w;
+    writer_init(&w, block, cap);
+    write_json_event(&w, ev);
+    if (w.full) {
+        free(block);
+        return NULL;
+    }
+    *len = w.len;
+    return block;
+}
+
+/* The text line of an event: "event KIND SECONDS node ID@BUS (DEVICE): TEXT", or "event KIND SECONDS BUS: TEXT" for
+ * one of no node. The device's name (an EDS file's) and the text (a model's message) are shown escaped, as the log
+ * shows them (text_escape.h): one line, nothing a terminal acts on. Cut to size (line_size - 1 bytes), it still ends
+ * with its newline. */
+static size_t write_text_event(const event_t *ev, char *line, size_t line_size)
+{
+    char raw[1024];
+    event_writer_t w;
+    writer_init(&w, raw, sizeof raw - 1U); /* as snprintf into raw cut it */
+    writer_text(&w, "event ");
+    writer_text(&w, event_kind_name(ev->kind));
+    writer_bytes(&w, " ", 1U);
+    writer_seconds(&w, ev->time_us);
+    if (ev->node != NULL) {
+        writer_text(&w, " node ");
+        writer_uint(&w, co_node_id(&ev->node->dev.node));
+        writer_bytes(&w, "@", 1U);
+        writer_text(&w, ev->bus->can.name);
+        writer_text(&w, " (");
+        writer_text(&w, ev->node->dev.cls->name);
+        writer_text(&w, "): ");
+    } else {
+        writer_bytes(&w, " ", 1U);
+        writer_text(&w, ev->bus != NULL ? ev->bus->can.name : "-");
+        writer_text(&w, ": ");
+    }
+    writer_text(&w, ev->text != NULL ? ev->text : "");
+    size_t len = text_escape(line, line_size - 1U, raw, w.len, TEXT_ONE_LINE);
+    line[len++] = '\n';
+    return len;
+}
+
+/* One event to the sessions to[0..n_to) (sessions_wanting): its JSON line written once, its text line once. */
+static void publish(const event_t *ev, emu_session_t *const *to, size_t n_to)
+{
+    char json_room[EVENT_JSON_ROOM];
+    const char *json_line = NULL;
+    char *json_block = NULL;
     size_t json_len = 0U;
+    bool json_failed = false;
     char text_line[1024];
     size_t text_len = 0U;
-    const co_time_us_t t = emu_since_start(emu, at);
-    for (size_t i = 0U; i < emu->n_sessions; i++) {
-        emu_session_t *s = emu->sessions[i];
-        if (!session_wants(s, kind, id, bus, cob_id)) {
-            continue;
-        }
+    for (size_t i = 0U; i < n_to; i++) {
+        emu_session_t *s = to[i];
         if (s->events_json) {
-            if (json_line == NULL) {
-                json_t *o = json_object();
-                (void)json_object_set_new(o, "event", json_string(event_kind_name(kind)));
-                (void)json_object_set_new(o, "time_us", json_integer((json_int_t)t));
-                if (bus != NULL) {
-                    (void)json_object_set_new(o, "bus", json_string(bus->can.name));
+            if (json_line == NULL && !json_failed) {
+                event_writer_t w;
+                writer_init(&w, json_room, sizeof json_room);
+                write_json_event(&w, ev);
+                if (!w.full) {
+                    json_line = json_room;
+                    json_len = w.len;
+                } else {
+                    json_block = write_json_event_large(ev, &json_len);
+                    json_line = json_block;
+                    json_failed = json_block == NULL;
                 }
-                if (n != NULL) {
-                    (void)json_object_set_new(o, "node", json_integer(id));
-                    (void)json_object_set_new(o, "device", jstr(n->dev.cls->name)); /* an EDS file's name: any bytes */
-                }
-                if (fields != NULL) {
-                    (void)json_object_update(o, fields);
-                }
-                if (text != NULL) {
-                    (void)json_object_set_new(o, "text", jstr(text));
-                }
-                /* ASCII only: jansson writes DEL and the C1 controls (U+0080..U+009F, a CSI to some terminals) as
-                 * they are otherwise, and a raw event stream may be read on a terminal. */
-                json_line = json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
-                json_decref(o);
-                if (json_line == NULL) {
-                    continue;
-                }
-                json_len = strlen(json_line);
-                json_line[json_len++] = '\n'; /* in the NUL's room: written with its length */
             }
-            s->write(s->ctx, json_line, json_len);
+            if (json_line != NULL) {
+                s->write(s->ctx, json_line, json_len);
+            }
         } else {
             if (text_len == 0U) {
-                /* The device's name (an EDS file's) and the text (a model's message) are shown escaped, as the
-                 * log shows them (text_escape.h): one line, nothing a terminal acts on. */
-                char raw[sizeof text_line];
-                int w;
-                if (n != NULL) {
-                    w = snprintf(raw, sizeof raw, "event %s %.6f node %u@%s (%s): %s", event_kind_name(kind),
-                                 (double)t / 1e6, id, bus->can.name, n->dev.cls->name, text != NULL ? text : "");
-                } else {
-                    w = snprintf(raw, sizeof raw, "event %s %.6f %s: %s", event_kind_name(kind),
-                                 (double)t / 1e6, bus != NULL ? bus->can.name : "-", text != NULL ? text : "");
-                }
-                const size_t raw_len = w < 0 ? 0U : (size_t)w < sizeof raw ? (size_t)w : sizeof raw - 1U;
-                text_len = text_escape(text_line, sizeof text_line - 1U, raw, raw_len, TEXT_ONE_LINE);
-                text_line[text_len++] = '\n'; /* a line cut to size still ends with its newline */
+                text_len = write_text_event(ev, text_line, sizeof text_line);
             }
             s->write(s->ctx, text_line, text_len);
         }
     }
-    free(json_line);
-    json_decref(fields);
+    free(json_block);
 }
 
-/* The log line and the event of one report. fmt gives the text after "node N (device): ". */
-static void report(emu_node_t *n, event_kind_t kind, int level, json_t *fields, const char *fmt, ...)
+/* The log line and the event of one report. fmt gives the text after "node N (device): "; fields are the event's
+ * members of its kind (NULL: none). */
+static void report(emu_node_t *n, event_kind_t kind, int level, const event_writer_t *fields, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
-static void report(emu_node_t *n, event_kind_t kind, int level, json_t *fields, const char *fmt, ...)
+static void report(emu_node_t *n, event_kind_t kind, int level, const event_writer_t *fields, const char *fmt, ...)
 {
     char text[512];
     va_list ap;
@@ -122,11 +187,16 @@ static void report(emu_node_t *n, event_kind_t kind, int level, json_t *fields, 
         logline(level, "node %u (%s): %s", co_node_id(&n->dev.node), n->dev.cls->name, text);
     }
     emu_t *emu = n->bus != NULL ? n->bus->emu : NULL;
-    if (emu != NULL && anyone_wants(emu, kind, co_node_id(&n->dev.node), n->bus, 0U)) {
+    if (emu == NULL) {
+        return;
+    }
+    emu_session_t *to[MAX_SESSIONS];
+    const size_t n_to = sessions_wanting(emu, kind, co_node_id(&n->dev.node), n->bus, 0U, to);
+    if (n_to != 0U) {
         /* The node's time: that of the call in which it acted (the frame's arrival, its deadline). */
-        publish(emu, kind, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), 0U, text, fields);
-    } else {
-        json_decref(fields);
+        const event_t ev = {kind, n, n->bus, emu_since_start(emu, n->dev.now != 0U ? n->dev.now : socketcan_now_us()),
+                            text, fields};
+        publish(&ev, to, n_to);
     }
 }
 
@@ -137,35 +207,45 @@ void events_device_print(void *ctx, const device_t *dev, const char *line)
     const unsigned id = co_node_id(&dev->node) != 0U ? co_node_id(&dev->node) : dev->cfg.node_id;
     reply(&output_stdout_replies, "node %u: %s", id, line);
     emu_t *emu = n != NULL && n->bus != NULL ? n->bus->emu : NULL;
-    if (emu != NULL && !emu->in_command && anyone_wants(emu, EVENT_MESSAGE, (uint8_t)id, n->bus, 0U)) {
-        publish(emu, EVENT_MESSAGE, n, n->bus, n->dev.now != 0U ? n->dev.now : socketcan_now_us(), 0U, line, NULL);
+    if (emu == NULL || emu->in_command) {
+        return;
+    }
+    emu_session_t *to[MAX_SESSIONS];
+    const size_t n_to = sessions_wanting(emu, EVENT_MESSAGE, (uint8_t)id, n->bus, 0U, to);
+    if (n_to != 0U) {
+        const event_t ev = {EVENT_MESSAGE, n, n->bus,
+                            emu_since_start(emu, n->dev.now != 0U ? n->dev.now : socketcan_now_us()), line, NULL};
+        publish(&ev, to, n_to);
     }
 }
 
-static json_t *pack_state(const char *key1, uint32_t v1, const char *key2, uint32_t v2)
+/* The fields of an event of one or two numbers (key2 NULL: one). */
+static void pack_state(event_writer_t *f, char *room, size_t size, const char *key1, uint32_t v1, const char *key2,
+                       uint32_t v2)
 {
-    json_t *o = json_object();
-    (void)json_object_set_new(o, key1, json_integer(v1));
+    writer_init(f, room, size);
+    writer_member_uint(f, key1, v1);
     if (key2 != NULL) {
-        (void)json_object_set_new(o, key2, json_integer(v2));
+        writer_member_uint(f, key2, v2);
     }
-    return o;
 }
 
 static void store_report(emu_node_t *n, const co_event_t *ev)
 {
     const int level = ev->code == 0U ? LOG_NORMAL : LOG_QUIET; /* a failed store is a problem: shown with -q */
-    json_t *f = json_object();
-    (void)json_object_set_new(f, "what", json_string(ev->index == 0x7E5U ? "lss-store" : ev->kind == CO_EV_STORE ? "store" : "restore"));
-    (void)json_object_set_new(f, "index", json_integer(ev->index));
-    (void)json_object_set_new(f, "sub", json_integer(ev->sub));
-    (void)json_object_set_new(f, "ok", json_boolean(ev->code == 0U));
-    (void)json_object_set_new(f, "abort_code", json_integer(ev->code));
+    char room[EVENT_FIELDS_ROOM];
+    event_writer_t f;
+    writer_init(&f, room, sizeof room);
+    writer_member_string(&f, "what", ev->index == 0x7E5U ? "lss-store" : ev->kind == CO_EV_STORE ? "store" : "restore");
+    writer_member_uint(&f, "index", ev->index);
+    writer_member_uint(&f, "sub", ev->sub);
+    writer_member_bool(&f, "ok", ev->code == 0U);
+    writer_member_uint(&f, "abort_code", ev->code);
     if (ev->index == 0x7E5U) {
-        report(n, EVENT_STORE, level, f, "LSS store configuration (node-ID %lu): %s", (unsigned long)ev->value,
+        report(n, EVENT_STORE, level, &f, "LSS store configuration (node-ID %lu): %s", (unsigned long)ev->value,
                ev->code == 0U ? "stored" : "failed");
     } else {
-        report(n, EVENT_STORE, level, f, "%s 0x%04X:%02X: %s", ev->kind == CO_EV_STORE ? "store" : "restore", ev->index,
+        report(n, EVENT_STORE, level, &f, "%s 0x%04X:%02X: %s", ev->kind == CO_EV_STORE ? "store" : "restore", ev->index,
                ev->sub, ev->code == 0U ? "done" : co_abort_text(ev->code));
     }
 }
@@ -173,48 +253,51 @@ static void store_report(emu_node_t *n, const co_event_t *ev)
 static void nvm_report(emu_node_t *n, const co_event_t *ev)
 {
     static const char *const status[] = {"none", "loaded", "damaged", "foreign", "refused"};
-    json_t *f = json_object();
-    (void)json_object_set_new(f, "area", json_string(ev->index == 0x7E5U ? "lss" : "parameters"));
-    (void)json_object_set_new(f, "status", json_string(ev->value < 5U ? status[ev->value] : "?"));
+    char room[EVENT_FIELDS_ROOM];
+    event_writer_t f;
+    writer_init(&f, room, sizeof room);
+    writer_member_string(&f, "area", ev->index == 0x7E5U ? "lss" : "parameters");
+    writer_member_string(&f, "status", ev->value < 5U ? status[ev->value] : "?");
     if (ev->index == 0x7E5U) {
         if (ev->value == CO_NVM_CORRUPT) {
-            report(n, EVENT_NVM, LOG_QUIET, f, "stored LSS configuration is damaged; using the command-line node-ID and "
+            report(n, EVENT_NVM, LOG_QUIET, &f, "stored LSS configuration is damaged; using the command-line node-ID and "
                    "the default bit timing");
         } else {
-            report(n, EVENT_NVM, -1, f, "stored LSS configuration %s", ev->value == CO_NVM_LOADED ? "loaded" : "none");
+            report(n, EVENT_NVM, -1, &f, "stored LSS configuration %s", ev->value == CO_NVM_LOADED ? "loaded" : "none");
         }
     } else if (ev->value == CO_NVM_CORRUPT || ev->value == CO_NVM_FOREIGN) {
-        report(n, EVENT_NVM, LOG_QUIET, f, "stored parameters %s; starting from defaults",
+        report(n, EVENT_NVM, LOG_QUIET, &f, "stored parameters %s; starting from defaults",
                ev->value == CO_NVM_CORRUPT ? "are damaged (bad header, length or CRC)" : "belong to another device");
     } else if (ev->value == CO_NVM_REFUSED) {
-        report(n, EVENT_NVM, -1, f, "stored parameters refused; defaults used"); /* CO_EV_NVM_REFUSED logged it */
+        report(n, EVENT_NVM, -1, &f, "stored parameters refused; defaults used"); /* CO_EV_NVM_REFUSED logged it */
     } else {
-        report(n, EVENT_NVM, LOG_VERBOSE, f, "stored parameters %s", ev->value == CO_NVM_LOADED ? "loaded" : "none, defaults used");
+        report(n, EVENT_NVM, LOG_VERBOSE, &f, "stored parameters %s", ev->value == CO_NVM_LOADED ? "loaded" : "none, defaults used");
     }
 }
 
 void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
 {
     emu_node_t *n = (emu_node_t *)ctx;
+    char room[EVENT_FIELDS_ROOM];
+    event_writer_t f;
     switch (ev->kind) {
     case CO_EV_NMT_STATE: {
         const char *from = co_nmt_state_name((co_nmt_state_t)ev->code), *to = co_nmt_state_name((co_nmt_state_t)ev->value);
-        json_t *f = json_object();
-        (void)json_object_set_new(f, "from", json_string(from));
-        (void)json_object_set_new(f, "to", json_string(to));
-        report(n, EVENT_NMT, LOG_NORMAL, f, "NMT %s -> %s", from, to);
+        writer_init(&f, room, sizeof room);
+        writer_member_string(&f, "from", from);
+        writer_member_string(&f, "to", to);
+        report(n, EVENT_NMT, LOG_NORMAL, &f, "NMT %s -> %s", from, to);
         if (ev->code == CO_NMT_INITIALISING && ev->value == CO_NMT_PRE_OPERATIONAL) {
             report(n, EVENT_BOOT_UP, -1, NULL, "boot-up"); /* the core sends it on this transition */
         }
         break;
     }
-    case CO_EV_SDO_ABORT: {
-        json_t *f = pack_state("index", ev->index, "sub", ev->sub);
-        (void)json_object_set_new(f, "abort_code", json_integer(ev->code));
-        report(n, EVENT_SDO_ABORT, LOG_NORMAL, f, "SDO abort 0x%08lX on 0x%04X:%02X (%s)", (unsigned long)ev->code,
+    case CO_EV_SDO_ABORT:
+        pack_state(&f, room, sizeof room, "index", ev->index, "sub", ev->sub);
+        writer_member_uint(&f, "abort_code", ev->code);
+        report(n, EVENT_SDO_ABORT, LOG_NORMAL, &f, "SDO abort 0x%08lX on 0x%04X:%02X (%s)", (unsigned long)ev->code,
                ev->index, ev->sub, co_abort_text(ev->code));
         break;
-    }
     case CO_EV_EMCY: {
         /* Its 8 bytes are the newest of the node's EMCY queue (co_node.h, CO_EV_EMCY). */
         const co_emcy_t *em = &n->dev.node.emcy;
@@ -223,9 +306,9 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         n->last_emcy.code = (uint16_t)ev->value;
         n->last_emcy.reg = (uint8_t)ev->code;
         memcpy(n->last_emcy.info, &data[3], sizeof n->last_emcy.info);
-        json_t *f = pack_state("code", ev->value, "register", ev->code);
-        (void)json_object_set_new(f, "info", hex_string(n->last_emcy.info, sizeof n->last_emcy.info));
-        report(n, EVENT_EMCY, LOG_NORMAL, f, "EMCY 0x%04lX, error register 0x%02lX", (unsigned long)ev->value,
+        pack_state(&f, room, sizeof room, "code", ev->value, "register", ev->code);
+        writer_member_hex(&f, "info", n->last_emcy.info, sizeof n->last_emcy.info); /* as the answers' hex_string */
+        report(n, EVENT_EMCY, LOG_NORMAL, &f, "EMCY 0x%04lX, error register 0x%02lX", (unsigned long)ev->value,
                (unsigned long)ev->code);
         break;
     }
@@ -237,31 +320,32 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         nvm_report(n, ev);
         break;
     case CO_EV_NVM_REFUSED: /* value 0: then CO_EV_NVM_LOADED with CO_NVM_REFUSED; 1: a save that fails */
+        pack_state(&f, room, sizeof room, "index", ev->index, "sub", ev->sub);
         if (ev->value == 1U) {
-            report(n, EVENT_NVM, LOG_QUIET, pack_state("index", ev->index, "sub", ev->sub),
+            report(n, EVENT_NVM, LOG_QUIET, &f,
                    "save refused: 0x%04X:%02X holds a value its load would refuse (%s); nothing stored", ev->index,
                    ev->sub, co_abort_text(ev->code));
         } else {
-            report(n, EVENT_NVM, LOG_QUIET, pack_state("index", ev->index, "sub", ev->sub),
+            report(n, EVENT_NVM, LOG_QUIET, &f,
                    "stored parameters refused: 0x%04X:%02X holds a value a write would be refused for (%s); starting "
                    "from defaults", ev->index, ev->sub, co_abort_text(ev->code));
         }
         break;
     case CO_EV_LSS_NODE_ID:
-        report(n, EVENT_LSS, LOG_NORMAL, pack_state("pending_node_id", ev->value, NULL, 0U), "LSS pending node-ID %lu",
-               (unsigned long)ev->value);
+        pack_state(&f, room, sizeof room, "pending_node_id", ev->value, NULL, 0U);
+        report(n, EVENT_LSS, LOG_NORMAL, &f, "LSS pending node-ID %lu", (unsigned long)ev->value);
         break;
     case CO_EV_LSS_BIT_TIMING:
-        report(n, EVENT_LSS, LOG_NORMAL, pack_state("pending_bit_timing", ev->value, NULL, 0U),
-               "LSS pending bit timing %lu", (unsigned long)ev->value);
+        pack_state(&f, room, sizeof room, "pending_bit_timing", ev->value, NULL, 0U);
+        report(n, EVENT_LSS, LOG_NORMAL, &f, "LSS pending bit timing %lu", (unsigned long)ev->value);
         break;
     case CO_EV_LSS_ACTIVATE:
-        report(n, EVENT_LSS, LOG_NORMAL, pack_state("kbit_s", ev->value, NULL, 0U), "LSS activated %lu kbit/s",
-               (unsigned long)ev->value);
+        pack_state(&f, room, sizeof room, "kbit_s", ev->value, NULL, 0U);
+        report(n, EVENT_LSS, LOG_NORMAL, &f, "LSS activated %lu kbit/s", (unsigned long)ev->value);
         break;
     case CO_EV_HB_TIMEOUT:
-        report(n, EVENT_HEARTBEAT, LOG_NORMAL, pack_state("producer", ev->value, NULL, 0U), "heartbeat of node %lu missing",
-               (unsigned long)ev->value);
+        pack_state(&f, room, sizeof room, "producer", ev->value, NULL, 0U);
+        report(n, EVENT_HEARTBEAT, LOG_NORMAL, &f, "heartbeat of node %lu missing", (unsigned long)ev->value);
         break;
     case CO_EV_GUARD_TIMEOUT:
         report(n, EVENT_GUARDING, LOG_NORMAL, NULL, "life guarding: no guard request in time");
@@ -282,17 +366,25 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
 
 void events_fault(emu_node_t *n, const char *kind, const char *action, const char *text)
 {
-    json_t *f = json_object();
-    (void)json_object_set_new(f, "fault", json_string(kind));
-    (void)json_object_set_new(f, "action", json_string(action));
-    report(n, EVENT_FAULT, LOG_NORMAL, f, "%s", text);
+    char room[EVENT_FIELDS_ROOM];
+    event_writer_t f;
+    writer_init(&f, room, sizeof room);
+    writer_member_string(&f, "fault", kind);
+    writer_member_string(&f, "action", action);
+    report(n, EVENT_FAULT, LOG_NORMAL, &f, "%s", text);
 }
 
 void events_interface(emu_bus_t *bus, const char *line)
 {
     emu_t *emu = bus->emu;
-    if (emu != NULL && anyone_wants(emu, EVENT_INTERFACE, 0U, bus, 0U)) {
-        publish(emu, EVENT_INTERFACE, NULL, bus, socketcan_now_us(), 0U, line, NULL);
+    if (emu == NULL) {
+        return;
+    }
+    emu_session_t *to[MAX_SESSIONS];
+    const size_t n_to = sessions_wanting(emu, EVENT_INTERFACE, 0U, bus, 0U, to);
+    if (n_to != 0U) {
+        const event_t ev = {EVENT_INTERFACE, NULL, bus, emu_since_start(emu, socketcan_now_us()), line, NULL};
+        publish(&ev, to, n_to);
     }
 }
 
@@ -302,27 +394,41 @@ __attribute__((noinline)) void events_frame_publish(emu_t *emu, emu_bus_t *bus, 
 {
     /* The format is part of the frame's identity (session_wants): an extended 0x181 is no TPDO1 of node 1. */
     const bool eff = (f->flags & CO_FRAME_EFF) != 0U;
+    const bool rtr = (f->flags & CO_FRAME_RTR) != 0U;
     const uint32_t identity = f->id | (eff ? SESSION_FRAME_EFF : 0U);
-    if (!anyone_wants(emu, EVENT_FRAME, from != NULL ? co_node_id(&from->dev.node) : 0U, bus, identity)) {
-        return; /* nothing is built for a frame nobody's filter takes */
+    emu_session_t *to[MAX_SESSIONS];
+    const size_t n_to = sessions_wanting(emu, EVENT_FRAME, from != NULL ? co_node_id(&from->dev.node) : 0U, bus,
+                                         identity, to);
+    if (n_to == 0U) {
+        return; /* nothing is written for a frame nobody's filter takes */
     }
-    json_t *fields = json_object();
-    char hex[17] = "";
-    for (uint8_t i = 0U; i < f->len && i < 8U; i++) {
-        (void)snprintf(hex + 2U * i, 3U, "%02X", f->data[i]);
-    }
-    (void)json_object_set_new(fields, "dir", json_string(from != NULL ? "tx" : "rx"));
-    (void)json_object_set_new(fields, "id", json_integer(f->id));
-    (void)json_object_set_new(fields, "data", json_string(hex));
-    if ((f->flags & CO_FRAME_RTR) != 0U) {
-        (void)json_object_set_new(fields, "rtr", json_true());
+    const char *dir = from != NULL ? "tx" : "rx";
+    const size_t len = f->len < 8U ? f->len : 8U;
+    char room[EVENT_FIELDS_ROOM];
+    event_writer_t fields;
+    writer_init(&fields, room, sizeof room);
+    writer_member_string(&fields, "dir", dir);
+    writer_member_uint(&fields, "id", f->id);
+    writer_member_hex(&fields, "data", f->data, len);
+    if (rtr) {
+        writer_member_bool(&fields, "rtr", true);
     }
     if (eff) {
-        (void)json_object_set_new(fields, "eff", json_true());
+        writer_member_bool(&fields, "eff", true);
     }
-    char text[64];
     /* candump's form: 3 hex digits for an 11-bit identifier, 8 for a 29-bit one, whatever its value */
-    (void)snprintf(text, sizeof text, "%s %0*X#%s%s", from != NULL ? "tx" : "rx", eff ? 8 : 3, (unsigned)f->id, hex,
-                   (f->flags & CO_FRAME_RTR) != 0U ? "R" : "");
-    publish(emu, EVENT_FRAME, from, bus, at, identity, text, fields);
+    char text[48];
+    event_writer_t t;
+    writer_init(&t, text, sizeof text);
+    writer_bytes(&t, dir, 2U);
+    writer_bytes(&t, " ", 1U);
+    writer_hex_uint(&t, f->id, eff ? 8U : 3U);
+    writer_bytes(&t, "#", 1U);
+    writer_hex_bytes(&t, f->data, len);
+    if (rtr) {
+        writer_bytes(&t, "R", 1U);
+    }
+    writer_bytes(&t, "", 1U); /* its NUL */
+    const event_t ev = {EVENT_FRAME, from, bus, emu_since_start(emu, at), text, &fields};
+    publish(&ev, to, n_to);
 }
