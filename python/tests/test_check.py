@@ -97,6 +97,17 @@ def test_a_stopped_heartbeat_fails_the_period_check(three_devices, canopen_emu_b
     assert report["heartbeat.period"].message.startswith("no heartbeat within")
 
 
+def test_a_tpdo_of_the_wrong_length_fails_the_tpdo_check(three_devices, canopen_emu_bus):
+    three_devices.client.inject_fault(18, "tpdo-length", 2, 3)
+    report = run(canopen_emu_bus.can_kwargs(), 18, EDS["pro-ionizer"], only=["pdo"], write=True)
+    assert report["pdo.mappings"].status is Status.PASSED  # the mapping is right, the frame is not
+    result = report["pdo.tpdo-frames"]
+    assert result.status is Status.FAILED
+    assert "TPDO 0x1801 on 0x292 (remote request): 3 byte(s), its mapping has" in result.message
+    assert [(f.can_id, len(f.data)) for f in result.frames] == [(0x292, 3)]
+    assert three_devices.client.nodes()[2].state == "PRE-OPERATIONAL"  # put back as it was found
+
+
 def test_an_eds_whose_default_differs_from_the_device_fails_default_values(canopen_emu_factory, canopen_emu_bus,
                                                                           tmp_path):
     device = SOURCE_DIR / "tests/eds/files/minimal.eds"

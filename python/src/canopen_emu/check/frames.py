@@ -7,9 +7,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Callable, Iterable, List, Optional, Set
+from collections import deque
+from typing import Callable, Deque, Iterable, List, Optional
 
 import can
+
+#: How long after sending a frame its copy coming back is recognised (and dropped).
+ECHO_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -46,9 +50,9 @@ class FrameLog:
         self.bus = bus
         self.relevant = relevant or (lambda can_id: True)
         self.trace: List[Frame] = []
-        # The CAN-IDs this side sends on (NMT, SDO requests, LSS master...): a slave never does, so a frame
-        # received on one is this bus's own coming back (udp_multicast on loopback may deliver it) and is dropped.
-        self.own_ids: Set[int] = set()
+        # Frames this side sent in the last ECHO_S seconds: one received as sent (same ID, data, remote bit) is
+        # this bus's own coming back (python-can's udp_multicast on loopback may deliver it) and is dropped.
+        self._sent: Deque[Frame] = deque()
 
     def start_trace(self) -> None:
         """Throws away what is waiting (frames from before the check) and starts an empty record."""
@@ -63,9 +67,9 @@ class FrameLog:
         message = can.Message(arbitration_id=can_id, data=bytes(data), is_extended_id=False,
                               is_remote_frame=rtr, dlc=dlc if dlc is not None else len(data))
         sent_at = time.time()  # before the send: an answer's receive time stamp is then never earlier
-        self.own_ids.add(can_id)
         self.bus.send(message)
         frame = Frame(sent_at, can_id, bytes(data), True, rtr)
+        self._sent.append(frame)
         self._keep(frame)
         return frame
 
@@ -78,10 +82,12 @@ class FrameLog:
             message = self.bus.recv(left)
             if message is None:
                 return None
-            if message.is_error_frame or message.is_extended_id or message.arbitration_id in self.own_ids:
+            if message.is_error_frame or message.is_extended_id:
                 continue
             frame = Frame(message.timestamp or time.time(), message.arbitration_id, bytes(message.data), False,
                           message.is_remote_frame)
+            if self._is_echo(frame):
+                continue
             self._keep(frame)
             return frame
 
@@ -107,6 +113,16 @@ class FrameLog:
             frame = self.recv(left)
             if frame is not None and match(frame):
                 found.append(frame)
+
+    def _is_echo(self, frame: Frame) -> bool:
+        now = time.time()
+        while self._sent and now - self._sent[0].time > ECHO_S:
+            self._sent.popleft()
+        for sent in self._sent:
+            if (sent.can_id, sent.data, sent.rtr) == (frame.can_id, frame.data, frame.rtr):
+                self._sent.remove(sent)
+                return True
+        return False
 
     def _keep(self, frame: Frame) -> None:
         if self.relevant(frame.can_id):

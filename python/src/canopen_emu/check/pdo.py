@@ -65,3 +65,66 @@ def mappings(ctx: "Context") -> Optional[str]:
         raise NotApplicable("the EDS lists no PDO mapping parameter")
     findings.raise_if_any("wrong PDO mappings")
     return f"{seen} mapping parameter(s)"
+
+
+def _mapped_bytes(ctx: "Context", mapping_index: int) -> int:
+    """The bytes a PDO of this mapping carries (the mapped bits rounded up)."""
+    count = ctx.upload(mapping_index, 0)[0]
+    bits = sum(int.from_bytes(ctx.upload(mapping_index, sub), "little") & 0xFF for sub in range(1, count + 1))
+    return (bits + 7) // 8
+
+
+@check("pdo.tpdo-frames", clause="CiA 301 v4.2.0 §7.2.2 (PDO: transmission types, event timer, RTR), §7.5.2.37 "
+                                 "(TPDO communication parameter)",
+       summary="in Operational, each valid TPDO comes on its COB-ID with the length of its mapping: by its event "
+               "timer (types 254/255), after as many SYNCs as its type (1..240), or on a remote request where its "
+               "COB-ID allows one (bit 30 clear)", writes=True)
+def tpdo_frames(ctx: "Context") -> Optional[str]:
+    from .nmt import BACK_TO, current_state, fast_heartbeat  # noqa: PLC0415: nmt's helpers, only here
+    tpdos = [i for i in sorted(ctx.eds.objects) if 0x1800 <= i <= 0x19FF and i + 0x200 in ctx.eds.objects]
+    if not tpdos:
+        raise NotApplicable("the EDS lists no TPDO with a mapping")
+    plans = []
+    with ctx.exchange():
+        sync_id = int.from_bytes(ctx.upload(0x1005, 0), "little") & 0x7FF if 0x1005 in ctx.eds.objects else 0x080
+        for index in tpdos:
+            cob = int.from_bytes(ctx.upload(index, 1), "little")
+            if cob & 0x80000000 or cob & 0x20000000:
+                continue  # not valid, or an extended frame
+            kind = ctx.upload(index, 2)[0]
+            timer = (int.from_bytes(ctx.upload(index, 5), "little") if ctx.eds.entry(index, 5) is not None else 0)
+            size = _mapped_bytes(ctx, index + 0x200)
+            plans.append((index, cob & 0x7FF, kind, timer, not cob & 0x40000000, size))
+    if not plans:
+        raise NotApplicable("no TPDO is valid")
+    period_s = fast_heartbeat(ctx)
+    state = current_state(ctx, period_s)
+    ctx.on_exit(lambda: ctx.nmt(BACK_TO[state]) and None)
+    ctx.nmt("start")
+    findings = Findings()
+    judged = []
+    for index, cob, kind, timer, rtr_allowed, size in plans:
+        ctx.log.drain()
+        if kind in (254, 255) and timer:
+            how, wait = f"event timer {timer} ms", timer / 1000 * 1.5 + ctx.options.timeout
+        elif 1 <= kind <= 240:
+            for _ in range(kind):
+                ctx.log.send(sync_id, b"")
+            how, wait = f"type {kind}, {kind} SYNC(s)", ctx.options.timeout
+        elif rtr_allowed and kind in (252, 253, 254, 255):
+            ctx.log.send(cob, b"", rtr=True, dlc=size)
+            how, wait = "remote request", ctx.options.timeout
+        else:
+            continue  # type 0 or an event-driven TPDO without a timer: sent when the application decides
+        frame = ctx.log.wait_for(lambda f, cob=cob: f.can_id == cob and not f.rtr, wait)
+        where = f"TPDO 0x{index:04X} on 0x{cob:03X} ({how})"
+        if frame is None:
+            findings.add(f"{where}: none within {wait:.1f} s", list(ctx.log.trace[-20:]))
+        elif len(frame.data) != size:
+            findings.add(f"{where}: {len(frame.data)} byte(s), its mapping has {size}", [frame])
+        else:
+            judged.append(f"0x{index:04X}")
+    if not judged and not findings:
+        raise NotApplicable("no TPDO has an event timer, a synchronous type or a remote request to trigger it")
+    findings.raise_if_any("TPDOs wrong")
+    return ", ".join(judged)
