@@ -141,8 +141,13 @@ static inline struct timespec *emu_poll_timeout(co_time_us_t deadline, co_time_u
         return NULL;
     }
     const co_time_us_t wait = deadline > now ? deadline - now : 0U;
-    ts->tv_sec = (time_t)(wait / 1000000U);
-    ts->tv_nsec = (long)(wait % 1000000U) * 1000L;
+    if (wait < 1000000U) { /* the common case, without the divisions */
+        ts->tv_sec = 0;
+        ts->tv_nsec = (long)wait * 1000L;
+    } else {
+        ts->tv_sec = (time_t)(wait / 1000000U);
+        ts->tv_nsec = (long)(wait % 1000000U) * 1000L;
+    }
     return ts;
 }
 

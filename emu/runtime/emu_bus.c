@@ -75,6 +75,20 @@ static __attribute__((noinline)) void log_sent(const emu_node_t *from, const co_
     logline(LOG_VERBOSE, "node %u tx %03X#%s", co_node_id(&from->dev.node), (unsigned)f->id, hex);
 }
 
+/* Whether a local node but from takes CAN-ID id (an 11-bit one). */
+static inline bool others_take(const emu_bus_t *b, const emu_node_t *from, uint32_t id)
+{
+    uint64_t low = b->takes[id][0];
+    uint64_t high = b->takes[id][1];
+    const uint64_t bit = (uint64_t)1U << (from->index & 63U);
+    if (from->index < 64U) {
+        low &= ~bit;
+    } else {
+        high &= ~bit;
+    }
+    return (low | high) != 0U;
+}
+
 /* What a sent frame means beyond the interface: an event, the sender's heartbeat age, the copy for the other
  * local nodes, the socketcand clients' copies, the -v line. */
 static inline __attribute__((always_inline)) void frame_sent(emu_bus_t *b, emu_node_t *from, const co_frame_t *f)
@@ -84,7 +98,10 @@ static inline __attribute__((always_inline)) void frame_sent(emu_bus_t *b, emu_n
     if (f->id == 0x700U + (uint32_t)from->dev.node.node_id) {
         from->last_heartbeat = at; /* its age in show: what a master's heartbeat consumer would see */
     }
-    if (b->n_nodes > 1U) {
+    /* Queued only when another local node takes its CAN-ID now (the routing table as a frame on the bus would find
+     * it): most frames a node sends (heartbeats, SDO answers, TPDOs) concern no other local node. */
+    if (b->n_nodes > 1U && f->id <= 0x7FFU && (f->flags & (CO_FRAME_EFF | CO_FRAME_ERR)) == 0U &&
+        others_take(b, from, f->id)) {
         if (b->local_count == LOCAL_QUEUE_LEN) {
             b->local_lost++; /* the other local nodes miss this frame; counted, reported at exit */
         } else {

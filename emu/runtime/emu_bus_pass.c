@@ -65,13 +65,18 @@ void bus_frame_in(emu_bus_t *b, const co_frame_t *f, co_time_us_t now)
 static inline void run_node(emu_bus_t *b, emu_node_t *n, co_time_us_t now)
 {
     const uint32_t i = (uint32_t)n->index;
-    schedule_set_ran(&b->schedule, i);
     co_time_us_t d = device_process(&n->dev, now);
-    const co_time_us_t held = faults_none(&n->faults) ? CO_NEVER : faults_run(n, now);
-    if (schedule_take_mark(&b->schedule, i)) {
-        d = device_process(&n->dev, now); /* the faults changed the node: a recovery EMCY goes out now */
+    if (!faults_none(&n->faults)) {
+        const co_time_us_t held = faults_run(n, now);
+        if (schedule_take_mark(&b->schedule, i)) {
+            d = device_process(&n->dev, now); /* the faults changed the node: a recovery EMCY goes out now */
+        }
+        d = held < d ? held : d;
     }
-    schedule_set(&b->schedule, i, held < d ? held : d);
+    schedule_set(&b->schedule, i, d);
+    if (d <= now) {
+        schedule_set_again(&b->schedule, i); /* not again in this round */
+    }
     schedule_set_tx_waiting(&b->schedule, i, n->dev.node.txq.count > 0U);
 }
 
@@ -116,10 +121,12 @@ static inline __attribute__((always_inline)) void run_nodes(emu_bus_t *b, co_tim
     } while (b->local_count > 0U); /* the others may have answered: loop until quiet */
 }
 
-static inline __attribute__((always_inline)) co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending)
+static inline __attribute__((always_inline)) co_time_us_t bus_run(emu_bus_t *b, co_time_us_t now, bool *tx_pending,
+                                                                  bool *ran)
 {
     /* With no local frame waiting and no node marked or due, a pass would change nothing. */
-    if (b->local_count > 0U || schedule_has_work(&b->schedule, now)) {
+    *ran = b->local_count > 0U || schedule_has_work(&b->schedule, now);
+    if (*ran) {
         run_nodes(b, now);
     }
     const co_time_us_t next = schedule_next(&b->schedule);
@@ -168,7 +175,7 @@ static void tx_ready(emu_bus_t *b)
 
 /* Inline into both callers: bus_run_alone's loop then keeps the pass's time and state in registers. */
 static inline __attribute__((always_inline)) co_time_us_t pass(emu_bus_t *b, co_time_us_t *now, short revents,
-                                                               co_time_us_t due, bool *tx_pending)
+                                                               co_time_us_t due, bool *tx_pending, bool *ran)
 {
     if ((revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
         *now = bus_receive(b, *now, due);
@@ -176,12 +183,13 @@ static inline __attribute__((always_inline)) co_time_us_t pass(emu_bus_t *b, co_
     if ((revents & POLLOUT) != 0) {
         tx_ready(b);
     }
-    return bus_run(b, *now, tx_pending);
+    return bus_run(b, *now, tx_pending, ran);
 }
 
 co_time_us_t bus_pass(emu_bus_t *b, co_time_us_t *now, short revents, co_time_us_t due, bool *tx_pending)
 {
-    return pass(b, now, revents, due, tx_pending);
+    bool ran = false;
+    return pass(b, now, revents, due, tx_pending, &ran);
 }
 
 /* The same pass and sleep as loop_run's for this case, in one function with the pass inlined: the pass per frame
@@ -196,14 +204,20 @@ int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *n
     int status = 0;
     while (!emu->quit && *stop == 0) {
         bool tx_pending = false;
-        deadline = pass(b, &t, pfd.revents, deadline, &tx_pending);
+        bool ran = false;
+        deadline = pass(b, &t, pfd.revents, deadline, &tx_pending, &ran);
         if (output_flush()) {
             break; /* output waits: loop_run polls for it */
         }
         pfd.fd = can_channel_fd(&b->can);
         pfd.events = can_channel_poll_events(&b->can, tx_pending);
         pfd.revents = 0;
-        t = socketcan_now_us();
+        /* The sleep ends at the deadline, not late by the pass's work: the clock is read again after nodes ran (a
+         * flood's reading reads it itself). A pass that only read a frame no node takes took less than a
+         * microsecond: the time it woke at serves, and spares a clock read per frame. */
+        if (ran) {
+            t = socketcan_now_us();
+        }
         struct timespec ts;
         if (ppoll(&pfd, 1U, emu_poll_timeout(deadline, t, &ts), NULL) < 0) {
             if (errno != EINTR) {

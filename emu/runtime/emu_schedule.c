@@ -3,43 +3,51 @@
 
 #include <string.h>
 
-/* The winner of inner node k: the earlier of its children's (the left one on a tie: the lower index). */
-static inline uint8_t play(const emu_schedule_t *s, size_t k)
+/* Inner node k from its children: the earlier of theirs (the left one on a tie: the lower index). */
+static inline void play(emu_schedule_t *s, size_t k)
 {
-    const uint8_t a = s->winner[2U * k];
-    const uint8_t b = s->winner[2U * k + 1U];
-    return s->at[b] < s->at[a] ? b : a;
+    const size_t c = s->at[2U * k + 1U] < s->at[2U * k] ? 2U * k + 1U : 2U * k;
+    s->at[k] = s->at[c];
+    s->who[k] = s->who[c];
 }
 
-/* Every inner node again, bottom up: after the tree grew. */
-static void rebuild(emu_schedule_t *s)
+/* Every inner node again, bottom up, the leaves laid out for `leaves` (the deadlines of the nodes in deadlines). */
+static void rebuild(emu_schedule_t *s, size_t leaves, const co_time_us_t *deadlines)
 {
-    for (size_t i = 0U; i < s->leaves; i++) {
-        s->winner[s->leaves + i] = (uint8_t)i;
+    s->leaves = leaves;
+    for (size_t i = 0U; i < leaves; i++) {
+        s->at[leaves + i] = i < s->n_nodes ? deadlines[i] : CO_NEVER;
+        s->who[leaves + i] = (uint8_t)i;
     }
-    for (size_t k = s->leaves - 1U; k >= 1U; k--) {
-        s->winner[k] = play(s, k);
+    for (size_t k = leaves - 1U; k >= 1U; k--) {
+        play(s, k);
     }
 }
 
 void schedule_init(emu_schedule_t *s)
 {
     memset(s, 0, sizeof *s);
-    for (size_t i = 0U; i < SCHEDULE_LEAVES_MAX; i++) {
-        s->at[i] = CO_NEVER;
-    }
-    s->leaves = 2U;
-    rebuild(s);
+    rebuild(s, 2U, NULL);
 }
 
+/* Always to the root: the common walk is a due node's (the root's) later deadline, which changes every step up,
+ * and a test for an early end cost that walk more than it spared the others. */
 void schedule_update(emu_schedule_t *s, uint32_t node)
 {
-    for (size_t k = (s->leaves + node) >> 1; k >= 1U; k >>= 1) {
-        const uint8_t w = play(s, k);
-        if (w != node && s->winner[k] == w) {
-            break; /* this node lost here before and still does: nothing above changes */
+    size_t pos = s->leaves + node;
+    co_time_us_t best = s->at[pos];
+    uint8_t who = (uint8_t)node;
+    while (pos > 1U) {
+        const size_t sibling = pos ^ 1U;
+        const co_time_us_t other = s->at[sibling];
+        /* the sibling is the left one when pos is odd: it wins a tie */
+        if (other < best || (other == best && (pos & 1U) != 0U)) {
+            best = other;
+            who = s->who[sibling];
         }
-        s->winner[k] = w;
+        pos >>= 1;
+        s->at[pos] = best;
+        s->who[pos] = who;
     }
 }
 
@@ -48,14 +56,16 @@ void schedule_add(emu_schedule_t *s, uint32_t node, co_time_us_t at)
     if (node >= SCHEDULE_NODES_MAX || node != s->n_nodes) {
         return; /* the bus refuses more nodes before this; nodes come in order */
     }
-    s->n_nodes++;
-    s->at[node] = at;
-    if (s->n_nodes > s->leaves) {
-        s->leaves *= 2U;
-        rebuild(s);
-    } else {
-        schedule_update(s, node);
+    if (node + 1U > s->leaves) { /* twice as wide: the deadlines so far laid out again */
+        co_time_us_t deadlines[SCHEDULE_LEAVES_MAX];
+        for (size_t i = 0U; i < s->n_nodes; i++) {
+            deadlines[i] = s->at[s->leaves + i];
+        }
+        rebuild(s, 2U * s->leaves, deadlines);
     }
+    s->n_nodes++;
+    s->at[s->leaves + node] = at;
+    schedule_update(s, node);
 }
 
 void schedule_remove_last(emu_schedule_t *s, uint32_t node)
@@ -65,7 +75,7 @@ void schedule_remove_last(emu_schedule_t *s, uint32_t node)
     }
     (void)schedule_take_mark(s, node);
     schedule_set_tx_waiting(s, node, false);
-    s->at[node] = CO_NEVER;
+    s->at[s->leaves + node] = CO_NEVER;
     schedule_update(s, node);
     s->n_nodes--;
 }
@@ -96,22 +106,22 @@ void schedule_sort_marked(emu_schedule_t *s)
 
 void schedule_mark_due(emu_schedule_t *s, co_time_us_t now)
 {
-    /* The due leaves are where the winners are due: a walk down each branch while its winner is due finds them all. */
-    uint8_t stack[SCHEDULE_LEAVES_MAX]; /* inner nodes to visit: each at most once, at most one per leaf */
+    /* The due leaves are below the inner nodes whose earliest is due: a walk down each branch while it is due finds
+     * them all. */
+    uint8_t stack[SCHEDULE_LEAVES_MAX]; /* inner nodes to visit: each at most once */
     size_t depth = 0U;
-    if (s->at[s->winner[1]] <= now) {
+    if (s->at[1] <= now) {
         stack[depth++] = 1U;
     }
     while (depth > 0U) {
         const size_t k = stack[--depth];
         for (size_t c = 2U * k; c <= 2U * k + 1U; c++) {
-            const uint8_t w = s->winner[c];
-            if (s->at[w] > now) {
+            if (s->at[c] > now) {
                 continue;
             }
             if (c >= s->leaves) {
-                if (!schedule_has_run(s, w)) {
-                    schedule_mark(s, w);
+                if (!schedule_has_run(s, s->who[c])) {
+                    schedule_mark(s, s->who[c]);
                 }
             } else {
                 stack[depth++] = (uint8_t)c;

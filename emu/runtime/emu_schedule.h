@@ -21,17 +21,18 @@
 #define SCHEDULE_LEAVES_MAX 128U /* the tree's leaves: a power of two */
 
 /*
- * The deadlines are the leaves of a tournament tree: each inner node holds the node of its subtree whose deadline is
- * earliest (the lower index on a tie), the root the earliest of all. A new deadline walks from its leaf up, and stops
- * where the winner no longer changes: at most log2 of the nodes steps (7 at 127 nodes), no swaps, no positions to
- * keep. The tree is as wide as the nodes need (a power of two, at least 2), so one node costs one step.
+ * The deadlines are the leaves of a tournament tree: each inner node holds the earliest deadline of its subtree and
+ * whose it is (the lower index on a tie), the root the earliest of all. A new deadline walks from its leaf up against
+ * the sibling of each step: log2 of the nodes steps (7 at 127 nodes) of a few instructions, no swaps, no positions
+ * to keep. The tree is as wide as the nodes
+ * need (a power of two, at least 2), so one node costs one step.
  */
 typedef struct emu_schedule {
-    co_time_us_t at[SCHEDULE_LEAVES_MAX];    /* node i's deadline; CO_NEVER for a leaf without a node */
-    uint8_t winner[2U * SCHEDULE_LEAVES_MAX]; /* inner node k (1..leaves-1): children 2k, 2k+1; leaf of node i: leaves+i */
+    co_time_us_t at[2U * SCHEDULE_LEAVES_MAX]; /* inner node k (1..leaves-1): its earliest; leaves + i: node i's */
+    uint8_t who[2U * SCHEDULE_LEAVES_MAX];     /* whose deadline at[k] is; who[leaves + i] = i */
     size_t leaves;
     size_t n_nodes;
-    uint64_t ran[2];            /* bit i: node i ran in this round of the pass (schedule_due) */
+    uint64_t again[2];          /* bit i: node i ran in this round of the pass and is due again at once */
     /* The nodes to run in the next pass: a bit each, and their list in the order they were marked. A node marked
      * again while its run goes on adds a second entry, so twice the nodes is room enough; the run skips an entry
      * whose bit is clear. */
@@ -57,8 +58,8 @@ void schedule_update(emu_schedule_t *s, uint32_t node);
  *  walk. */
 static inline void schedule_set(emu_schedule_t *s, uint32_t node, co_time_us_t at)
 {
-    if (s->at[node] != at) {
-        s->at[node] = at;
+    if (s->at[s->leaves + node] != at) {
+        s->at[s->leaves + node] = at;
         schedule_update(s, node);
     }
 }
@@ -66,13 +67,19 @@ static inline void schedule_set(emu_schedule_t *s, uint32_t node, co_time_us_t a
 /** The node whose deadline is earliest (a node of the bus unless there is none: then its deadline is CO_NEVER). */
 static inline uint32_t schedule_first(const emu_schedule_t *s)
 {
-    return s->winner[1];
+    return s->who[1];
 }
 
 /** The earliest deadline of all nodes; CO_NEVER with none. */
 static inline co_time_us_t schedule_next(const emu_schedule_t *s)
 {
-    return s->at[s->winner[1]];
+    return s->at[1];
+}
+
+/** Node `node`'s deadline. */
+static inline co_time_us_t schedule_deadline(const emu_schedule_t *s, uint32_t node)
+{
+    return s->at[s->leaves + node];
 }
 
 static inline bool schedule_is_marked(const emu_schedule_t *s, uint32_t node)
@@ -115,19 +122,20 @@ void schedule_sort_marked(emu_schedule_t *s);
 /** A round of a pass begins: no node has run in it. */
 static inline void schedule_new_round(emu_schedule_t *s)
 {
-    s->ran[0] = 0U;
-    s->ran[1] = 0U;
+    s->again[0] = 0U;
+    s->again[1] = 0U;
 }
 
-/** The node runs in this round (each node runs once a round). */
-static inline void schedule_set_ran(emu_schedule_t *s, uint32_t node)
+/** The node ran in this round and its run left it due at once (deadline <= now): it is not to run again in this
+ *  round (each node runs once a round; a node that ran and is not due is not taken anyway). */
+static inline void schedule_set_again(emu_schedule_t *s, uint32_t node)
 {
-    s->ran[node >> 6] |= (uint64_t)1U << (node & 63U);
+    s->again[node >> 6] |= (uint64_t)1U << (node & 63U);
 }
 
 static inline bool schedule_has_run(const emu_schedule_t *s, uint32_t node)
 {
-    return (s->ran[node >> 6] & ((uint64_t)1U << (node & 63U))) != 0U;
+    return (s->again[node >> 6] & ((uint64_t)1U << (node & 63U))) != 0U;
 }
 
 /** Marks the nodes due at now that have not run in this round and sorts the marked ones (schedule_due's rare
@@ -139,10 +147,10 @@ void schedule_mark_due(emu_schedule_t *s, co_time_us_t now);
  *  bus) and -1 returned: each runs once a round, and none waits behind a node that is due again at once. */
 static inline int schedule_due(emu_schedule_t *s, co_time_us_t now)
 {
-    const uint32_t first = s->winner[1];
-    if (s->at[first] > now) {
+    if (s->at[1] > now) {
         return -1;
     }
+    const uint32_t first = s->who[1];
     if (!schedule_has_run(s, first)) {
         return (int)first;
     }

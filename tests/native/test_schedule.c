@@ -33,17 +33,21 @@ static size_t take_pass(co_time_us_t now, uint32_t *ran)
         for (size_t k = 0U; k < s.n_marked; k++) {
             const uint32_t i = s.marked[k];
             if (schedule_take_mark(&s, i)) {
-                schedule_set_ran(&s, i);
                 ran[count++] = i;
                 schedule_set(&s, i, after_run[i]);
+                if (after_run[i] <= now) {
+                    schedule_set_again(&s, i);
+                }
             }
         }
         s.n_marked = 0U;
         if (round == 0) {
             for (int i = schedule_due(&s, now); i >= 0; i = schedule_due(&s, now)) {
-                schedule_set_ran(&s, (uint32_t)i);
                 ran[count++] = (uint32_t)i;
                 schedule_set(&s, (uint32_t)i, after_run[i]);
+                if (after_run[i] <= now) {
+                    schedule_set_again(&s, (uint32_t)i);
+                }
             }
         }
     }
