@@ -35,11 +35,14 @@ def three_devices(canopen_emu_factory):
 
 
 def test_the_built_in_devices_pass_every_check(three_devices, canopen_emu_bus):
-    # one run per node, at the same time (each its own python-can bus): the SDS's heartbeat is 5 s
+    # one run per node, at the same time (each its own python-can bus): the SDS's heartbeat is 5 s; LSS after,
+    # one node at a time: its answers do not say which node gave them
     with ThreadPoolExecutor(len(BUILT_IN)) as pool:
         reports = dict(zip((d for d, _ in BUILT_IN), pool.map(
-            lambda dn: run(canopen_emu_bus.can_kwargs(), dn[1], EDS[dn[0]], write=True, heartbeat_intervals=2),
-            BUILT_IN)))
+            lambda dn: run(canopen_emu_bus.can_kwargs(), dn[1], EDS[dn[0]], write=True, heartbeat_intervals=2,
+                           skip=["lss"]), BUILT_IN)))
+    for device, node in BUILT_IN:
+        reports[device].results += run(canopen_emu_bus.can_kwargs(), node, EDS[device], only=["lss"]).results
     for device, report in reports.items():
         failed = "\n".join(f"{r.name}: {r.message}" for r in report.failed)
         assert report.ok, f"{device}:\n{failed}"
@@ -111,11 +114,11 @@ def test_a_tpdo_of_the_wrong_length_fails_the_tpdo_check(three_devices, canopen_
 def test_an_eds_whose_default_differs_from_the_device_fails_default_values(canopen_emu_factory, canopen_emu_bus,
                                                                           tmp_path):
     device = SOURCE_DIR / "tests/eds/files/minimal.eds"
-    canopen_emu_factory(f"{device}:20")
-    assert run(canopen_emu_bus.can_kwargs(), 20, device, only=["od"]).ok
+    canopen_emu_factory(f"{device}:0x61")  # not a node-ID of file_devices, which may be on the bus
+    assert run(canopen_emu_bus.can_kwargs(), 0x61, device, only=["od"]).ok
     wrong = tmp_path / "minimal-wrong.eds"
     wrong.write_text(device.read_text().replace("DefaultValue=0x00000ABC", "DefaultValue=0x00000ABD"))
-    report = run(canopen_emu_bus.can_kwargs(), 20, wrong, only=["od"])
+    report = run(canopen_emu_bus.can_kwargs(), 0x61, wrong, only=["od"])
     assert [r.name for r in report.failed] == ["od.default-values"]
     assert ("0x1018:01 'Vendor-ID' (UNSIGNED32, ro): holds 2748 (0xABC), the EDS says '0x00000ABD' = 2749 (0xABD)"
             in report["od.default-values"].message)
@@ -138,6 +141,23 @@ def test_every_file_device_passes(file_devices, canopen_emu_bus, name):
     report = run(canopen_emu_bus.can_kwargs(), 20 + FILE_DEVICES.index(name), SOURCE_DIR / "tests/eds/files" / name,
                  write=True, heartbeat_intervals=2)
     assert report.ok, "\n".join(f"{r.name}: {r.message}" for r in report.failed)
+
+
+def test_a_device_that_takes_a_value_past_the_eds_limit_fails_write_limits(canopen_emu_factory, canopen_emu_bus,
+                                                                          tmp_path):
+    device = SOURCE_DIR / "tests/eds/files/limits.eds"
+    emu = canopen_emu_factory(f"{device}:0x60")  # not a node-ID of file_devices, which may be on the bus
+    before = emu.client.get(0x60, "0x2000")
+    stricter = tmp_path / "limits-stricter.eds"  # the EDS says 40, the device takes up to 50
+    stricter.write_text(device.read_text().replace("HighLimit=50", "HighLimit=40"))
+    report = run(canopen_emu_bus.can_kwargs(), 0x60, stricter, only=["od.write-limits", "od.write-sizes"], write=True)
+    assert report["od.write-sizes"].status is Status.PASSED, report["od.write-sizes"].message
+    result = report["od.write-limits"]
+    assert result.status is Status.FAILED
+    assert ("0x2000:00 'Empty default with limits' (UNSIGNED16, rw): 41 (above HighLimit 40): taken, expected "
+            "0x06090031 (value of parameter written too high (download only)) (its value put back)") in result.message
+    assert [f.data.hex() for f in result.frames] == ["2b00200029000000", "6000200000000000"]
+    assert emu.client.get(0x60, "0x2000") == before
 
 
 def canopen_check_program():

@@ -3,7 +3,10 @@
 Only the service that changes nothing is used so far: "identify remote slave", which every LSS slave in the
 waiting state answers whatever its NMT state. Left for later (docs/conformance.md "Not yet checked"): switch state
 selective and the inquiries (vendor, product, revision, serial, node-ID) against 0x1018, with --write the
-configuration services."""
+configuration services.
+
+LSS answers do not say which node gave them: the check assumes no other LSS master on the bus meanwhile (two runs
+of canopen-check at once on one bus confuse each other's LSS checks)."""
 from __future__ import annotations
 
 import struct
@@ -32,6 +35,7 @@ def identify_remote_slave(ctx: "Context") -> Optional[str]:
     vendor, product, revision, serial = identity
 
     def ask(vendor_id: int) -> Optional[object]:
+        ctx.log.drain()
         for command, value in ((0x46, vendor_id), (0x47, product), (0x48, revision), (0x49, revision),
                                (0x4A, serial), (0x4B, serial)):
             ctx.log.send(LSS_MASTER_ID, struct.pack("<BI3x", command, value))

@@ -191,3 +191,99 @@ def first_entry(ctx: "Context", want) -> Optional[eds_module.Entry]:  # type: ig
 
 
 __all__ = ["first_entry", "Failed"]
+
+
+ABORT_TYPE_LENGTH, ABORT_TOO_LONG, ABORT_TOO_SHORT = 0x06070010, 0x06070012, 0x06070013
+ABORT_TOO_HIGH, ABORT_TOO_LOW = 0x06090031, 0x06090032
+#: Store and restore parameters: a write there stores or restores (or is refused by its signature), not a value.
+NOT_WRITTEN = (0x1010, 0x1011)
+
+
+def _writable_with_value(ctx: "Context") -> List[Tuple[eds_module.Entry, bytes]]:
+    """Readable and writable entries of a fixed-size type, with their current bytes (write-only ones have no value
+    to write back, and are left out)."""
+    entries = [e for e in ctx.eds.entries() if e.readable and e.writable and e.size is not None
+               and e.index not in NOT_WRITTEN]
+    got = []
+    for entry in entries:
+        try:
+            got.append((entry, ctx.upload(entry.index, entry.sub)))
+        except SdoError:
+            continue  # od.readable-entries reports it
+    return got
+
+
+def _refused(ctx: "Context", entry: eds_module.Entry, data: bytes, original: bytes, codes: Tuple[int, ...],
+             what: str, findings: Findings) -> None:
+    """Writes ``data``, which must be refused with one of ``codes``; puts ``original`` back when it was taken."""
+    try:
+        ctx.sdo.download(entry.index, entry.sub, data)
+    except SdoAbort as e:
+        if e.code not in codes:
+            findings.add(f"{entry}: {what}: aborted with {abort_text(e.code)}, expected "
+                         f"{' or '.join(abort_text(c) for c in codes)}", e.frames)
+        return
+    except SdoError as e:
+        findings.add(f"{entry}: {what}: {e}", e.frames)
+        return
+    frames = list(ctx.sdo.frames)
+    try:
+        ctx.sdo.download(entry.index, entry.sub, original)
+        restored = "its value put back"
+    except SdoError as e:
+        restored = f"putting its value back failed: {e}"
+    findings.add(f"{entry}: {what}: taken, expected {' or '.join(abort_text(c) for c in codes)} ({restored})", frames)
+
+
+@check("od.write-sizes", clause="CiA 301 v4.2.0 §7.2.4.3.17 (aborts 0x06070010, 0x06070012, 0x06070013)",
+       summary="every writable entry of a fixed-size type refuses its own value one byte too long (types of 1..3 "
+               "bytes: expedited) with 0x06070012 or 0x06070010, and one byte too short with 0x06070013 or "
+               "0x06070010; put back where it was taken", writes=True)
+def write_sizes(ctx: "Context") -> Optional[str]:
+    entries = _writable_with_value(ctx)
+    if not entries:
+        raise NotApplicable("no readable and writable entry of a fixed-size type")
+    findings = Findings()
+    for entry, original in entries:
+        if len(original) <= 3:
+            _refused(ctx, entry, original + b"\0", original, (ABORT_TOO_LONG, ABORT_TYPE_LENGTH), "one byte too long",
+                     findings)
+        if len(original) >= 2:
+            _refused(ctx, entry, original[:-1], original, (ABORT_TOO_SHORT, ABORT_TYPE_LENGTH), "one byte too short",
+                     findings)
+    findings.raise_if_any(f"of {len(entries)} writable entries take a wrong size")
+    return f"{len(entries)} entries"
+
+
+def _is_mapping(index: int) -> bool:
+    return 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
+
+
+@check("od.write-limits", clause="CiA 306 (LowLimit, HighLimit), CiA 301 v4.2.0 §7.2.4.3.17 (aborts 0x06090031, "
+                                 "0x06090032)",
+       summary="every writable integer entry with a HighLimit (LowLimit) in the EDS refuses one above it with "
+               "0x06090031 (one below with 0x06090032; not 0 in a PDO mapping's count, which CiA 301's mapping "
+               "procedure writes); put back where it was taken", writes=True)
+def write_limits(ctx: "Context") -> Optional[str]:
+    findings = Findings()
+    tried = 0
+    for entry, original in _writable_with_value(ctx):
+        if entry.data_type not in eds_module.SIGNED_TYPES | eds_module.UNSIGNED_TYPES or entry.data_type == 0x01:
+            continue
+        size = entry.size or 0
+        signed = entry.data_type in eds_module.SIGNED_TYPES
+        type_low, type_high = (-(1 << (8 * size - 1)), (1 << (8 * size - 1)) - 1) if signed else (0, (1 << 8 * size) - 1)
+        for limit, step, code, what in ((entry.high, 1, ABORT_TOO_HIGH, "above HighLimit"),
+                                        (entry.low, -1, ABORT_TOO_LOW, "below LowLimit")):
+            if not isinstance(limit, int) or not type_low <= limit + step <= type_high:
+                continue
+            if limit + step == 0 and entry.sub == 0 and _is_mapping(entry.index):
+                continue  # 0 in a mapping's count is CiA 301's first step of every mapping change (§7.5.2.36/38)
+            tried += 1
+            value = limit + step
+            _refused(ctx, entry, eds_module.encode(value, entry.data_type), original, (code,),
+                     f"{value} ({what} {limit})", findings)
+    if not tried:
+        raise NotApplicable("no writable integer entry has a limit inside its type's range")
+    findings.raise_if_any("limits not kept")
+    return f"{tried} limits"
