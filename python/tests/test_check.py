@@ -23,9 +23,9 @@ BUILT_IN = (("sds", 16), ("buerkert", 17), ("pro-ionizer", 18))
 #: in 4 bytes (sds.eds "Comments", pro-ionizer.eds); the Bürkert device has no write-only entry and keeps no error
 #: history (no 0x1003).
 NOT_APPLICABLE = {
-    "sds": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.segmented-download"},
+    "sds": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download"},
     "buerkert": {"od.write-only-refuses-read", "emcy.error-history"},
-    "pro-ionizer": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.segmented-download"},
+    "pro-ionizer": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download"},
 }
 
 
@@ -51,6 +51,7 @@ def test_the_built_in_devices_pass_every_check(three_devices, canopen_emu_bus):
     # what they looked at: every readable entry of the Bürkert's 341 sections, its 12-byte device name segmented
     assert reports["buerkert"]["od.readable-entries"].message == "307 entries"
     assert "0x1008:00" in reports["buerkert"]["sdo.segmented-upload"].message
+    assert "(12 bytes, with CRC)" in reports["buerkert"]["sdo.block-upload"].message
 
 
 def test_read_only_runs_send_no_download_and_no_nmt_command(three_devices, canopen_emu_bus):
@@ -224,3 +225,8 @@ def test_the_eds_reader(tmp_path):
     gain = model.objects[0x2000]
     assert [(e.sub, e.name, e.value) for e in gain.entries.values()] == [
         (0, "Highest sub-index supported", 2), (1, "Left", -3), (2, "Gain2", 8)]  # 0xFD of an INTEGER8; 010 octal
+
+
+def test_the_block_transfer_crc_is_cia_301s():
+    from canopen_emu.check.sdo import sdo_crc
+    assert sdo_crc(b"123456789") == 0x31C3 and sdo_crc(b"") == 0  # CRC-16-CCITT, start value 0 (§7.2.4.3.16)

@@ -7,7 +7,7 @@ that breaks the protocol) carry the frames of the transfer."""
 from __future__ import annotations
 
 import struct
-from typing import List, Optional
+from typing import List, Optional, Tuple
 
 from .frames import Frame, FrameLog
 
@@ -45,6 +45,16 @@ ABORT_TEXTS = {
     0x08000023: "object dictionary dynamic generation fails or no object dictionary is present",
     0x08000024: "no data available",
 }
+
+
+def sdo_crc(data: bytes) -> int:
+    """The CRC of SDO block transfer (CiA 301 §7.2.4.3.16): CRC-16-CCITT, x^16 + x^12 + x^5 + 1, start value 0."""
+    crc = 0
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021 if crc & 0x8000 else crc << 1) & 0xFFFF
+    return crc
 
 
 def abort_text(code: int) -> str:
@@ -181,6 +191,65 @@ class SdoClient:
             if last:
                 return
             toggle ^= 1
+
+    def block_upload(self, index: int, sub: int, block_size: int = 127) -> Tuple[bytes, bool]:
+        """Reads an entry by SDO block upload (§7.2.4.3.9-16) with CRC and no protocol switch (pst 0): the data and
+        whether the server used the CRC (it is then checked). SdoAbort when the server refuses (0x05040001: it has
+        no block transfer); SdoProtocolError for a wrong sequence number, size or CRC."""
+        self.frames = []
+        answer = self.request(struct.pack("<BHBBB", 0xA4, index, sub, block_size, 0))
+        self._check_answer(answer, index, sub, 6)
+        command = answer.data[0]
+        crc_used = bool(command & 0x04)
+        size = struct.unpack_from("<I", answer.data, 4)[0] if command & 0x02 else None
+        self.frames.append(self.log.send(self.request_id, bytes([0xA3]).ljust(8, b"\0")))
+        data = bytearray()
+        while True:
+            last_seq, done = 0, False
+            while True:  # the segments of one block, streamed by the server
+                segment = self.log.wait_for(lambda f: f.can_id == self.response_id, self.timeout)
+                if segment is None:
+                    raise SdoTimeout(f"0x{index:04X}:{sub:02X}: block upload: segment {last_seq + 1} did not come",
+                                     list(self.frames))
+                self.frames.append(segment)
+                seq = segment.data[0] & 0x7F
+                if segment.data[0] == 0x80 and len(segment.data) == 8 and last_seq == 0 and not data:
+                    code = struct.unpack_from("<I", segment.data, 4)[0]  # an abort instead of the first segment
+                    raise SdoAbort(code, index, sub, list(self.frames))
+                if seq != last_seq + 1:
+                    raise SdoProtocolError(f"0x{index:04X}:{sub:02X}: block upload segment with sequence number "
+                                           f"{seq}, expected {last_seq + 1}", list(self.frames))
+                last_seq = seq
+                data += segment.data[1:8]
+                if segment.data[0] & 0x80:
+                    done = True
+                    break
+                if seq == block_size:
+                    break
+            self.frames.append(self.log.send(self.request_id, bytes([0xA2, last_seq, block_size]).ljust(8, b"\0")))
+            if done:
+                break
+        end = self.log.wait_for(lambda f: f.can_id == self.response_id, self.timeout)
+        if end is None:
+            raise SdoTimeout(f"0x{index:04X}:{sub:02X}: block upload: no end frame", list(self.frames))
+        self.frames.append(end)
+        self._check_answer(end, index, sub, 6, mux=False)
+        if end.data[0] & 0x03 != 0x01:
+            raise SdoProtocolError(f"0x{index:04X}:{sub:02X}: block upload end with ss {end.data[0] & 0x03}, not 1",
+                                   list(self.frames))
+        unused = (end.data[0] >> 2) & 7
+        if unused:
+            del data[-unused:]
+        self.frames.append(self.log.send(self.request_id, bytes([0xA1]).ljust(8, b"\0")))
+        if size is not None and size != len(data):
+            raise SdoProtocolError(f"0x{index:04X}:{sub:02X}: block upload of {len(data)} bytes, {size} indicated",
+                                   list(self.frames))
+        if crc_used:
+            crc = struct.unpack_from("<H", end.data, 1)[0]
+            if crc != sdo_crc(bytes(data)):
+                raise SdoProtocolError(f"0x{index:04X}:{sub:02X}: block upload CRC 0x{crc:04X}, the data's is "
+                                       f"0x{sdo_crc(bytes(data)):04X}", list(self.frames))
+        return bytes(data), crc_used
 
     def _check_answer(self, answer: Frame, index: int, sub: int, scs: int, mux: bool = True) -> None:
         if len(answer.data) != 8:

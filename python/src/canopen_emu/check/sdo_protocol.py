@@ -174,6 +174,26 @@ def server_cob_ids(ctx: "Context") -> Optional[str]:
     return ", ".join(["0x1200"] + checked) if 0x1200 in servers else ", ".join(checked)
 
 
+@check("sdo.block-upload", clause="CiA 301 v4.2.0 §7.2.4.3.9-16 (SDO block upload, CRC)",
+       summary="where the server has block transfer (it does not abort the initiate with 0x05040001): a value over "
+               "4 bytes uploads by block with sequence numbers 1.. in each block, the size indicated, and the CRC "
+               "where the server uses it; the same bytes as a segmented or expedited upload")
+def block_upload(ctx: "Context") -> Optional[str]:
+    entry, plain = long_readable_entry(ctx)
+    try:
+        data, crc = ctx.sdo.block_upload(entry.index, entry.sub)
+    except SdoAbort as e:
+        if e.code == ABORT_COMMAND:
+            raise NotApplicable("the server has no block transfer (the initiate is aborted with 0x05040001)") \
+                from None
+        raise Failed(str(e), e.frames) from None
+    except SdoError as e:
+        raise Failed(str(e), e.frames) from None
+    if data != plain:
+        raise Failed(f"{entry}: block upload gave {data!r}, an upload {plain!r}", ctx.sdo.frames)
+    return f"{entry} ({len(data)} bytes, {'with' if crc else 'without'} CRC)"
+
+
 def writable_entry(ctx: "Context", long: bool) -> Tuple[eds_module.Entry, bytes]:
     """A readable and writable entry with its current value (not empty): of a string type or over 4 bytes
     (``long``: a segmented download, which CiA 301 allows for any length) or of 1 to 4 bytes; one of the
