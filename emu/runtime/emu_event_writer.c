@@ -16,7 +16,7 @@ void writer_init(event_writer_t *w, char *buf, size_t cap)
     w->full = false;
 }
 
-void writer_bytes(event_writer_t *w, const char *bytes, size_t n)
+void writer_bytes_cut(event_writer_t *w, const char *bytes, size_t n)
 {
     if (w->full) {
         return; /* nothing after a cut */
@@ -38,16 +38,37 @@ static void writer_byte(event_writer_t *w, char c)
     w->buf[w->len++] = c;
 }
 
-void writer_text(event_writer_t *w, const char *text) { writer_bytes(w, text, strlen(text)); }
+/* "00".."99": two decimal digits a division. */
+static const char two_digits[200] = {
+    '0', '0', '0', '1', '0', '2', '0', '3', '0', '4', '0', '5', '0', '6', '0', '7', '0', '8', '0', '9',
+    '1', '0', '1', '1', '1', '2', '1', '3', '1', '4', '1', '5', '1', '6', '1', '7', '1', '8', '1', '9',
+    '2', '0', '2', '1', '2', '2', '2', '3', '2', '4', '2', '5', '2', '6', '2', '7', '2', '8', '2', '9',
+    '3', '0', '3', '1', '3', '2', '3', '3', '3', '4', '3', '5', '3', '6', '3', '7', '3', '8', '3', '9',
+    '4', '0', '4', '1', '4', '2', '4', '3', '4', '4', '4', '5', '4', '6', '4', '7', '4', '8', '4', '9',
+    '5', '0', '5', '1', '5', '2', '5', '3', '5', '4', '5', '5', '5', '6', '5', '7', '5', '8', '5', '9',
+    '6', '0', '6', '1', '6', '2', '6', '3', '6', '4', '6', '5', '6', '6', '6', '7', '6', '8', '6', '9',
+    '7', '0', '7', '1', '7', '2', '7', '3', '7', '4', '7', '5', '7', '6', '7', '7', '7', '8', '7', '9',
+    '8', '0', '8', '1', '8', '2', '8', '3', '8', '4', '8', '5', '8', '6', '8', '7', '8', '8', '8', '9',
+    '9', '0', '9', '1', '9', '2', '9', '3', '9', '4', '9', '5', '9', '6', '9', '7', '9', '8', '9', '9'};
 
 void writer_uint(event_writer_t *w, uint64_t v)
 {
     char digits[20]; /* 2^64 - 1 has 20 */
     size_t i = sizeof digits;
-    do {
-        digits[--i] = (char)('0' + (char)(v % 10U));
-        v /= 10U;
-    } while (v != 0U);
+    while (v >= 100U) {
+        const size_t pair = (size_t)(v % 100U) * 2U;
+        v /= 100U;
+        i -= 2U;
+        digits[i] = two_digits[pair];
+        digits[i + 1U] = two_digits[pair + 1U];
+    }
+    if (v >= 10U) {
+        i -= 2U;
+        digits[i] = two_digits[v * 2U];
+        digits[i + 1U] = two_digits[v * 2U + 1U];
+    } else {
+        digits[--i] = (char)('0' + (char)v);
+    }
     writer_bytes(w, digits + i, sizeof digits - i);
 }
 
@@ -62,6 +83,25 @@ void writer_hex_uint(event_writer_t *w, uint64_t v, unsigned min_digits)
     writer_bytes(w, digits + i, sizeof digits - i);
 }
 
+/* "00".."FF": the two hex digits of each byte value, one load a byte. */
+static const char hex_pairs[2U * 256U + 1U] =
+    "000102030405060708090A0B0C0D0E0F"
+    "101112131415161718191A1B1C1D1E1F"
+    "202122232425262728292A2B2C2D2E2F"
+    "303132333435363738393A3B3C3D3E3F"
+    "404142434445464748494A4B4C4D4E4F"
+    "505152535455565758595A5B5C5D5E5F"
+    "606162636465666768696A6B6C6D6E6F"
+    "707172737475767778797A7B7C7D7E7F"
+    "808182838485868788898A8B8C8D8E8F"
+    "909192939495969798999A9B9C9D9E9F"
+    "A0A1A2A3A4A5A6A7A8A9AAABACADAEAF"
+    "B0B1B2B3B4B5B6B7B8B9BABBBCBDBEBF"
+    "C0C1C2C3C4C5C6C7C8C9CACBCCCDCECF"
+    "D0D1D2D3D4D5D6D7D8D9DADBDCDDDEDF"
+    "E0E1E2E3E4E5E6E7E8E9EAEBECEDEEEF"
+    "F0F1F2F3F4F5F6F7F8F9FAFBFCFDFEFF";
+
 void writer_hex_bytes(event_writer_t *w, const uint8_t *bytes, size_t n)
 {
     if (w->full || n > (w->cap - w->len) / 2U) {
@@ -70,8 +110,7 @@ void writer_hex_bytes(event_writer_t *w, const uint8_t *bytes, size_t n)
     }
     char *out = w->buf + w->len;
     for (size_t i = 0U; i < n; i++) {
-        out[2U * i] = hex_digits[bytes[i] >> 4];
-        out[2U * i + 1U] = hex_digits[bytes[i] & 0x0FU];
+        memcpy(out + 2U * i, &hex_pairs[2U * bytes[i]], 2U);
     }
     w->len += 2U * n;
 }
@@ -91,9 +130,26 @@ void writer_seconds(event_writer_t *w, uint64_t us)
 
 /* ---- JSON strings, as Jansson writes them ------------------------------------------------------------------- */
 
-/* A byte Jansson writes as it is: printable ASCII but '"' and '\\', and DEL (JSON_ENSURE_ASCII escapes only code
- * points from U+0080). */
-static inline bool json_plain(unsigned char b) { return (unsigned char)(b - 0x20U) < 0x60U && b != '"' && b != '\\'; }
+/* The bytes Jansson writes as they are: printable ASCII but '"' and '\\', and DEL (JSON_ENSURE_ASCII escapes only
+ * code points from U+0080). A table: the test of each byte of a string is one load. */
+static const bool json_plain_bytes[256] = {
+    /* 0x00..0x1F: controls (and the NUL that ends a string) */
+    [0x20] = 1, [0x21] = 1, /* 0x22 '"' */ [0x23] = 1, [0x24] = 1, [0x25] = 1, [0x26] = 1, [0x27] = 1,
+    [0x28] = 1, [0x29] = 1, [0x2A] = 1, [0x2B] = 1, [0x2C] = 1, [0x2D] = 1, [0x2E] = 1, [0x2F] = 1,
+    [0x30] = 1, [0x31] = 1, [0x32] = 1, [0x33] = 1, [0x34] = 1, [0x35] = 1, [0x36] = 1, [0x37] = 1,
+    [0x38] = 1, [0x39] = 1, [0x3A] = 1, [0x3B] = 1, [0x3C] = 1, [0x3D] = 1, [0x3E] = 1, [0x3F] = 1,
+    [0x40] = 1, [0x41] = 1, [0x42] = 1, [0x43] = 1, [0x44] = 1, [0x45] = 1, [0x46] = 1, [0x47] = 1,
+    [0x48] = 1, [0x49] = 1, [0x4A] = 1, [0x4B] = 1, [0x4C] = 1, [0x4D] = 1, [0x4E] = 1, [0x4F] = 1,
+    [0x50] = 1, [0x51] = 1, [0x52] = 1, [0x53] = 1, [0x54] = 1, [0x55] = 1, [0x56] = 1, [0x57] = 1,
+    [0x58] = 1, [0x59] = 1, [0x5A] = 1, [0x5B] = 1, /* 0x5C '\\' */ [0x5D] = 1, [0x5E] = 1, [0x5F] = 1,
+    [0x60] = 1, [0x61] = 1, [0x62] = 1, [0x63] = 1, [0x64] = 1, [0x65] = 1, [0x66] = 1, [0x67] = 1,
+    [0x68] = 1, [0x69] = 1, [0x6A] = 1, [0x6B] = 1, [0x6C] = 1, [0x6D] = 1, [0x6E] = 1, [0x6F] = 1,
+    [0x70] = 1, [0x71] = 1, [0x72] = 1, [0x73] = 1, [0x74] = 1, [0x75] = 1, [0x76] = 1, [0x77] = 1,
+    [0x78] = 1, [0x79] = 1, [0x7A] = 1, [0x7B] = 1, [0x7C] = 1, [0x7D] = 1, [0x7E] = 1, [0x7F] = 1,
+    /* 0x80..0xFF: non-ASCII, escaped as the code point they are part of */
+};
+
+static inline bool json_plain(unsigned char b) { return json_plain_bytes[b]; }
 
 /* \uXXXX of one UTF-16 unit. */
 static void write_u_escape(event_writer_t *w, uint32_t unit)
@@ -208,44 +264,5 @@ void writer_json_string(event_writer_t *w, const char *text)
         }
         p += n;
     }
-    writer_byte(w, '"');
-}
-
-/* ---- Members ------------------------------------------------------------------------------------------------ */
-
-static void write_key(event_writer_t *w, const char *key)
-{
-    writer_bytes(w, ",\"", 2U);
-    writer_text(w, key);
-    writer_bytes(w, "\":", 2U);
-}
-
-void writer_member_string(event_writer_t *w, const char *key, const char *value)
-{
-    write_key(w, key);
-    writer_json_string(w, value);
-}
-
-void writer_member_uint(event_writer_t *w, const char *key, uint64_t value)
-{
-    write_key(w, key);
-    writer_uint(w, value);
-}
-
-void writer_member_bool(event_writer_t *w, const char *key, bool value)
-{
-    write_key(w, key);
-    if (value) {
-        writer_bytes(w, "true", 4U);
-    } else {
-        writer_bytes(w, "false", 5U);
-    }
-}
-
-void writer_member_hex(event_writer_t *w, const char *key, const uint8_t *bytes, size_t n)
-{
-    write_key(w, key);
-    writer_byte(w, '"');
-    writer_hex_bytes(w, bytes, n);
     writer_byte(w, '"');
 }

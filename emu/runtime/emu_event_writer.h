@@ -19,6 +19,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 typedef struct event_writer {
     char *buf;
@@ -30,11 +31,22 @@ typedef struct event_writer {
 /** An empty line in buf[0..cap). */
 void writer_init(event_writer_t *w, char *buf, size_t cap);
 
-/** n bytes as they are. */
-void writer_bytes(event_writer_t *w, const char *bytes, size_t n);
+/** writer_bytes when the bytes do not fit, or the writer is full: what fits of them. */
+void writer_bytes_cut(event_writer_t *w, const char *bytes, size_t n);
+
+/** n bytes as they are. Inline: most pieces are a few bytes of constant length, copied without a call. */
+static inline void writer_bytes(event_writer_t *w, const char *bytes, size_t n)
+{
+    if (!w->full && n <= w->cap - w->len) {
+        memcpy(w->buf + w->len, bytes, n);
+        w->len += n;
+    } else {
+        writer_bytes_cut(w, bytes, n);
+    }
+}
 
 /** A NUL-terminated text as it is. */
-void writer_text(event_writer_t *w, const char *text);
+static inline void writer_text(event_writer_t *w, const char *text) { writer_bytes(w, text, strlen(text)); }
 
 /** v in decimal. */
 void writer_uint(event_writer_t *w, uint64_t v);
@@ -51,12 +63,53 @@ void writer_seconds(event_writer_t *w, uint64_t us);
 /** A JSON string, quotes included, of text as the header says. */
 void writer_json_string(event_writer_t *w, const char *text);
 
-/** A JSON object's member after the first: ,"key":value. key is the program's own (written as it is: no byte that
- *  needs escaping). */
-void writer_member_string(event_writer_t *w, const char *key, const char *value);
-void writer_member_uint(event_writer_t *w, const char *key, uint64_t value);
-void writer_member_bool(event_writer_t *w, const char *key, bool value);
+/* ---- Members of a JSON object, after its first ---------------------------------------------------------------- */
+
+/** The key argument of the writer_member_* functions: ,"key": and its length, of a string literal (the program's
+ *  own keys: no byte that needs escaping). */
+#define EVENT_KEY(key) ",\"" key "\":", (sizeof ",\"" key "\":" - 1U)
+
+static inline void writer_member_string(event_writer_t *w, const char *key, size_t key_len, const char *value)
+{
+    writer_bytes(w, key, key_len);
+    writer_json_string(w, value);
+}
+
+/** A string the program wrote itself of bytes that need no escaping (printable ASCII but '"' and '\\'): hex digits,
+ *  a name of its own tables. */
+static inline void writer_member_plain(event_writer_t *w, const char *key, size_t key_len, const char *value,
+                                       size_t value_len)
+{
+    writer_bytes(w, key, key_len);
+    writer_bytes(w, "\"", 1U);
+    writer_bytes(w, value, value_len);
+    writer_bytes(w, "\"", 1U);
+}
+
+static inline void writer_member_uint(event_writer_t *w, const char *key, size_t key_len, uint64_t value)
+{
+    writer_bytes(w, key, key_len);
+    writer_uint(w, value);
+}
+
+static inline void writer_member_bool(event_writer_t *w, const char *key, size_t key_len, bool value)
+{
+    writer_bytes(w, key, key_len);
+    if (value) {
+        writer_bytes(w, "true", 4U);
+    } else {
+        writer_bytes(w, "false", 5U);
+    }
+}
+
 /** Bytes as a string of two upper-case hex digits a byte (as the control protocol's hex_string). */
-void writer_member_hex(event_writer_t *w, const char *key, const uint8_t *bytes, size_t n);
+static inline void writer_member_hex(event_writer_t *w, const char *key, size_t key_len, const uint8_t *bytes,
+                                     size_t n)
+{
+    writer_bytes(w, key, key_len);
+    writer_bytes(w, "\"", 1U);
+    writer_hex_bytes(w, bytes, n);
+    writer_bytes(w, "\"", 1U);
+}
 
 #endif /* EMU_EVENT_WRITER_H */

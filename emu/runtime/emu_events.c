@@ -49,6 +49,7 @@ typedef struct event {
     const emu_bus_t *bus;           /* NULL: of no bus */
     co_time_us_t time_us;           /* the emulator's clock (emu_since_start) */
     const char *text;               /* NULL: none */
+    bool text_plain;                /* text needs no escaping in JSON (a frame's, writer_member_plain) */
     const event_writer_t *fields;   /* NULL, or the members of its kind (",\"from\":...", writer_member_*) */
 } event_t;
 
@@ -60,21 +61,24 @@ typedef struct event {
 
 static void write_json_event(event_writer_t *w, const event_t *ev)
 {
-    writer_bytes(w, "{\"event\":", 9U);
-    writer_json_string(w, event_kind_name(ev->kind));
-    writer_member_uint(w, "time_us", ev->time_us);
+    writer_bytes(w, "{\"event\":\"", 10U);
+    writer_text(w, event_kind_name(ev->kind)); /* the protocol's names: nothing to escape */
+    writer_bytes(w, "\"", 1U);
+    writer_member_uint(w, EVENT_KEY("time_us"), ev->time_us);
     if (ev->bus != NULL) {
-        writer_member_string(w, "bus", ev->bus->can.name);
+        writer_member_string(w, EVENT_KEY("bus"), ev->bus->can.name);
     }
     if (ev->node != NULL) {
-        writer_member_uint(w, "node", co_node_id(&ev->node->dev.node));
-        writer_member_string(w, "device", ev->node->dev.cls->name); /* an EDS file's name: any bytes */
+        writer_member_uint(w, EVENT_KEY("node"), co_node_id(&ev->node->dev.node));
+        writer_member_string(w, EVENT_KEY("device"), ev->node->dev.cls->name); /* an EDS file's name: any bytes */
     }
     if (ev->fields != NULL) {
         writer_bytes(w, ev->fields->buf, ev->fields->len);
     }
-    if (ev->text != NULL) {
-        writer_member_string(w, "text", ev->text);
+    if (ev->text != NULL && ev->text_plain) {
+        writer_member_plain(w, EVENT_KEY("text"), ev->text, strlen(ev->text));
+    } else if (ev->text != NULL) {
+        writer_member_string(w, EVENT_KEY("text"), ev->text);
     }
     writer_bytes(w, "}\n", 2U);
 }
@@ -195,7 +199,7 @@ static void report(emu_node_t *n, event_kind_t kind, int level, const event_writ
     if (n_to != 0U) {
         /* The node's time: that of the call in which it acted (the frame's arrival, its deadline). */
         const event_t ev = {kind, n, n->bus, emu_since_start(emu, n->dev.now != 0U ? n->dev.now : socketcan_now_us()),
-                            text, fields};
+                            text, false, fields};
         publish(&ev, to, n_to);
     }
 }
@@ -214,19 +218,20 @@ void events_device_print(void *ctx, const device_t *dev, const char *line)
     const size_t n_to = sessions_wanting(emu, EVENT_MESSAGE, (uint8_t)id, n->bus, 0U, to);
     if (n_to != 0U) {
         const event_t ev = {EVENT_MESSAGE, n, n->bus,
-                            emu_since_start(emu, n->dev.now != 0U ? n->dev.now : socketcan_now_us()), line, NULL};
+                            emu_since_start(emu, n->dev.now != 0U ? n->dev.now : socketcan_now_us()), line, false,
+                            NULL};
         publish(&ev, to, n_to);
     }
 }
 
-/* The fields of an event of one or two numbers (key2 NULL: one). */
-static void pack_state(event_writer_t *f, char *room, size_t size, const char *key1, uint32_t v1, const char *key2,
-                       uint32_t v2)
+/* The fields of an event of one or two numbers (key2 NULL: one); keys of EVENT_KEY. */
+static void pack_state(event_writer_t *f, char *room, size_t size, const char *key1, size_t key1_len, uint32_t v1,
+                       const char *key2, size_t key2_len, uint32_t v2)
 {
     writer_init(f, room, size);
-    writer_member_uint(f, key1, v1);
+    writer_member_uint(f, key1, key1_len, v1);
     if (key2 != NULL) {
-        writer_member_uint(f, key2, v2);
+        writer_member_uint(f, key2, key2_len, v2);
     }
 }
 
@@ -236,11 +241,11 @@ static void store_report(emu_node_t *n, const co_event_t *ev)
     char room[EVENT_FIELDS_ROOM];
     event_writer_t f;
     writer_init(&f, room, sizeof room);
-    writer_member_string(&f, "what", ev->index == 0x7E5U ? "lss-store" : ev->kind == CO_EV_STORE ? "store" : "restore");
-    writer_member_uint(&f, "index", ev->index);
-    writer_member_uint(&f, "sub", ev->sub);
-    writer_member_bool(&f, "ok", ev->code == 0U);
-    writer_member_uint(&f, "abort_code", ev->code);
+    writer_member_string(&f, EVENT_KEY("what"), ev->index == 0x7E5U ? "lss-store" : ev->kind == CO_EV_STORE ? "store" : "restore");
+    writer_member_uint(&f, EVENT_KEY("index"), ev->index);
+    writer_member_uint(&f, EVENT_KEY("sub"), ev->sub);
+    writer_member_bool(&f, EVENT_KEY("ok"), ev->code == 0U);
+    writer_member_uint(&f, EVENT_KEY("abort_code"), ev->code);
     if (ev->index == 0x7E5U) {
         report(n, EVENT_STORE, level, &f, "LSS store configuration (node-ID %lu): %s", (unsigned long)ev->value,
                ev->code == 0U ? "stored" : "failed");
@@ -256,8 +261,8 @@ static void nvm_report(emu_node_t *n, const co_event_t *ev)
     char room[EVENT_FIELDS_ROOM];
     event_writer_t f;
     writer_init(&f, room, sizeof room);
-    writer_member_string(&f, "area", ev->index == 0x7E5U ? "lss" : "parameters");
-    writer_member_string(&f, "status", ev->value < 5U ? status[ev->value] : "?");
+    writer_member_string(&f, EVENT_KEY("area"), ev->index == 0x7E5U ? "lss" : "parameters");
+    writer_member_string(&f, EVENT_KEY("status"), ev->value < 5U ? status[ev->value] : "?");
     if (ev->index == 0x7E5U) {
         if (ev->value == CO_NVM_CORRUPT) {
             report(n, EVENT_NVM, LOG_QUIET, &f, "stored LSS configuration is damaged; using the command-line node-ID and "
@@ -284,8 +289,8 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
     case CO_EV_NMT_STATE: {
         const char *from = co_nmt_state_name((co_nmt_state_t)ev->code), *to = co_nmt_state_name((co_nmt_state_t)ev->value);
         writer_init(&f, room, sizeof room);
-        writer_member_string(&f, "from", from);
-        writer_member_string(&f, "to", to);
+        writer_member_string(&f, EVENT_KEY("from"), from);
+        writer_member_string(&f, EVENT_KEY("to"), to);
         report(n, EVENT_NMT, LOG_NORMAL, &f, "NMT %s -> %s", from, to);
         if (ev->code == CO_NMT_INITIALISING && ev->value == CO_NMT_PRE_OPERATIONAL) {
             report(n, EVENT_BOOT_UP, -1, NULL, "boot-up"); /* the core sends it on this transition */
@@ -293,8 +298,8 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         break;
     }
     case CO_EV_SDO_ABORT:
-        pack_state(&f, room, sizeof room, "index", ev->index, "sub", ev->sub);
-        writer_member_uint(&f, "abort_code", ev->code);
+        pack_state(&f, room, sizeof room, EVENT_KEY("index"), ev->index, EVENT_KEY("sub"), ev->sub);
+        writer_member_uint(&f, EVENT_KEY("abort_code"), ev->code);
         report(n, EVENT_SDO_ABORT, LOG_NORMAL, &f, "SDO abort 0x%08lX on 0x%04X:%02X (%s)", (unsigned long)ev->code,
                ev->index, ev->sub, co_abort_text(ev->code));
         break;
@@ -306,8 +311,8 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         n->last_emcy.code = (uint16_t)ev->value;
         n->last_emcy.reg = (uint8_t)ev->code;
         memcpy(n->last_emcy.info, &data[3], sizeof n->last_emcy.info);
-        pack_state(&f, room, sizeof room, "code", ev->value, "register", ev->code);
-        writer_member_hex(&f, "info", n->last_emcy.info, sizeof n->last_emcy.info); /* as the answers' hex_string */
+        pack_state(&f, room, sizeof room, EVENT_KEY("code"), ev->value, EVENT_KEY("register"), ev->code);
+        writer_member_hex(&f, EVENT_KEY("info"), n->last_emcy.info, sizeof n->last_emcy.info); /* as the answers' hex_string */
         report(n, EVENT_EMCY, LOG_NORMAL, &f, "EMCY 0x%04lX, error register 0x%02lX", (unsigned long)ev->value,
                (unsigned long)ev->code);
         break;
@@ -320,7 +325,7 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         nvm_report(n, ev);
         break;
     case CO_EV_NVM_REFUSED: /* value 0: then CO_EV_NVM_LOADED with CO_NVM_REFUSED; 1: a save that fails */
-        pack_state(&f, room, sizeof room, "index", ev->index, "sub", ev->sub);
+        pack_state(&f, room, sizeof room, EVENT_KEY("index"), ev->index, EVENT_KEY("sub"), ev->sub);
         if (ev->value == 1U) {
             report(n, EVENT_NVM, LOG_QUIET, &f,
                    "save refused: 0x%04X:%02X holds a value its load would refuse (%s); nothing stored", ev->index,
@@ -332,19 +337,19 @@ void events_device_event(void *ctx, const device_t *dev, const co_event_t *ev)
         }
         break;
     case CO_EV_LSS_NODE_ID:
-        pack_state(&f, room, sizeof room, "pending_node_id", ev->value, NULL, 0U);
+        pack_state(&f, room, sizeof room, EVENT_KEY("pending_node_id"), ev->value, NULL, 0U, 0U);
         report(n, EVENT_LSS, LOG_NORMAL, &f, "LSS pending node-ID %lu", (unsigned long)ev->value);
         break;
     case CO_EV_LSS_BIT_TIMING:
-        pack_state(&f, room, sizeof room, "pending_bit_timing", ev->value, NULL, 0U);
+        pack_state(&f, room, sizeof room, EVENT_KEY("pending_bit_timing"), ev->value, NULL, 0U, 0U);
         report(n, EVENT_LSS, LOG_NORMAL, &f, "LSS pending bit timing %lu", (unsigned long)ev->value);
         break;
     case CO_EV_LSS_ACTIVATE:
-        pack_state(&f, room, sizeof room, "kbit_s", ev->value, NULL, 0U);
+        pack_state(&f, room, sizeof room, EVENT_KEY("kbit_s"), ev->value, NULL, 0U, 0U);
         report(n, EVENT_LSS, LOG_NORMAL, &f, "LSS activated %lu kbit/s", (unsigned long)ev->value);
         break;
     case CO_EV_HB_TIMEOUT:
-        pack_state(&f, room, sizeof room, "producer", ev->value, NULL, 0U);
+        pack_state(&f, room, sizeof room, EVENT_KEY("producer"), ev->value, NULL, 0U, 0U);
         report(n, EVENT_HEARTBEAT, LOG_NORMAL, &f, "heartbeat of node %lu missing", (unsigned long)ev->value);
         break;
     case CO_EV_GUARD_TIMEOUT:
@@ -369,8 +374,8 @@ void events_fault(emu_node_t *n, const char *kind, const char *action, const cha
     char room[EVENT_FIELDS_ROOM];
     event_writer_t f;
     writer_init(&f, room, sizeof room);
-    writer_member_string(&f, "fault", kind);
-    writer_member_string(&f, "action", action);
+    writer_member_string(&f, EVENT_KEY("fault"), kind);
+    writer_member_string(&f, EVENT_KEY("action"), action);
     report(n, EVENT_FAULT, LOG_NORMAL, &f, "%s", text);
 }
 
@@ -383,7 +388,8 @@ void events_interface(emu_bus_t *bus, const char *line)
     emu_session_t *to[MAX_SESSIONS];
     const size_t n_to = sessions_wanting(emu, EVENT_INTERFACE, 0U, bus, 0U, to);
     if (n_to != 0U) {
-        const event_t ev = {EVENT_INTERFACE, NULL, bus, emu_since_start(emu, socketcan_now_us()), line, NULL};
+        const event_t ev = {EVENT_INTERFACE, NULL, bus, emu_since_start(emu, socketcan_now_us()), line, false,
+                            NULL};
         publish(&ev, to, n_to);
     }
 }
@@ -404,18 +410,6 @@ __attribute__((noinline)) void events_frame_publish(emu_t *emu, emu_bus_t *bus, 
     }
     const char *dir = from != NULL ? "tx" : "rx";
     const size_t len = f->len < 8U ? f->len : 8U;
-    char room[EVENT_FIELDS_ROOM];
-    event_writer_t fields;
-    writer_init(&fields, room, sizeof room);
-    writer_member_string(&fields, "dir", dir);
-    writer_member_uint(&fields, "id", f->id);
-    writer_member_hex(&fields, "data", f->data, len);
-    if (rtr) {
-        writer_member_bool(&fields, "rtr", true);
-    }
-    if (eff) {
-        writer_member_bool(&fields, "eff", true);
-    }
     /* candump's form: 3 hex digits for an 11-bit identifier, 8 for a 29-bit one, whatever its value */
     char text[48];
     event_writer_t t;
@@ -424,11 +418,24 @@ __attribute__((noinline)) void events_frame_publish(emu_t *emu, emu_bus_t *bus, 
     writer_bytes(&t, " ", 1U);
     writer_hex_uint(&t, f->id, eff ? 8U : 3U);
     writer_bytes(&t, "#", 1U);
+    const size_t data_at = t.len;
     writer_hex_bytes(&t, f->data, len);
     if (rtr) {
         writer_bytes(&t, "R", 1U);
     }
     writer_bytes(&t, "", 1U); /* its NUL */
-    const event_t ev = {EVENT_FRAME, from, bus, emu_since_start(emu, at), text, &fields};
+    char room[EVENT_FIELDS_ROOM];
+    event_writer_t fields;
+    writer_init(&fields, room, sizeof room);
+    writer_member_plain(&fields, EVENT_KEY("dir"), dir, 2U);
+    writer_member_uint(&fields, EVENT_KEY("id"), f->id);
+    writer_member_plain(&fields, EVENT_KEY("data"), text + data_at, 2U * len); /* the text's hex digits */
+    if (rtr) {
+        writer_member_bool(&fields, EVENT_KEY("rtr"), true);
+    }
+    if (eff) {
+        writer_member_bool(&fields, EVENT_KEY("eff"), true);
+    }
+    const event_t ev = {EVENT_FRAME, from, bus, emu_since_start(emu, at), text, true, &fields};
     publish(&ev, to, n_to);
 }

@@ -48,7 +48,7 @@ static void same_as_jansson(const char *text)
     event_writer_t w;
     writer_init(&w, line, sizeof line);
     writer_text(&w, "{\"a\":1");
-    writer_member_string(&w, "k", text);
+    writer_member_string(&w, EVENT_KEY("k"), text);
     writer_bytes(&w, "}", 1U);
     TEST_ASSERT_FALSE(w.full);
     if (w.len != strlen(expected) || memcmp(line, expected, w.len) != 0) {
@@ -146,7 +146,7 @@ static void number_as_jansson(uint64_t v)
     event_writer_t w;
     writer_init(&w, line, sizeof line);
     writer_text(&w, "{\"a\":1");
-    writer_member_uint(&w, "n", v);
+    writer_member_uint(&w, EVENT_KEY("n"), v);
     writer_bytes(&w, "}", 1U);
     TEST_ASSERT_EQUAL_size_t(strlen(expected), w.len);
     TEST_ASSERT_EQUAL_STRING_LEN(expected, line, w.len);
@@ -165,12 +165,15 @@ static void numbers_booleans_and_hex_are_written_as_jansson_and_printf_write_the
     }
     event_writer_t w;
     writer_init(&w, line, sizeof line);
-    writer_member_bool(&w, "rtr", true);
-    writer_member_bool(&w, "ok", false);
+    writer_member_bool(&w, EVENT_KEY("rtr"), true);
+    writer_member_bool(&w, EVENT_KEY("ok"), false);
     static const uint8_t bytes[] = {0x00, 0x01, 0x7F, 0x80, 0xA5, 0xFF, 0x0F, 0xF0};
-    writer_member_hex(&w, "data", bytes, sizeof bytes);
-    writer_member_hex(&w, "none", bytes, 0U);
-    TEST_ASSERT_EQUAL_STRING_LEN(",\"rtr\":true,\"ok\":false,\"data\":\"00017F80A5FF0FF0\",\"none\":\"\"", line, w.len);
+    writer_member_hex(&w, EVENT_KEY("data"), bytes, sizeof bytes);
+    writer_member_hex(&w, EVENT_KEY("none"), bytes, 0U);
+    writer_member_plain(&w, EVENT_KEY("text"), "rx 181#01", 9U);
+    const char *expected_members = ",\"rtr\":true,\"ok\":false,\"data\":\"00017F80A5FF0FF0\",\"none\":\"\",\"text\":\"rx 181#01\"";
+    TEST_ASSERT_EQUAL_size_t(strlen(expected_members), w.len);
+    TEST_ASSERT_EQUAL_STRING_LEN(expected_members, line, w.len);
     char expected[64];
     for (unsigned run = 0U; run < 20000U; run++) {
         const uint32_t id = random_u32() >> (random_u32() % 32U);
