@@ -266,19 +266,19 @@ class Harness:
             res["emu_summary"] = self.stop(emu, "canopen-emu")
         return res
 
-    def callgrind(self, seconds, nvm_root=None):
-        """The counting run: Ir of the emulator over `seconds` of running streams, under callgrind."""
-        emu = self.start_emu("callgrind", callgrind=True, nvm_root=nvm_root)
-        res = {"seconds": seconds}
+    def callgrind(self, name, seconds, nvm_root=None):
+        """A counting run: Ir of the emulator over `seconds` of running streams, under callgrind."""
+        emu = self.start_emu(name, callgrind=True, nvm_root=nvm_root)
+        res = {"seconds": seconds, "buses": self.buses, "nodes": self.nodes, "late_ms": self.late_ms}
         try:
             t0 = time.monotonic()
-            self.configure("callgrind", emu, 900)
+            self.configure(name, emu, 900)
             res["config_s"] = time.monotonic() - t0
             time.sleep(SETTLE_S)
             control = ["callgrind_control"]
             subprocess.run(control + ["--zero", str(emu.pid)], check=True, stdout=subprocess.DEVNULL, timeout=120)
             t0 = time.monotonic()
-            res["record"] = self.record("callgrind", seconds)
+            res["record"] = self.record(name, seconds)
             subprocess.run(control + ["--dump=window", str(emu.pid)], check=True, stdout=subprocess.DEVNULL,
                            timeout=120)
             res["window_s"] = time.monotonic() - t0
@@ -338,6 +338,8 @@ def main():
     ap.add_argument("--seconds", type=int, default=20)
     ap.add_argument("--callgrind-seconds", type=int, default=10, help="0: no callgrind run")
     ap.add_argument("--late-ms", type=int, default=LATE_MS)
+    ap.add_argument("--callgrind-small", type=int, default=0, metavar="B",
+                    help="also a callgrind run with B buses (one callgrind keeps up with)")
     ap.add_argument("--aligned", action="store_true", help="also a run with each bus's TPDOs in one burst")
     ap.add_argument("--nvm-tmpfs", help="a directory on tmpfs (/dev/shm): also a run with the stored parameters "
                     "there (the aligned and callgrind runs too); the first run keeps them in --work")
@@ -365,10 +367,17 @@ def main():
             res["aligned"]["summary"] = summary(res["aligned"])
         if args.callgrind_seconds > 0:
             h.log(f"scale_buses: the same under callgrind, {args.callgrind_seconds} s")
-            cg = h.callgrind(args.callgrind_seconds, nvm_root=tmpfs)
-            cg.update(buses=args.buses, nodes=args.nodes)
+            cg = h.callgrind("callgrind", args.callgrind_seconds, nvm_root=tmpfs)
             cg["summary"] = summary(cg)
             res["callgrind"] = cg
+        if args.callgrind_seconds > 0 and args.callgrind_small:
+            # Fewer buses, a rate callgrind keeps up with: the Ir per frame of a program that is never behind.
+            h.log(f"scale_buses: {args.callgrind_small} buses under callgrind, {args.callgrind_seconds} s")
+            small = Harness(h.bin, h.emu_path, h.work, args.callgrind_small, args.nodes, args.late_ms)
+            small.commands = h.commands
+            cg = small.callgrind(f"callgrind-{args.callgrind_small}", args.callgrind_seconds, nvm_root=tmpfs)
+            cg["summary"] = summary(cg)
+            res["callgrind_small"] = cg
     except (BenchError, subprocess.TimeoutExpired, OSError) as e:
         print(f"scale_buses: {e}", file=sys.stderr)
         return 1
