@@ -112,6 +112,14 @@ def test_a_tpdo_of_the_wrong_length_fails_the_tpdo_check(three_devices, canopen_
     assert three_devices.client.nodes()[2].state == "PRE-OPERATIONAL"  # put back as it was found
 
 
+def test_a_node_silent_to_lss_fails_the_lss_checks(three_devices, canopen_emu_bus):
+    three_devices.client.inject_fault(17, "lss-silent")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["lss"], timeout=0.3)
+    assert [r.name for r in report.failed] == ["lss.identify-remote-slave", "lss.inquire-identity"]
+    assert report["lss.inquire-identity"].message.startswith("no answer to switch state selective")
+    assert {f.can_id for f in report["lss.inquire-identity"].frames} == {0x7E5}  # asked, never answered
+
+
 def test_an_eds_whose_default_differs_from_the_device_fails_default_values(canopen_emu_factory, canopen_emu_bus,
                                                                           tmp_path):
     device = SOURCE_DIR / "tests/eds/files/minimal.eds"

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, List, Optional, Tuple
 
 from . import eds as eds_module
-from .registry import Failed, Findings, NotApplicable, check
+from .registry import Findings, NotApplicable, check
 from .sdo import SdoAbort, SdoError, abort_text
 
 if TYPE_CHECKING:
@@ -184,13 +184,6 @@ def read_only_refuses_write(ctx: "Context") -> Optional[str]:
     findings.raise_if_any(f"of {len(entries)} read-only entries answer wrong")
     return f"{len(entries)} entries"
 
-
-def first_entry(ctx: "Context", want) -> Optional[eds_module.Entry]:  # type: ignore[no-untyped-def]
-    """The first entry of the EDS that ``want(entry)`` takes."""
-    return next((e for e in ctx.eds.entries() if want(e)), None)
-
-
-__all__ = ["first_entry", "Failed"]
 
 
 ABORT_TYPE_LENGTH, ABORT_TOO_LONG, ABORT_TOO_SHORT = 0x06070010, 0x06070012, 0x06070013

@@ -133,7 +133,7 @@ class SdoClient:
             size = 4 - ((command >> 2) & 3) if command & 0x01 else 4
             return bytes(answer.data[4:4 + size])
         size = struct.unpack_from("<I", answer.data, 4)[0] if command & 0x01 else None
-        return self._upload_segments(index, sub, size)
+        return self.upload_segments(index, sub, size)
 
     def start_segmented_upload(self, index: int, sub: int) -> Optional[int]:
         """The initiate step alone: the size the server indicated (None: not indicated). SdoProtocolError when it
@@ -145,7 +145,8 @@ class SdoClient:
             raise SdoProtocolError(f"0x{index:04X}:{sub:02X}: the server answered expedited", list(self.frames))
         return struct.unpack_from("<I", answer.data, 4)[0] if answer.data[0] & 0x01 else None
 
-    def _upload_segments(self, index: int, sub: int, size: Optional[int]) -> bytes:
+    def upload_segments(self, index: int, sub: int, size: Optional[int]) -> bytes:
+        """The segments of an upload whose initiate was answered segmented (``size`` as indicated, or None)."""
         data = bytearray()
         toggle = 0
         while True:
