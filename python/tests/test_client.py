@@ -329,3 +329,22 @@ def test_addresses_are_told_apart():
     assert parse_address("[::1]:5020") == (socket.AF_INET6, ("::1", 5020))
     assert parse_address(("127.0.0.1", 5020)) == (socket.AF_INET, ("127.0.0.1", 5020))
     assert parse_address(Path("/tmp/x:1")) == (socket.AF_UNIX, "/tmp/x:1")
+
+
+def test_tables_give_the_emulators_fault_kinds_and_abort_texts(canopen_emu):
+    """The fault kinds and abort texts come from the emulator (`tables`), the package keeps no copy: every kind it
+    lists is one inject_fault takes, with its usage; the abort texts are the ones its messages use."""
+    c = canopen_emu.client
+    t = c.tables()
+    assert t.fault_kinds[:3] == ("sdo-ignore", "sdo-delay", "sdo-abort")
+    assert {"heartbeat-stop", "tpdo-length", "lss-silent"} <= set(t.fault_kinds)
+    delay = next(f for f in t.faults if f.kind == "sdo-delay")
+    assert delay.usage == "sdo-delay MS" and delay.limits and delay.text
+    assert t.aborts[0x06020000] == "object does not exist"
+    assert list(t.aborts) == sorted(t.aborts)
+    for kind, args in (("heartbeat-stop", ()), ("sdo-delay", (50,))):  # listed kinds are taken, then cleared
+        c.inject_fault(17, kind, *args)
+        assert c.show(17)[0].faults[0].startswith(kind)
+        c.clear_fault(17)
+    with pytest.raises(ControlError):
+        c.inject_fault(17, "no-such-fault")

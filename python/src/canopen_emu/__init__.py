@@ -12,22 +12,19 @@
 """
 from ._version import __version__
 from .buses import BUS_KINDS, Bus, choose_bus, session_udp_bus, socketcand_bus
-from .client import (PROTOCOL_VERSION, ActiveError, Address, Client, Entry, Event, ExtendedId, FrameFilter,
-                     HeardNode, LastEmcy, NodeInfo, NodeRef, NodeStatus, ObjectInfo, ObjectRef, Reading, ServerInfo,
-                     Value, connect, decode_value, encode_value)
+from .client import (PROTOCOL_VERSION, ActiveError, Address, Client, Entry, Event, ExtendedId, FaultKind,
+                     FrameFilter, HeardNode, LastEmcy, NodeInfo, NodeRef, NodeStatus, ObjectInfo, ObjectRef, Reading,
+                     ServerInfo, Tables, Value, connect, decode_value, encode_value)
 from .emulator import DEFAULT_NODES, Emulator, find_executable
 from .errors import (CanopenEmuError, ConnectionClosed, ControlError, ControlTimeout, EmulatorError,
                      ProtocolError)
 
-#: The protocol faults of ``Client.inject_fault`` (``fault NODE KIND ...``, docs/control-protocol.md).
-FAULT_KINDS = ("sdo-ignore", "sdo-delay", "sdo-abort", "heartbeat-stop", "heartbeat-jitter", "heartbeat-state",
-               "tpdo-freeze", "tpdo-drop", "tpdo-length", "emcy-burst", "reboot", "bus-off", "lss-silent")
 
 __all__ = [
-    "__version__", "PROTOCOL_VERSION", "FAULT_KINDS", "DEFAULT_NODES",
+    "__version__", "PROTOCOL_VERSION", "DEFAULT_NODES",
     "connect", "Client", "Emulator", "find_executable", "decode_value", "encode_value",
     "Bus", "BUS_KINDS", "choose_bus", "session_udp_bus", "socketcand_bus",
     "ServerInfo", "NodeInfo", "NodeStatus", "HeardNode", "ActiveError", "LastEmcy", "Entry", "ObjectInfo", "Reading",
-    "Address", "NodeRef", "ObjectRef", "Value", "Event", "ExtendedId", "FrameFilter",
+    "Address", "NodeRef", "ObjectRef", "Value", "Event", "ExtendedId", "FrameFilter", "Tables", "FaultKind",
     "CanopenEmuError", "ControlError", "ProtocolError", "ControlTimeout", "ConnectionClosed", "EmulatorError",
 ]

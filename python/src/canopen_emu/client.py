@@ -74,6 +74,29 @@ class ServerInfo:
 
 
 @dataclass(frozen=True)
+class FaultKind:
+    """One kind of protocol fault of ``tables``: its name (``"sdo-delay"``), the words ``fault NODE`` takes after
+    NODE (``"sdo-delay MS"``), what the arguments may be (``"1..600000"``, or ``""``) and one line on what it does."""
+    kind: str
+    usage: str
+    limits: str
+    text: str
+
+
+@dataclass(frozen=True)
+class Tables:
+    """The answer to ``tables``: the tables the emulator keeps, as it has them (a client keeps no copy): the kinds
+    of protocol fault in the order ``fault NODE`` lists them, the SDO abort texts by code."""
+    faults: Tuple[FaultKind, ...]
+    aborts: Dict[int, str] = field(hash=False)
+
+    @property
+    def fault_kinds(self) -> Tuple[str, ...]:
+        """The names of the fault kinds (what ``Client.inject_fault`` takes)."""
+        return tuple(f.kind for f in self.faults)
+
+
+@dataclass(frozen=True)
 class NodeInfo:
     """One node of ``list``: its current node-ID, device type, variant (None when the device has none), the
     node-ID it was started with, its NMT state, its bus's name and kind (``"socketcan"``, ``"udp_multicast"``,
@@ -505,8 +528,15 @@ class Client:
         """Switches the node's supply off and on: the model restarts, stored values load, boot-up."""
         return self.command(node, "power-cycle")
 
+    def tables(self) -> Tables:
+        """The emulator's own tables (``tables``): its kinds of protocol fault and the SDO abort texts it uses."""
+        answer = self.request("tables")
+        return Tables(faults=tuple(FaultKind(kind=f["kind"], usage=f["usage"], limits=f["limits"], text=f["text"])
+                                   for f in answer["faults"]),
+                      aborts={int(a["code"]): a["text"] for a in answer["aborts"]})
+
     def inject_fault(self, node: NodeRef, kind: str, *args: Union[int, float, str]) -> List[str]:
-        """A protocol fault (``fault NODE KIND ARGS``): sdo-ignore, sdo-delay, sdo-abort, heartbeat-stop,
+        """A protocol fault (``fault NODE KIND ARGS``; the kinds and their arguments: ``tables().faults``): sdo-ignore, sdo-delay, sdo-abort, heartbeat-stop,
         heartbeat-jitter, heartbeat-state, tpdo-freeze, tpdo-drop, tpdo-length, emcy-burst, reboot, bus-off,
         lss-silent. An emulator without fault injection refuses it: ControlError "unknown command 'fault' ..."."""
         return self.command(node, "fault", kind, *args)
