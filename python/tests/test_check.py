@@ -20,13 +20,11 @@ from conftest import EDS, SOURCE_DIR
 
 BUILT_IN = (("sds", 16), ("buerkert", 17), ("pro-ionizer", 18))
 #: Not applicable on each device, and why: the Eltex devices' SDO server is expedited only and their values fit
-#: in 4 bytes (sds.eds "Comments", pro-ionizer.eds); the Bürkert device has no write-only entry and keeps no error
-#: history (no 0x1003).
-NOT_APPLICABLE = {
-    "sds": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download"},
-    "buerkert": {"od.write-only-refuses-read", "emcy.error-history"},
-    "pro-ionizer": {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download"},
-}
+#: in 4 bytes (sds.eds "Comments", pro-ionizer.eds), and they have no node guarding (no 0x100C/0x100D); the Bürkert
+#: device has no write-only entry and keeps no error history (no 0x1003).
+ELTEX = {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download",
+         "nmt.node-guarding"}
+NOT_APPLICABLE = {"sds": ELTEX, "buerkert": {"od.write-only-refuses-read", "emcy.error-history"}, "pro-ionizer": ELTEX}
 
 
 @pytest.fixture
@@ -94,11 +92,17 @@ def test_a_wrong_state_in_the_heartbeat_fails_the_heartbeat_and_nmt_checks(three
     assert "after NMT stop: no heartbeat with state 0x04 (stopped)" in report["nmt.state-changes"].message
 
 
-def test_a_stopped_heartbeat_fails_the_period_check(three_devices, canopen_emu_bus):
-    three_devices.client.inject_fault(17, "heartbeat-stop")
-    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["heartbeat.period"])
+def test_a_stopped_heartbeat_fails_the_period_and_guarding_checks(three_devices, canopen_emu_bus):
+    assert run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["nmt.node-guarding"], write=True).ok
+    three_devices.client.inject_fault(17, "heartbeat-stop")  # no heartbeat, nor node-guarding answer
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["heartbeat.period", "nmt.node-guarding"],
+                 write=True)
     assert report["heartbeat.period"].status is Status.FAILED
     assert report["heartbeat.period"].message.startswith("no heartbeat within")
+    assert report["nmt.node-guarding"].message.startswith(
+        "1 wrong guarding answers:\n  the first request: no answer to the guard request")
+    three_devices.client.clear_fault(17)
+    assert three_devices.client.get(17, "0x1017") == 500  # put back after the check set it to 0
 
 
 def test_a_tpdo_of_the_wrong_length_fails_the_tpdo_check(three_devices, canopen_emu_bus):

@@ -217,3 +217,57 @@ def reset_communication(ctx: "Context") -> Optional[str]:
        writes=True)
 def reset_node(ctx: "Context") -> Optional[str]:
     return _reset(ctx, "reset-node")
+
+
+@check("nmt.node-guarding", clause="CiA 301 v4.2.0 §7.2.8.3.2.1 (node guarding protocol), §7.5.2.11-12 (0x100C, "
+                                   "0x100D)",
+       summary="where the EDS lists 0x100C and 0x100D: with the heartbeat off (0x1017 set to 0 for the check), each "
+               "remote request on 0x700 + node-ID is answered with one byte: the state (0x7F, 0x05 after start, "
+               "0x04 after stop) and a toggle bit (bit 7) that starts at 0 and alternates", writes=True)
+def node_guarding(ctx: "Context") -> Optional[str]:
+    if ctx.eds.entry(0x100C) is None or ctx.eds.entry(0x100D) is None:
+        raise NotApplicable("the EDS has no 0x100C/0x100D (no node guarding)")
+    with ctx.exchange():
+        guard_ms = int.from_bytes(ctx.upload(0x100C, 0), "little")
+        factor = ctx.upload(0x100D, 0)[0]
+    if guard_ms and factor:
+        # the first request would start life guarding, and its end an EMCY and perhaps a state change (0x1029)
+        raise NotApplicable(f"life guarding is configured (0x100C = {guard_ms} ms, 0x100D = {factor}): the check "
+                            "would start it")
+    hb_entry = ctx.eds.entry(0x1017)
+    if hb_entry is not None:
+        with ctx.exchange():
+            period = ctx.upload(0x1017, 0)
+        if any(period):
+            if not hb_entry.writable:
+                raise NotApplicable("0x1017 is not writable, and a node with a heartbeat does not answer guarding")
+            with ctx.exchange():
+                ctx.sdo.download(0x1017, 0, b"\0" * len(period))
+            ctx.on_exit(lambda: ctx.sdo.download(0x1017, 0, period))
+    findings = Findings()
+    toggle, state = 0, None
+    for command in (None, "start", "stop", "pre-operational"):
+        if command is not None:
+            ctx.nmt(command)
+            ctx.log.wait_for(lambda f: False, 0.05)  # the command taken before the next request
+        ctx.log.send(0x700 + ctx.node, b"", rtr=True, dlc=1)
+        answer = ctx.log.wait_for(lambda f: ctx.is_heartbeat(f), ctx.options.timeout)
+        after = f"after NMT {command}" if command else "the first request"
+        if answer is None:
+            findings.add(f"{after}: no answer to the guard request within {ctx.options.timeout} s",
+                         list(ctx.log.trace[-3:]))
+            if state is None:
+                break  # no state to go on from, nor to put back
+            continue
+        if state is None and len(answer.data) == 1 and answer.data[0] & 0x7F in STATES:
+            state = answer.data[0] & 0x7F  # the state it was found in: put back at the end
+            restore_state(ctx, state)
+        expected = {None: state, "start": 0x05, "stop": 0x04, "pre-operational": 0x7F}[command]
+        if len(answer.data) != 1 or expected is None or answer.data[0] != (toggle << 7 | expected):
+            findings.add(f"{after}: answered {answer.data.hex(' ') or '(no data)'}, expected toggle {toggle} and "
+                         f"state {'0x04, 0x05 or 0x7F' if expected is None else f'0x{expected:02X}'}", [answer])
+            if state is None:
+                break
+        toggle ^= 1
+    findings.raise_if_any("wrong guarding answers")
+    return None
