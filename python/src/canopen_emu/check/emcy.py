@@ -49,6 +49,6 @@ def error_history(ctx: "Context") -> Optional[str]:
         try:
             ctx.upload(0x1003, sub)
         except SdoError as e:
-            findings.add(f"0x1003:{sub:02X}: {e}", e.frames)
+            findings.add(f"0x1003:{sub:02X}: {e.reason}", e.frames)
     findings.raise_if_any("error history entries missing")
     return f"{count} error(s) recorded"

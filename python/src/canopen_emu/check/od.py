@@ -36,9 +36,9 @@ def _upload_all(ctx: "Context", entries: List[eds_module.Entry], findings: Findi
             got.append((entry, ctx.upload(entry.index, entry.sub)))
         except SdoAbort as e:
             if e.code != ABORT_NO_DATA:
-                findings.add(f"{entry}: {e}", e.frames)
+                findings.add(f"{entry}: {e.reason}", e.frames)
         except SdoError as e:
-            findings.add(f"{entry}: {e}", e.frames)
+            findings.add(f"{entry}: {e.reason}", e.frames)
     return got
 
 
@@ -52,7 +52,7 @@ def mandatory_objects(ctx: "Context") -> Optional[str]:
         try:
             ctx.upload(index, sub)
         except SdoError as e:
-            findings.add(f"0x{index:04X}:{sub:02X} is mandatory: {e}", e.frames)
+            findings.add(f"0x{index:04X}:{sub:02X} is mandatory: {e.reason}", e.frames)
     findings.raise_if_any("mandatory entries missing")
     return None
 
@@ -119,7 +119,7 @@ def _expect_abort(ctx: "Context", index: int, sub: int, code: int, findings: Fin
             findings.add(f"0x{index:04X}:{sub:02X} ({what}): aborted with {abort_text(e.code)}, expected "
                          f"{abort_text(code)}", e.frames)
     except SdoError as e:
-        findings.add(f"0x{index:04X}:{sub:02X} ({what}): {e}", e.frames)
+        findings.add(f"0x{index:04X}:{sub:02X} ({what}): {e.reason}", e.frames)
 
 
 @check("od.missing-object", clause="CiA 301 v4.2.0 §7.2.4.3.17 (abort 0x06020000)",
@@ -217,7 +217,7 @@ def _refused(ctx: "Context", entry: eds_module.Entry, data: bytes, original: byt
                          f"{' or '.join(abort_text(c) for c in codes)}", e.frames)
         return
     except SdoError as e:
-        findings.add(f"{entry}: {what}: {e}", e.frames)
+        findings.add(f"{entry}: {what}: {e.reason}", e.frames)
         return
     frames = list(ctx.sdo.frames)
     try:

@@ -32,7 +32,7 @@ def mappings(ctx: "Context") -> Optional[str]:
             try:
                 count = ctx.upload(index, 0)[0]
             except SdoError as e:
-                findings.add(f"0x{index:04X}:00: {e}", e.frames)
+                findings.add(f"0x{index:04X}:00: {e.reason}", e.frames)
                 continue
             if count > 64:
                 findings.add(f"0x{index:04X}:00 = {count}: more than 64 entries", ctx.sdo.frames)
@@ -42,7 +42,7 @@ def mappings(ctx: "Context") -> Optional[str]:
                 try:
                     value = int.from_bytes(ctx.upload(index, sub), "little")
                 except SdoError as e:
-                    findings.add(f"0x{index:04X}:{sub:02X}: {e}", e.frames)
+                    findings.add(f"0x{index:04X}:{sub:02X}: {e.reason}", e.frames)
                     continue
                 mapped_index, mapped_sub, length = value >> 16, (value >> 8) & 0xFF, value & 0xFF
                 bits += length

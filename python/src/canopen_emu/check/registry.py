@@ -106,8 +106,9 @@ class Findings:
         return bool(self.problems)
 
     def raise_if_any(self, what: str) -> None:
+        """Failed("N WHAT: the first problem", then the others one a line (50 at most))."""
         if self.problems:
-            shown = self.problems[:50]
-            more = [f"... and {len(self.problems) - len(shown)} more"] if len(shown) < len(self.problems) else []
-            raise Failed(f"{len(self.problems)} {what}:\n" + "\n".join(["  " + p for p in shown] + more),
+            first, rest = self.problems[0], self.problems[1:50]
+            more = [f"... and {len(self.problems) - 50} more"] if len(self.problems) > 50 else []
+            raise Failed("\n".join([f"{len(self.problems)} {what}: {first}"] + ["  " + p for p in rest] + more),
                          self.frames)

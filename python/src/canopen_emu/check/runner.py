@@ -179,7 +179,7 @@ def run(bus: Union[can.BusABC, str, Dict[str, Any]], node: int, eds: Union[str, 
             can_bus = can.Bus(channel=bus, interface=interface)
     except (can.CanError, OSError, ValueError, ImportError) as e:
         raise SetupError(f"cannot open the bus {bus!r}: {e}") from None
-    label = str(bus if not isinstance(bus, can.BusABC) else can_bus.channel_info)
+    label = bus_label(bus, interface) if not isinstance(bus, can.BusABC) else str(can_bus.channel_info)
     report = Report(node, description.path, label, started=time.time())
     try:
         log = FrameLog(can_bus, relevant_to(node))
@@ -195,6 +195,14 @@ def run(bus: Union[can.BusABC, str, Dict[str, Any]], node: int, eds: Union[str, 
         if own_bus:
             can_bus.shutdown()
     return report
+
+
+def bus_label(bus: Union[str, Dict[str, Any]], interface: str) -> str:
+    """``vcan0 (socketcan)``, ``239.74.1.2 (udp_multicast, port=43113)``."""
+    if isinstance(bus, str):
+        return f"{bus} ({interface})"
+    rest = [f"{k}={v}" for k, v in bus.items() if k not in ("channel", "interface")]
+    return f"{bus.get('channel')} ({', '.join([str(bus.get('interface', interface))] + rest)})"
 
 
 def relevant_to(node: int) -> Callable[[int], bool]:

@@ -69,6 +69,13 @@ class SdoError(Exception):
         super().__init__(message)
         self.frames = frames
 
+    @property
+    def reason(self) -> str:
+        """The message without the entry it names first (``aborted with 0x06020000 (...)``)."""
+        text = str(self)
+        head, sep, tail = text.partition(": ")
+        return tail if sep and head.startswith("0x") and ":" in head else text
+
 
 class SdoAbort(SdoError):
     def __init__(self, code: int, index: int, sub: int, frames: List[Frame]) -> None:

@@ -123,7 +123,7 @@ def client_abort(ctx: "Context") -> Optional[str]:
             if ctx.sdo.silence(SILENCE_S) is not None:
                 findings.add(f"{entry}: the abort of an open segmented upload was answered", ctx.sdo.frames)
         except SdoError as e:
-            findings.add(f"{entry}: {e}", e.frames)
+            findings.add(f"{entry}: {e.reason}", e.frames)
     try:
         ctx.upload(0x1000, 0)
     except SdoError as e:
@@ -144,7 +144,7 @@ def server_cob_ids(ctx: "Context") -> Optional[str]:
             try:
                 value = int.from_bytes(ctx.upload(0x1200, sub), "little")
             except SdoError as e:
-                findings.add(f"0x1200:{sub:02X}: {e}", e.frames)
+                findings.add(f"0x1200:{sub:02X}: {e.reason}", e.frames)
                 continue
             if value != expected:
                 findings.add(f"0x1200:{sub:02X} is 0x{value:08X}, expected 0x{expected:03X} (0x{expected & 0x780:03X}"
