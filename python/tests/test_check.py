@@ -23,7 +23,7 @@ BUILT_IN = (("sds", 16), ("buerkert", 17), ("pro-ionizer", 18))
 #: in 4 bytes (sds.eds "Comments", pro-ionizer.eds), and they have no node guarding (no 0x100C/0x100D); the Bürkert
 #: device has no write-only entry and keeps no error history (no 0x1003).
 ELTEX = {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download",
-         "nmt.node-guarding"}
+         "sdo.download-toggle-error", "nmt.node-guarding"}
 NOT_APPLICABLE = {"sds": ELTEX, "buerkert": {"od.write-only-refuses-read", "emcy.error-history"}, "pro-ionizer": ELTEX}
 
 
@@ -123,6 +123,15 @@ def test_a_node_silent_to_lss_fails_the_lss_checks(three_devices, canopen_emu_bu
     assert [r.name for r in report.failed] == ["lss.identify-remote-slave", "lss.inquire-identity"]
     assert report["lss.inquire-identity"].message.startswith("no answer to switch state selective")
     assert {f.can_id for f in report["lss.inquire-identity"].frames} == {0x7E5}  # asked, never answered
+
+
+def test_an_error_register_without_its_generic_bit_fails_the_check(three_devices, canopen_emu_bus):
+    # the emulator's emcy command sets the generic bit as a device does; a raw set of 0x1001 does not
+    three_devices.client.set(17, "0x1001", 0x04)  # voltage, and the generic bit 0 not set
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["emcy.error-register"])
+    assert report["emcy.error-register"].message == "0x1001 = 0x04: an error bit without the generic error bit 0"
+    assert [(f.can_id, f.data.hex()) for f in report["emcy.error-register"].frames] == [
+        (0x611, "4001100000000000"), (0x591, "4f01100004000000")]
 
 
 def test_an_eds_whose_default_differs_from_the_device_fails_default_values(canopen_emu_factory, canopen_emu_bus,

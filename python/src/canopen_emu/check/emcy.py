@@ -52,3 +52,19 @@ def error_history(ctx: "Context") -> Optional[str]:
             findings.add(f"0x1003:{sub:02X}: {e.reason}", e.frames)
     findings.raise_if_any("error history entries missing")
     return f"{count} error(s) recorded"
+
+
+@check("emcy.error-register", clause="CiA 301 v4.2.0 §7.5.2.2 (0x1001 error register: bit 0, generic error)",
+       summary="0x1001 has bit 0 (generic error) set whenever any other bit is, and its reserved bit 6 clear")
+def error_register(ctx: "Context") -> Optional[str]:
+    with ctx.exchange():
+        register = ctx.upload(0x1001, 0)
+    if len(register) != 1:
+        raise Failed(f"0x1001 has {len(register)} bytes, it is an UNSIGNED8", ctx.sdo.frames)
+    value = register[0]
+    if value & 0xFE and not value & 0x01:
+        raise Failed(f"0x1001 = 0x{value:02X}: an error bit without the generic error bit 0", ctx.sdo.frames)
+    if value & 0x40:
+        raise Failed(f"0x1001 = 0x{value:02X}: bit 6 is reserved (0)", ctx.sdo.frames)
+    return f"0x{value:02X}"
+

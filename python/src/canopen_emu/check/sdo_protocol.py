@@ -236,3 +236,29 @@ def segmented_download(ctx: "Context") -> Optional[str]:
     if back != data:
         raise Failed(f"{entry}: wrote {data.hex(' ')}, read back {back.hex(' ')}", frames + ctx.sdo.frames)
     return f"{entry} ({len(data)} bytes)"
+
+
+@check("sdo.download-toggle-error", clause="CiA 301 v4.2.0 §7.2.4.3 (SDO download segment), §7.2.4.3.17 (abort "
+                                           "0x05030000)",
+       summary="a segmented download of an entry's own value whose first segment has toggle bit 1 is aborted with "
+               "0x05030000 (nothing is written: the transfer never completes)", writes=True)
+def download_toggle_error(ctx: "Context") -> Optional[str]:
+    entry, data = writable_entry(ctx, long=True)
+    with ctx.exchange():
+        ctx.sdo.frames = []
+        answer = ctx.sdo.request(struct.pack("<BHBI", 0x21, entry.index, entry.sub, len(data)))
+        if answer.data[0] >> 5 != 3:
+            raise Failed(f"{entry}: the segmented download initiate was answered with 0x{answer.data[0]:02X}, not "
+                         "0x60", ctx.sdo.frames)
+        chunk = data[:7]
+        last = len(data) <= 7
+        answer = ctx.sdo.request(bytes([0x10 | (7 - len(chunk)) << 1 | int(last)]) + chunk)  # toggle 1: wrong
+    if answer.data[0] >> 5 != 4:
+        if not last:
+            ctx.sdo.send_abort(entry.index, entry.sub, 0x08000000)  # end the transfer it went on with
+        raise Failed(f"{entry}: a download segment with the wrong toggle bit was taken, not aborted", ctx.sdo.frames)
+    code = struct.unpack_from("<I", answer.data, 4)[0]
+    if code != ABORT_TOGGLE:
+        raise Failed(f"{entry}: aborted with {abort_text(code)}, expected {abort_text(ABORT_TOGGLE)}", ctx.sdo.frames)
+    return str(entry)
+
