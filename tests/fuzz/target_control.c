@@ -86,6 +86,7 @@ static const struct {
 static emu_t g_emu;
 static emu_bus_t g_buses[2]; /* named only: their sockets are never opened (frames go to the fake ports) */
 static emu_node_t g_nodes[N_NODES];
+static co_time_us_t g_deadline[N_NODES]; /* each node's, as device_process and its faults gave it */
 static fake_port_t g_ports[N_NODES];
 static co_time_us_t g_now;
 
@@ -536,7 +537,7 @@ static void nodes_power_on(void)
         if (device_init(&n->dev, cls, n->values, n->model, &cfg, g_emu.start) != CO_OK) {
             fail("node %s:%u could not start", specs[i].cls, specs[i].id);
         }
-        n->deadline = g_emu.start;
+        g_deadline[i] = g_emu.start;
         g_emu.nodes[i] = n;
         g_pristine[i].node = *n;
         g_pristine[i].port = g_ports[i];
@@ -554,6 +555,7 @@ static void nodes_start(void)
     for (size_t b = 0U; b < 2U; b++) {
         (void)snprintf(g_buses[b].can.name, sizeof g_buses[b].can.name, "vcan%zu", b);
         g_buses[b].emu = &g_emu;
+        schedule_init(&g_buses[b].schedule); /* the marks a command leaves (node_mark_dirty); deadlines: g_deadline */
         g_emu.buses[b] = &g_buses[b];
     }
     g_emu.log_level = LOG_NORMAL;
@@ -570,23 +572,27 @@ static void nodes_start(void)
         emu_node_t *n = &g_nodes[i];
         const device_class_t *cls = n->dev.cls;
         *n = g_pristine[i].node;
+        g_deadline[i] = g_emu.start;
         g_ports[i] = g_pristine[i].port;
         memcpy(n->values, g_pristine[i].values, cls->od->values_size);
         memcpy(n->model, g_pristine[i].model, cls->model_size > 0U ? cls->model_size : 1U);
     }
 }
 
-/* As the main loop: nodes concerned by a command, or due, run. */
+/* As the main loop: nodes concerned by a command (marked), or due, run. */
 static void nodes_process(void)
 {
     const co_time_us_t now = socketcan_now_us();
+    for (size_t b = 0U; b < 2U; b++) {
+        g_buses[b].schedule.n_marked = 0U; /* the marks' list; each node's mark is taken below */
+        g_buses[b].schedule.marked_overflow = false;
+    }
     for (size_t i = 0U; i < N_NODES; i++) {
         emu_node_t *n = &g_nodes[i];
-        if (n->dirty || now >= n->deadline) {
-            n->dirty = false;
+        if (schedule_take_mark(&n->bus->schedule, (uint32_t)n->index) || now >= g_deadline[i]) {
             const co_time_us_t d = device_process(&n->dev, now);
             const co_time_us_t held = faults_run(n, now); /* as bus_run: held frames, the end of a bus-off */
-            n->deadline = held < d ? held : d;
+            g_deadline[i] = held < d ? held : d;
             g_ports[i].n_sent = 0U; /* frames are not looked at here: keep the recorder from filling */
         }
         const co_nmt_state_t s = co_node_state(&n->dev.node);
