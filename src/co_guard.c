@@ -43,7 +43,7 @@ void co_guard_rx(co_node_t *node, const co_frame_t *f)
     const uint32_t life = (uint32_t)g->guard_ms * g->life_factor;
     g->armed = life != 0U;
     g->deadline = life != 0U ? co_long_timer_start(node->now, life, &g->rest_ms) : CO_NEVER;
-    co_node_due(node, g->deadline);
+    co_node_due(node, CO_SVC_I_GUARD, g->deadline);
     if (g->failed) {
         g->failed = false;
         (void)co_emcy_clear(node, 0x8130U, guard_msef);

@@ -31,5 +31,5 @@ void co_hb_written(co_node_t *node, const co_od_entry_t *e)
     node->hb.period_ms = (uint16_t)ms;
     const uint32_t p = period_us(node);
     node->hb.due = p != 0U ? co_time_after(node->now, p) : CO_NEVER;
-    co_node_due(node, node->hb.due);
+    co_node_due(node, CO_SVC_I_HB, node->hb.due);
 }

@@ -93,7 +93,7 @@ bool co_hbc_rx(co_node_t *node, const co_frame_t *f)
         }
         s->state = 2U;
         s->deadline = co_time_after(node->now, (uint32_t)s->time_ms * 1000U);
-        co_node_due(node, s->deadline);
+        co_node_due(node, CO_SVC_I_HBC, s->deadline);
     }
     return used;
 }

@@ -490,20 +490,24 @@ typedef co_time_us_t (*service_process_t)(co_node_t *node);
 /* What a processing pass carries from one service to the next. */
 typedef struct pass {
     co_node_t *node;
-    bool all;          /* at a deadline: every service runs */
+    bool at_deadline;  /* next_due has come: the services whose own deadline came run */
     co_time_us_t next; /* the earliest deadline so far */
 } pass_t;
 
-/* Runs a service if the pass runs it: all of them at a deadline, else those marked since they last ran. The mark is
- * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. */
-static void run_service(pass_t *pass, unsigned service, service_process_t process)
+/* Runs a service if it is marked since it last ran or its deadline has come, and keeps its new deadline. The mark is
+ * taken before the service runs, so that what the service itself causes (a hook's write) marks it again; a deadline
+ * co_node_due() gives while it runs (its own timer restarted) is kept beside the one it returns. */
+static void run_service(pass_t *pass, enum co_service_index index, service_process_t process)
 {
     co_node_t *node = pass->node;
-    if (!pass->all && (node->wake & service) == 0U) {
-        return;
+    const unsigned service = 1U << index;
+    if ((node->wake & service) != 0U || (pass->at_deadline && co_time_reached(node->now, node->svc_due[index]))) {
+        node->wake = (uint8_t)(node->wake & ~service);
+        node->svc_due[index] = CO_NEVER;
+        const co_time_us_t due = process(node);
+        node->svc_due[index] = co_min_time(node->svc_due[index], due);
     }
-    node->wake = (uint8_t)(node->wake & ~service);
-    pass->next = co_min_time(pass->next, process(node));
+    pass->next = co_min_time(pass->next, node->svc_due[index]);
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
@@ -519,35 +523,30 @@ co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
  * registers. */
 co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
 {
-    /* At a deadline every service runs and the deadlines are taken afresh. Otherwise only the marked ones: the
-     * others' deadlines are as they were, none earlier than next_due, which therefore stays a bound (at worst
-     * early, when a marked service's deadline moved later: the pass then is a full one). */
-    pass_t pass = {node, false, node->next_due};
-    if (co_time_reached(now, pass.next)) {
-        pass.all = true;
-        pass.next = CO_NEVER;
-    }
+    /* A service runs when marked or when its own deadline has come: at a heartbeat's deadline the heartbeat runs,
+     * not every service (each keeps its deadline in svc_due). The others' deadlines are as they were and count. */
+    pass_t pass = {node, co_time_reached(now, node->next_due), CO_NEVER};
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
     if (node->txq.count > 0U && co_time_pending(now, node->lss.silent_until)) {
         pass.next = co_min_time(pass.next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits */
     } else {
         txq_flush(node);
     }
-    run_service(&pass, CO_SVC_LSS, co_lss_process);
+    run_service(&pass, CO_SVC_I_LSS, co_lss_process);
     if (services_run(node)) {
-        run_service(&pass, CO_SVC_HB, co_hb_process);
+        run_service(&pass, CO_SVC_I_HB, co_hb_process);
 #if CO_CONFIG_NODE_GUARDING
-        run_service(&pass, CO_SVC_GUARD, co_guard_process);
+        run_service(&pass, CO_SVC_I_GUARD, co_guard_process);
 #endif
 #if CO_CONFIG_HB_CONSUMER
-        run_service(&pass, CO_SVC_HBC, co_hbc_process);
+        run_service(&pass, CO_SVC_I_HBC, co_hbc_process);
 #endif
-        run_service(&pass, CO_SVC_SDO, co_sdo_process);
+        run_service(&pass, CO_SVC_I_SDO, co_sdo_process);
 #if CO_CONFIG_SYNC
-        run_service(&pass, CO_SVC_SYNC, co_sync_process);
+        run_service(&pass, CO_SVC_I_SYNC, co_sync_process);
 #endif
-        run_service(&pass, CO_SVC_PDO, co_pdo_process);
-        run_service(&pass, CO_SVC_EMCY, co_emcy_process);
+        run_service(&pass, CO_SVC_I_PDO, co_pdo_process);
+        run_service(&pass, CO_SVC_I_EMCY, co_emcy_process);
     } else {
         node->wake = 0U; /* nothing but LSS runs; a reset that starts the services wakes them all */
     }

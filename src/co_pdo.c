@@ -251,7 +251,7 @@ void co_rpdo_rx(co_node_t *node, uint16_t n, const co_frame_t *f)
     }
 #if CO_CONFIG_PDO_TIMERS
     p->deadline = p->event_ms != 0U ? co_time_after(node->now, (uint32_t)p->event_ms * 1000U) : CO_NEVER;
-    co_node_due(node, p->deadline);
+    co_node_due(node, CO_SVC_I_PDO, p->deadline);
     if (p->timeout_error) {
         p->timeout_error = false;
         (void)co_emcy_clear(node, 0x8250U, rpdo_msef);

@@ -78,7 +78,7 @@ void co_sync_rx(co_node_t *node, const co_frame_t *f)
         (void)co_emcy_clear(node, 0x8100U, sync_msef);
     }
     sync->due = timeout_after(node);
-    co_node_due(node, sync->due);
+    co_node_due(node, CO_SVC_I_SYNC, sync->due);
     co_pdo_on_sync(node, overflow != 0U ? f->data[0] : 0U);
 }
 

@@ -434,8 +434,9 @@ struct co_node {
      * immediate offset (bytes below 32, halfwords below 64, words below 128 on Cortex-M0+); large arrays last. */
     uint8_t node_id;            /**< Active node-ID, 0xFF while unconfigured. */
     uint8_t wake;               /**< Services whose state changed since they last ran (a frame taken, an API call;
-                                     bits in src/priv/co_priv.h): the next co_node_process() runs them, and every
-                                     service once next_due has come. 0: it returns next_due at once. */
+                                     bits in src/priv/co_priv.h): the next co_node_process() runs them, and the
+                                     services whose deadline came once next_due has. 0: it returns next_due at
+                                     once. */
     bool cos_pending;           /**< A TPDO-mappable value was written: event-driven TPDOs compare what they
                                      would send with what they sent last at the next pass. */
     uint8_t n_sdo_extra;        /**< Additional servers the OD declares. */
@@ -452,8 +453,8 @@ struct co_node {
     co_nmt_state_t nmt_state;
     co_nvm_status_t nvm_status;
     co_time_us_t now;           /**< Time of the call in progress (co_node_rx / co_node_process / API). */
-    co_time_us_t next_due;      /**< The earliest deadline of any service (a little early at worst), as the
-                                     last co_node_process() returned it. */
+    co_time_us_t next_due;      /**< The earliest deadline of any service (svc_due), as the last
+                                     co_node_process() returned it or a timer moved it since. */
     const co_od_t *od;
     uint8_t *values;
     const co_port_t *port;
@@ -483,6 +484,8 @@ struct co_node {
 #if CO_CONFIG_HB_CONSUMER
     co_hb_consumer_t hbc;
 #endif
+    co_time_us_t svc_due[8];    /**< Each service's deadline (src/priv/co_priv.h: co_service_index), as it last
+                                     ran or a timer moved it: a pass at next_due runs only the services due. */
     co_rpdo_t rpdo_own[CO_RPDO_MAX];
     co_tpdo_t tpdo_own[CO_TPDO_MAX];
     co_rx_route_t route_own[CO_RX_ROUTES_FIXED + CO_RPDO_MAX];
@@ -511,8 +514,8 @@ co_status_t co_node_init(co_node_t *node, const co_node_cfg_t *cfg, co_time_us_t
 bool co_node_rx(co_node_t *node, const co_frame_t *frame, co_time_us_t now);
 
 /**
- * Runs the timed services and sends what is due. Never blocks. Runs every service when a deadline has come, only
- * those a frame or an API call changed otherwise, nothing at all (a few instructions) when neither happened.
+ * Runs the timed services and sends what is due. Never blocks. Runs the services whose deadline has come and those
+ * a frame or an API call changed, nothing at all (a few instructions) when neither happened.
  * @return the absolute time when it must be called again at the latest (CO_NEVER if nothing is pending); it may be
  *         earlier than needed (a pass then finds nothing to do), or now itself (call again at once: a hook marked a
  *         service the pass had already run).

@@ -186,18 +186,29 @@ uint32_t co_od_write_large(co_node_t *node, const co_od_entry_t *e, const uint8_
 #endif
 
 /* ---- node (co_node.c) ---- */
-/* The services of co_node_process(), in the order it runs them: bits of co_node_t.wake. A module that changes a
- * service's state outside that service's process function (a frame, an API call, a written parameter) marks it,
- * so that the next pass runs it and takes its new deadline; a pass at next_due runs them all. */
+/* The services of co_node_process(), in the order it runs them: their index (co_node_t.svc_due) and their bit of
+ * co_node_t.wake. A module that changes a service's state outside that service's process function (a frame, an API
+ * call, a written parameter) marks it, so that the next pass runs it and takes its new deadline, or, where only a
+ * timer moved, gives the new deadline (co_node_due); a pass at next_due runs the services whose deadline came. */
+enum co_service_index {
+    CO_SVC_I_LSS,
+    CO_SVC_I_HB,
+    CO_SVC_I_GUARD,
+    CO_SVC_I_HBC,
+    CO_SVC_I_SDO,
+    CO_SVC_I_SYNC,
+    CO_SVC_I_PDO,
+    CO_SVC_I_EMCY
+};
 enum co_service {
-    CO_SVC_LSS = 0x01U,
-    CO_SVC_HB = 0x02U,
-    CO_SVC_GUARD = 0x04U,
-    CO_SVC_HBC = 0x08U,
-    CO_SVC_SDO = 0x10U,
-    CO_SVC_SYNC = 0x20U,
-    CO_SVC_PDO = 0x40U,
-    CO_SVC_EMCY = 0x80U,
+    CO_SVC_LSS = 1U << CO_SVC_I_LSS,
+    CO_SVC_HB = 1U << CO_SVC_I_HB,
+    CO_SVC_GUARD = 1U << CO_SVC_I_GUARD,
+    CO_SVC_HBC = 1U << CO_SVC_I_HBC,
+    CO_SVC_SDO = 1U << CO_SVC_I_SDO,
+    CO_SVC_SYNC = 1U << CO_SVC_I_SYNC,
+    CO_SVC_PDO = 1U << CO_SVC_I_PDO,
+    CO_SVC_EMCY = 1U << CO_SVC_I_EMCY,
     CO_SVC_ALL = 0xFFU
 };
 /* The services compiled in: a mark of one left out would never be taken, and every pass would return now. */
@@ -213,8 +224,12 @@ static inline void co_node_wake(co_node_t *node, unsigned services)
     node->wake = (uint8_t)(node->wake | (services & CO_SVC_PRESENT));
 }
 /* A service's new deadline, where its change needs no pass of the service now (a timer restarted by a frame):
- * the next pass comes no later than t. */
-static inline void co_node_due(co_node_t *node, co_time_us_t t) { node->next_due = co_min_time(node->next_due, t); }
+ * the service (its index) runs no later than t, and the next pass comes no later than t. */
+static inline void co_node_due(co_node_t *node, enum co_service_index service, co_time_us_t t)
+{
+    node->svc_due[service] = co_min_time(node->svc_due[service], t);
+    node->next_due = co_min_time(node->next_due, t);
+}
 
 /* Queues/sends a frame through the port; frames are retried when the port is busy. */
 void co_node_send(co_node_t *node, const co_frame_t *frame);
