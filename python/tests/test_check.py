@@ -20,10 +20,11 @@ from conftest import EDS, SOURCE_DIR
 
 BUILT_IN = (("sds", 16), ("buerkert", 17), ("pro-ionizer", 18))
 #: Not applicable on each device, and why: the Eltex devices' SDO server is expedited only and their values fit
-#: in 4 bytes (sds.eds "Comments", pro-ionizer.eds), and they have no node guarding (no 0x100C/0x100D); the Bürkert
+#: in 4 bytes (sds.eds "Comments", pro-ionizer.eds), they have no node guarding (no 0x100C/0x100D) and their PDO
+#: mappings are static (read-only); the Bürkert
 #: device has no write-only entry and keeps no error history (no 0x1003).
 ELTEX = {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download",
-         "sdo.download-toggle-error", "nmt.node-guarding"}
+         "sdo.download-toggle-error", "nmt.node-guarding", "pdo.mapping-procedure"}
 NOT_APPLICABLE = {"sds": ELTEX, "buerkert": {"od.write-only-refuses-read", "emcy.error-history"}, "pro-ionizer": ELTEX}
 
 
@@ -132,6 +133,21 @@ def test_an_error_register_without_its_generic_bit_fails_the_check(three_devices
     assert report["emcy.error-register"].message == "0x1001 = 0x04: an error bit without the generic error bit 0"
     assert [(f.can_id, f.data.hex()) for f in report["emcy.error-register"].frames] == [
         (0x611, "4001100000000000"), (0x591, "4f01100004000000")]
+
+
+def test_the_mapping_procedure_puts_the_pdo_back(three_devices, canopen_emu_bus):
+    client = three_devices.client
+    pdo = ["0x1800:01", "0x1A00:00", "0x1A00:01", "0x1A00:02", "0x1A00:03"]
+    before = client.get_many(17, pdo)
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["pdo.mapping-procedure"], write=True)
+    assert report.ok, report["pdo.mapping-procedure"].message
+    assert report["pdo.mapping-procedure"].message == (
+        "TPDO 0x1800/0x1A00; valid: refused with 0x06010000 (unsupported access to an object)")
+    assert client.get_many(17, pdo) == before
+    # the aborts were asked for and given: not mappable, too long
+    aborts = [line for line in three_devices.log_lines() if "SDO abort 0x0604004" in line]
+    assert any("0x06040041 on 0x1A00:01" in line for line in aborts), aborts
+    assert any("0x06040042" in line for line in aborts), aborts
 
 
 def test_an_eds_whose_default_differs_from_the_device_fails_default_values(canopen_emu_factory, canopen_emu_bus,

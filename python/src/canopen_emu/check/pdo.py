@@ -128,3 +128,97 @@ def tpdo_frames(ctx: "Context") -> Optional[str]:
         raise NotApplicable("no TPDO has an event timer, a synchronous type or a remote request to trigger it")
     findings.raise_if_any("TPDOs wrong")
     return ", ".join(judged)
+
+
+ABORT_NOT_MAPPABLE, ABORT_PDO_LENGTH = 0x06040041, 0x06040042
+
+
+def _u32(value: int) -> bytes:
+    return value.to_bytes(4, "little")
+
+
+@check("pdo.mapping-procedure", clause="CiA 301 v4.2.0 §7.5.2.36 / §7.5.2.38 (the mapping procedure), §7.2.4.3.17 "
+                                       "(aborts 0x06040041, 0x06040042)",
+       summary="on the first PDO whose COB-ID and mapping are writable: the mapping is refused while the PDO is "
+               "valid; made invalid with its count 0, an entry that may not be mapped is refused with 0x06040041 "
+               "and more than 64 bits with 0x06040042; the PDO put back as it was", writes=True)
+def mapping_procedure(ctx: "Context") -> Optional[str]:
+    from .sdo import SdoAbort, abort_text  # noqa: PLC0415
+    chosen = None
+    for comm in [i for i in sorted(ctx.eds.objects) if 0x1800 <= i <= 0x19FF] + \
+            [i for i in sorted(ctx.eds.objects) if 0x1400 <= i <= 0x15FF]:
+        cob_entry, count_entry = ctx.eds.entry(comm, 1), ctx.eds.entry(comm + 0x200, 0)
+        if cob_entry is not None and count_entry is not None and cob_entry.writable and count_entry.writable:
+            chosen = comm
+            break
+    if chosen is None:
+        raise NotApplicable("no PDO whose COB-ID and mapping are writable (static mapping)")
+    mapping = chosen + 0x200
+    transmit = chosen >= 0x1800
+    not_mappable = next((e for e in ctx.eds.entries() if not e.pdo_mapping and e.size and e.readable
+                         and e.index >= 0x1000), None)
+    mappable = next((e for e in ctx.eds.entries() if e.pdo_mapping and e.size and 2 <= e.size <= 4
+                     and (e.readable if transmit else e.writable)), None)
+    with ctx.exchange():
+        cob = int.from_bytes(ctx.upload(chosen, 1), "little")
+        count = ctx.upload(mapping, 0)[0]
+        # every entry the EDS lists, those above the count too: the check writes some of them
+        entries = {sub: ctx.upload(mapping, sub) for sub in sorted(ctx.eds.objects[mapping].entries) if sub}
+
+    notes = []
+
+    def put_back() -> None:  # the procedure again, to the values found
+        ctx.sdo.download(chosen, 1, _u32(cob | 0x80000000))
+        ctx.sdo.download(mapping, 0, b"\0")
+        for sub, value in entries.items():
+            try:
+                ctx.sdo.download(mapping, sub, value)
+            except SdoAbort as e:
+                if sub <= count:
+                    raise
+                # above the count, a value the device took from its own configuration that a master may not
+                # write (docs/decisions.md "Mapping entries above the count"): it maps nothing; left empty
+                ctx.sdo.download(mapping, sub, b"\0\0\0\0")
+                ctx.notes.append(f"0x{mapping:04X}:{sub:02X} (above the count) left 0, its 0x"
+                             f"{int.from_bytes(value, 'little'):08X} refused: {abort_text(e.code)}")
+        ctx.sdo.download(mapping, 0, bytes([count]))
+        ctx.sdo.download(chosen, 1, _u32(cob))
+    ctx.on_exit(put_back)
+
+    findings = Findings()
+    what = f"{'TPDO' if transmit else 'RPDO'} 0x{chosen:04X}/0x{mapping:04X}"
+    if not cob & 0x80000000:
+        try:
+            ctx.sdo.download(mapping, 0, bytes([count]))
+            findings.add(f"{what}: its count written while the PDO is valid was taken", ctx.sdo.frames)
+        except SdoAbort as e:
+            notes.append(f"valid: refused with {abort_text(e.code)}")
+    with ctx.exchange():
+        ctx.sdo.download(chosen, 1, _u32(cob | 0x80000000))
+        ctx.sdo.download(mapping, 0, b"\0")
+    steps = []
+    if not_mappable is not None:
+        steps.append(([(1, not_mappable.index << 16 | not_mappable.sub << 8 | not_mappable.size * 8)], None,
+                      ABORT_NOT_MAPPABLE, f"{not_mappable} mapped"))
+    if mappable is not None and mappable.size:
+        times = 64 // (mappable.size * 8) + 1
+        if ctx.eds.entry(mapping, times) is not None:
+            value = mappable.index << 16 | mappable.sub << 8 | mappable.size * 8
+            steps.append(([(sub, value) for sub in range(1, times + 1)], times, ABORT_PDO_LENGTH,
+                          f"{mappable} mapped {times} times ({times * mappable.size * 8} bits)"))
+    if not steps:
+        raise NotApplicable(f"{what}: the EDS has no entry to map wrongly")
+    for writes, new_count, code, description in steps:
+        ctx.sdo.download(mapping, 0, b"\0")
+        try:
+            for sub, value in writes:
+                ctx.sdo.download(mapping, sub, _u32(value))
+            if new_count is not None:
+                ctx.sdo.download(mapping, 0, bytes([new_count]))
+            findings.add(f"{what}: {description}: taken, expected {abort_text(code)}", ctx.sdo.frames)
+        except SdoAbort as e:
+            if e.code != code:
+                findings.add(f"{what}: {description}: aborted with {abort_text(e.code)}, expected "
+                             f"{abort_text(code)}", e.frames)
+    findings.raise_if_any("mapping rules not kept")
+    return "; ".join([what] + notes)

@@ -53,6 +53,7 @@ class Context:
         self.options = options
         self.sdo = SdoClient(log, node, options.timeout)
         self._undo: List[Callable[[], None]] = []
+        self.notes: List[str] = []  # said under the result whatever it is (what an undo step could not restore)
 
     # --- the check's life --------------------------------------------------------------------------------------
 
@@ -246,5 +247,7 @@ def run_one(chosen: Check, log: FrameLog, node: int, description: eds_module.Eds
         result.message = "\n".join([result.message, *problems]).strip()
         if result.status is Status.PASSED:
             result.status = Status.FAILED
+    if ctx.notes:
+        result.message = "\n".join([result.message, *ctx.notes]).strip()
     result.duration = time.monotonic() - start
     return result
