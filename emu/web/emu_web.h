@@ -59,7 +59,8 @@ struct web_session;
 typedef struct emu_web {
     struct MHD_Daemon *daemon;      /* NULL: no --web */
     int epoll_fd;                   /* libmicrohttpd's: readable when it has work */
-    bool run_due;                   /* libmicrohttpd asked to run after the next poll whatever it says */
+    co_time_us_t run_at;            /* when libmicrohttpd asked to run at the latest, without a wake-up of its
+                                     * descriptor (a connection's timeout; now: work it holds); CO_NEVER: none */
     tcp_listener_t listener;        /* what was bound (fd owned by libmicrohttpd once it runs) */
     char token[WEB_ID_HEX + 1];
     char *index_html;               /* web/index.html with the token in it */
