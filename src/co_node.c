@@ -510,6 +510,13 @@ static void run_service(pass_t *pass, enum co_service_index index, service_proce
     pass->next = co_min_time(pass->next, node->svc_due[index]);
 }
 
+/* Out of line: five callers (timers restarted by frames and written parameters), none on a hot path. */
+void co_node_due(co_node_t *node, enum co_service_index service, co_time_us_t t)
+{
+    node->svc_due[service] = co_min_time(node->svc_due[service], t);
+    node->next_due = co_min_time(node->next_due, t);
+}
+
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
 {
     node->now = now;
