@@ -67,9 +67,14 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             commands = true;
         }
         char line[COMMAND_LINE_MAX + 1];
-        /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored) */
-        while (!emu->quit && script_next_at(&emu->script) <= now - emu->start &&
-               script_take_due(&emu->script, now - emu->start, line, sizeof line)) {
+        /* quit ends the run at once: a script line due at the same time after it must not run (a save there stored).
+         * At most SCRIPT_LINES_PER_PASS a pass: the rest of a burst runs in the next passes (their time has come,
+         * so the poll does not wait), with the nodes' turns and the replies' writing between (thousands of lines
+         * due at once held every heartbeat and filled the replies' buffer until lines were dropped). */
+        for (unsigned k = 0U; k < SCRIPT_LINES_PER_PASS && !emu->quit &&
+                              script_next_at(&emu->script) <= now - emu->start &&
+                              script_take_due(&emu->script, now - emu->start, line, sizeof line);
+             k++) {
             run_command(emu, line, &output_stdout_replies);
             commands = true;
         }

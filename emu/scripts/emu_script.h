@@ -15,6 +15,9 @@
  *  overflows: a time just below 2^64 µs wrapped the loop's deadline (100 % CPU while idle). */
 #define SCRIPT_TIME_MAX_MS 1000000000ULL
 
+/** The script lines the main loop runs in one pass at most (the rest of those due in the next passes). */
+#define SCRIPT_LINES_PER_PASS 64U
+
 typedef struct script_line {
     co_time_us_t at;        /* since the program's start */
     char *text;             /* malloc'd */
