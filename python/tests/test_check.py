@@ -94,6 +94,16 @@ def test_a_wrong_state_in_the_heartbeat_fails_the_heartbeat_and_nmt_checks(three
     assert "after NMT stop: no heartbeat with state 0x04 (stopped)" in report["nmt.state-changes"].message
 
 
+def test_a_jittered_heartbeat_fails_the_period_check(three_devices, canopen_emu_bus):
+    # each heartbeat 0..400 ms late (0x1017 = 500 ms): an interval within +-50 ms of 500 has a chance of 23 %, six
+    # in a row 0.02 %
+    three_devices.client.inject_fault(17, "heartbeat-jitter", 400)
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["heartbeat.period"], heartbeat_intervals=6)
+    assert report["heartbeat.period"].status is Status.FAILED
+    assert "0x1017 = 500 ms, allowed +-50 ms" in report["heartbeat.period"].message
+    assert len(report["heartbeat.period"].frames) == 7  # the heartbeats judged
+
+
 def test_a_stopped_heartbeat_fails_the_period_and_guarding_checks(three_devices, canopen_emu_bus):
     assert run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["nmt.node-guarding"], write=True).ok
     three_devices.client.inject_fault(17, "heartbeat-stop")  # no heartbeat, nor node-guarding answer

@@ -19,14 +19,14 @@ one included) or anything ``run()`` takes (a python-can bus, its keyword argumen
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Dict, List, Union
+from typing import Any, Dict, List, Sequence, Union
 
 from .registry import CHECKS, Result, Status
 from .report import result_details
 from .runner import Report, run, select
 
 
-def check_names(*, only: List[str] = [], skip: List[str] = []) -> List[str]:  # noqa: B006: never changed
+def check_names(*, only: Sequence[str] = (), skip: Sequence[str] = ()) -> List[str]:
     """The checks' names, in the order they run (``only``/``skip`` as run()'s): the parameters of a test."""
     return [c.name for c in select(only, skip)] if only or skip else list(CHECKS)
 
