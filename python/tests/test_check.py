@@ -209,6 +209,17 @@ def test_a_device_that_takes_a_value_past_the_eds_limit_fails_write_limits(canop
     assert emu.client.get(0x60, "0x2000") == before
 
 
+def test_the_mpdo_variant_passes(canopen_emu_factory, canopen_emu_bus):
+    # a SAM-MPDO (0x1A03:00 = 0xFE): its mapping is no list of entries, its frame always 8 bytes
+    variant = SOURCE_DIR / "od/variants"
+    canopen_emu_factory(f"{variant / 'buerkert-mpdo.eds'}:0x62",
+                        extra_args=["--rules", str(variant / "buerkert-mpdo.yaml")])
+    report = run(canopen_emu_bus.can_kwargs(), 0x62, variant / "buerkert-mpdo.eds", write=True, heartbeat_intervals=2)
+    assert report.ok, "\n".join(f"{r.name}: {r.message}" for r in report.failed)
+    assert report["pdo.mappings"].message.endswith("MPDO: 0x1A03 SAM-MPDO")
+    assert "0x1803" in report["pdo.tpdo-frames"].message
+
+
 def canopen_check_program():
     found = Path(sys.executable).parent / "canopen-check"  # installed with the package, beside its python
     return str(found) if found.exists() else shutil.which("canopen-check")

@@ -6,7 +6,7 @@ change), a TPDO of each transmission type seen on the bus with its length, an RP
 time and event timer."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING, List, Optional
 
 from .registry import Findings, NotApplicable, check
 from .sdo import SdoError
@@ -15,15 +15,20 @@ if TYPE_CHECKING:
     from .runner import Context
 
 MAPPING_AREAS = ((0x1600, "RPDO"), (0x1A00, "TPDO"))
+#: A mapping count that makes the PDO a multiplexed PDO (CiA 301 §7.2.3, §7.5.2.36/38): its frame is 8 bytes, an
+#: address and an object's value, whatever the entries say.
+MPDO_COUNTS = {0xFE: "SAM-MPDO", 0xFF: "DAM-MPDO"}
 
 
 @check("pdo.mappings", clause="CiA 301 v4.2.0 §7.5.2.36 / §7.5.2.38 (RPDO / TPDO mapping parameter), §7.2.2 "
                               "(PDO: at most 8 bytes)",
        summary="every PDO mapping the node holds names an entry of the EDS that may be mapped (PDOMapping=1, or a "
-               "dummy of [DummyUsage]) with its type's length, 64 bits at most in all")
+               "dummy of [DummyUsage]) with its type's length, 64 bits at most in all (an MPDO's, count 0xFE/0xFF, "
+               "is not judged)")
 def mappings(ctx: "Context") -> Optional[str]:
     findings = Findings()
     seen = 0
+    mpdos: List[str] = []
     for base, kind in MAPPING_AREAS:
         for index in range(base, base + 0x200):
             if index not in ctx.eds.objects:
@@ -34,6 +39,9 @@ def mappings(ctx: "Context") -> Optional[str]:
             except SdoError as e:
                 findings.add(f"0x{index:04X}:00: {e.reason}", e.frames)
                 continue
+            if count in MPDO_COUNTS:
+                mpdos.append(f"0x{index:04X} {MPDO_COUNTS[count]}")
+                continue  # an MPDO's frame carries its own multiplexer: no mapping to judge here
             if count > 64:
                 findings.add(f"0x{index:04X}:00 = {count}: more than 64 entries", ctx.sdo.frames)
                 continue
@@ -64,12 +72,14 @@ def mappings(ctx: "Context") -> Optional[str]:
     if not seen:
         raise NotApplicable("the EDS lists no PDO mapping parameter")
     findings.raise_if_any("wrong PDO mappings")
-    return f"{seen} mapping parameter(s)"
+    return f"{seen} mapping parameter(s)" + (f"; MPDO: {', '.join(mpdos)}" if mpdos else "")
 
 
 def _mapped_bytes(ctx: "Context", mapping_index: int) -> int:
     """The bytes a PDO of this mapping carries (the mapped bits rounded up)."""
     count = ctx.upload(mapping_index, 0)[0]
+    if count in MPDO_COUNTS:
+        return 8  # an MPDO frame: multiplexer and value, always 8 bytes
     bits = sum(int.from_bytes(ctx.upload(mapping_index, sub), "little") & 0xFF for sub in range(1, count + 1))
     return (bits + 7) // 8
 
