@@ -495,26 +495,20 @@ typedef struct pass {
 } pass_t;
 
 /* Runs a service if it is marked since it last ran or its deadline has come, and keeps its new deadline. The mark is
- * taken before the service runs, so that what the service itself causes (a hook's write) marks it again; a deadline
- * co_node_due() gives while it runs (its own timer restarted) is kept beside the one it returns. */
+ * taken before the service runs, so that what the service itself causes (a hook's write) marks it again. */
 static void run_service(pass_t *pass, enum co_service_index index, service_process_t process)
 {
     co_node_t *node = pass->node;
     const unsigned service = 1U << index;
     if ((node->wake & service) != 0U || (pass->at_deadline && co_time_reached(node->now, node->svc_due[index]))) {
         node->wake = (uint8_t)(node->wake & ~service);
-        node->svc_due[index] = CO_NEVER;
+        /* what it returns is its earliest timer, those it gives co_node_due() while it runs included */
         const co_time_us_t due = process(node);
-        node->svc_due[index] = co_min_time(node->svc_due[index], due);
+        node->svc_due[index] = due;
+        pass->next = co_min_time(pass->next, due);
+    } else if (pass->at_deadline) {
+        pass->next = co_min_time(pass->next, node->svc_due[index]); /* the exact earliest, taken afresh */
     }
-    pass->next = co_min_time(pass->next, node->svc_due[index]);
-}
-
-/* Out of line: five callers (timers restarted by frames and written parameters), none on a hot path. */
-void co_node_due(co_node_t *node, enum co_service_index service, co_time_us_t t)
-{
-    node->svc_due[service] = co_min_time(node->svc_due[service], t);
-    node->next_due = co_min_time(node->next_due, t);
 }
 
 co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
@@ -531,8 +525,12 @@ co_time_us_t co_node_process(co_node_t *node, co_time_us_t now)
 co_time_us_t co_node_pass(co_node_t *node, co_time_us_t now)
 {
     /* A service runs when marked or when its own deadline has come: at a heartbeat's deadline the heartbeat runs,
-     * not every service (each keeps its deadline in svc_due). The others' deadlines are as they were and count. */
-    pass_t pass = {node, co_time_reached(now, node->next_due), CO_NEVER};
+     * not every service (each keeps its deadline in svc_due). At a deadline the earliest of all is taken afresh;
+     * otherwise the others' deadlines are as they were, none earlier than next_due, which therefore stays a bound
+     * (at worst early, when a marked service's deadline moved later: that pass then finds nothing due and takes
+     * the earliest afresh). */
+    const bool at_deadline = co_time_reached(now, node->next_due);
+    pass_t pass = {node, at_deadline, at_deadline ? CO_NEVER : node->next_due};
     node->next_due = CO_NEVER; /* what co_node_due() gives during the pass is kept below */
     if (node->txq.count > 0U && co_time_pending(now, node->lss.silent_until)) {
         pass.next = co_min_time(pass.next, node->lss.silent_until); /* CiA 305 bit-rate switch: the queue waits */

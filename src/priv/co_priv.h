@@ -225,7 +225,12 @@ static inline void co_node_wake(co_node_t *node, unsigned services)
 }
 /* A service's new deadline, where its change needs no pass of the service now (a timer restarted by a frame):
  * the service (its index) runs no later than t, and the next pass comes no later than t. */
-void co_node_due(co_node_t *node, enum co_service_index service, co_time_us_t t);
+static inline void co_node_due(co_node_t *node, enum co_service_index service, co_time_us_t t)
+{
+    /* inline: an RPDO's and a SYNC's reception restart a timer here */
+    node->svc_due[service] = co_min_time(node->svc_due[service], t);
+    node->next_due = co_min_time(node->next_due, t);
+}
 
 /* Queues/sends a frame through the port; frames are retried when the port is busy. */
 void co_node_send(co_node_t *node, const co_frame_t *frame);
