@@ -26,6 +26,9 @@ BUILT_IN = (("sds", 16), ("buerkert", 17), ("pro-ionizer", 18))
 ELTEX = {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download",
          "sdo.download-toggle-error", "nmt.node-guarding", "pdo.mapping-procedure"}
 NOT_APPLICABLE = {"sds": ELTEX, "buerkert": {"od.write-only-refuses-read", "emcy.error-history"}, "pro-ionizer": ELTEX}
+#: The Eltex devices' RPDO maps a write-only entry (0x6200:01, the HV release: not read back, nor sent with its own
+#: value) and their TPDOs have no inhibit time (no sub-index 3).
+ELTEX |= {"pdo.rpdo-write-read", "pdo.rpdo-length-error", "pdo.tpdo-inhibit-time"}
 
 
 @pytest.fixture
@@ -297,3 +300,65 @@ def test_a_virtual_bus_served_by_socketcand():
 def test_the_block_transfer_crc_is_cia_301s():
     from canopen_emu.check.sdo import sdo_crc
     assert sdo_crc(b"123456789") == 0x31C3 and sdo_crc(b"") == 0  # CRC-16-CCITT, start value 0 (§7.2.4.3.16)
+
+
+# --- PDO, EMCY and store checks with --write (RPDO written and read back, its length error, the TPDO inhibit
+# time, 0x1010/0x1011) ---
+
+def test_an_rpdo_is_written_and_read_back_and_its_length_error_answered(three_devices, canopen_emu_bus):
+    client = three_devices.client
+    before = client.get(17, "0x2540:01")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"],
+                 only=["pdo.rpdo-write-read", "pdo.rpdo-length-error", "pdo.tpdo-inhibit-time"], write=True)
+    assert report.ok, "\n".join(f"{r.name}: {r.message}" for r in report.failed)
+    assert report["pdo.rpdo-write-read"].message == "0x1400 (0x2540:01 changed)"
+    # the short frame (3 of 4 bytes), EMCY 0x8210 with the communication and generic bits, then the error reset
+    assert report["pdo.rpdo-length-error"].message.startswith(
+        "RPDO 0x1400 on 0x211: EMCY 10 82 11 04 00 00 00 00, then 00 00 00 04 00 00 00 00; no 0x1003")
+    assert "inhibit time 200 ms, event timer 50 ms: intervals" in report["pdo.tpdo-inhibit-time"].message
+    # put back: the set-point, the TPDO's inhibit time and timer, the NMT state
+    assert client.get(17, "0x2540:01") == before
+    assert [r.value for r in client.get_many(17, ["0x1800:03", "0x1800:05"])] == [5000, 1000]
+    assert client.nodes()[1].state == "PRE-OPERATIONAL"
+
+
+def test_an_rpdo_not_read_back_and_an_error_history_that_lacks_the_error_fail(three_devices, canopen_emu_bus,
+                                                                            tmp_path):
+    # the EDS says the node keeps an error history (0x1003), which the Bürkert device has not
+    with_history = tmp_path / "buerkert-history.eds"
+    with_history.write_text(EDS["buerkert"].read_text(encoding="latin-1").replace(
+        "[OptionalObjects]\nSupportedObjects=29\n", "[OptionalObjects]\nSupportedObjects=30\n30=0x1003\n") + (
+        "\n[1003]\nParameterName=Pre-defined Error Field\nObjectType=0x8\nSubNumber=2\n\n[1003sub0]\n"
+        "ParameterName=Number of Errors\nObjectType=0x7\nDataType=0x0005\nAccessType=rw\nDefaultValue=0\n"
+        "PDOMapping=0\n\n[1003sub1]\nParameterName=Standard Error Field\nObjectType=0x7\nDataType=0x0007\n"
+        "AccessType=ro\nDefaultValue=0\nPDOMapping=0\n"), encoding="latin-1")
+    report = run(canopen_emu_bus.can_kwargs(), 17, with_history, only=["pdo.rpdo-length-error"], write=True)
+    result = report["pdo.rpdo-length-error"]
+    assert result.status is Status.FAILED
+    assert "0x1003 (the EDS lists it): aborted with 0x06020000" in result.message, result.message
+    # a set-point the node does not give back over SDO
+    three_devices.client.inject_fault(17, "sdo-abort", "0x2540:01", "0x08000000")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["pdo.rpdo-write-read"], write=True)
+    assert report["pdo.rpdo-write-read"].status is Status.FAILED
+    assert "0x08000000" in report["pdo.rpdo-write-read"].message
+    assert three_devices.client.nodes()[1].state == "PRE-OPERATIONAL"
+
+
+def test_store_and_restore_leave_the_values_the_node_runs_with_for_the_next_power_on(three_devices,
+                                                                                   canopen_emu_bus):
+    client = three_devices.client
+    client.set(17, "0x1017", 700)  # not the default 500: a restore left as it is would bring 500 back
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["store"], write=True)
+    assert report.ok, "\n".join(f"{r.name}: {r.message}" for r in report.failed)
+    assert report["store.save"].message == ("0x1010:01 = 0x00000001; wrong signature refused with 0x08000020; saved")
+    assert report["store.restore"].message == ("wrong signature refused with 0x08000020; restored, then saved again")
+    client.power_cycle(17)
+    assert client.get(17, "0x1017") == 700
+    # a node whose store fails (0x06060000: the port's error) fails the save
+    client.inject_fault(17, "sdo-abort", "0x1010:01", "0x06060000")
+    report = run(canopen_emu_bus.can_kwargs(), 17, EDS["buerkert"], only=["store"], write=True)
+    assert report["store.save"].status is Status.FAILED
+    assert "aborted with 0x06060000" in report["store.save"].message
+    # and the restore is not tried: it could not be saved over again
+    assert report["store.restore"].status is Status.FAILED
+    assert "0x1010:01 = 'save': aborted with 0x06060000" in report["store.restore"].message

@@ -1,8 +1,9 @@
 """EMCY checks (CiA 301 v4.2.0 §7.2.7 emergency object, §7.5.2.2 and §7.5.2.4 error register and history, §7.5.2.17
 0x1014).
 
-Read-only so far. Left for later (docs/conformance.md "Not yet checked"): an EMCY seen on the COB-ID of 0x1014 with
-the error register of 0x1001, the error-reset EMCY after a cleared error, writing 0x1003:00 = 0 with --write."""
+Read-only. An EMCY seen on the COB-ID of 0x1014, its error reset after the error is cleared and 0x1003 holding it are
+checked with an RPDO's length error (pdo.rpdo-length-error, rpdo.py). Left for later (docs/conformance.md "Not yet
+checked"): 0x1001 read while an error is active, writing 0x1003:00 = 0 with --write."""
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Optional

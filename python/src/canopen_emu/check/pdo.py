@@ -1,9 +1,8 @@
 """PDO checks (CiA 301 v4.2.0 §7.2.2 PDO, §7.5.2.35-38 PDO communication and mapping parameters).
 
-Only what can be judged by reading is here so far: the mappings the node holds. Left for later (docs/conformance.md
-"Not yet checked"): the mapping procedure with --write (0x06040041 / 0x06040042, the COB-ID's invalid bit before a
-change), a TPDO of each transmission type seen on the bus with its length, an RPDO written and read back, inhibit
-time and event timer."""
+The mappings the node holds (read only); with --write the TPDOs seen on the bus, the mapping procedure, the
+inhibit time. The RPDO checks are in rpdo.py. Left for later (docs/conformance.md "Not yet checked"): type 0
+TPDOs."""
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, List, Optional
@@ -232,3 +231,66 @@ def mapping_procedure(ctx: "Context") -> Optional[str]:
                              f"{abort_text(code)}", e.frames)
     findings.raise_if_any("mapping rules not kept")
     return "; ".join([what] + notes)
+
+
+#: The inhibit time and event timer pdo.tpdo-inhibit-time sets: a timer well inside the inhibit time, so that
+#: without the inhibit time the frames would come every TIMER ms.
+INHIBIT_100US, TIMER_MS, WATCH_S = 2000, 50, 1.3
+#: How much closer than the inhibit time two frames' receive time stamps may be (the receive side's jitter): this
+#: tool's allowance, CiA 301 has none.
+INHIBIT_TOLERANCE_S = 0.002
+
+
+@check("pdo.tpdo-inhibit-time", clause="CiA 301 v4.2.0 §7.2.2 (PDO: inhibit time, event timer), §7.5.2.37 "
+                                       "(TPDO communication parameter, sub-indexes 3 and 5)",
+       summary="on the first valid event-driven TPDO (type 254/255) whose COB-ID, inhibit time and event timer are "
+               "writable: set to a 200 ms inhibit time (while not valid, as CiA 301 asks) and a 50 ms event timer, "
+               "in Operational its frames come no closer than 200 ms by their receive time stamps; put back after",
+       writes=True)
+def tpdo_inhibit_time(ctx: "Context") -> Optional[str]:
+    from .nmt import BACK_TO, current_state, fast_heartbeat  # noqa: PLC0415: nmt's helpers, only here
+    chosen = None
+    with ctx.exchange():
+        for comm in [i for i in sorted(ctx.eds.objects) if 0x1800 <= i <= 0x19FF and i + 0x200 in ctx.eds.objects]:
+            entries = [ctx.eds.entry(comm, sub) for sub in (1, 2, 3, 5)]
+            if any(e is None or not e.readable for e in entries) or not all(
+                    e is not None and e.writable for e in (entries[0], entries[2], entries[3])):
+                continue
+            cob = int.from_bytes(ctx.upload(comm, 1), "little")
+            if cob & 0xA0000000 or ctx.upload(comm, 2)[0] not in (254, 255):
+                continue
+            chosen = (comm, cob, ctx.upload(comm, 3), ctx.upload(comm, 5))
+            break
+    if chosen is None:
+        raise NotApplicable("no valid event-driven TPDO whose COB-ID, inhibit time and event timer are writable")
+    comm, cob, inhibit, timer = chosen
+    where = f"TPDO 0x{comm:04X} on 0x{cob & 0x7FF:03X}"
+    period_s = fast_heartbeat(ctx)
+    state = current_state(ctx, period_s)
+    ctx.on_exit(lambda: ctx.nmt(BACK_TO[state]) and None)
+
+    def put_back() -> None:  # the inhibit time changes only while the PDO is not valid (CiA 301 §7.5.2.37)
+        ctx.sdo.download(comm, 1, _u32(cob | 0x80000000))
+        ctx.sdo.download(comm, 3, inhibit)
+        ctx.sdo.download(comm, 1, _u32(cob))
+        ctx.sdo.download(comm, 5, timer)
+    ctx.on_exit(put_back)
+    with ctx.exchange():
+        ctx.sdo.download(comm, 1, _u32(cob | 0x80000000))
+        ctx.sdo.download(comm, 3, INHIBIT_100US.to_bytes(2, "little"))
+        ctx.sdo.download(comm, 1, _u32(cob))
+        ctx.sdo.download(comm, 5, TIMER_MS.to_bytes(2, "little"))
+    ctx.nmt("start")
+    frames = ctx.log.collect(lambda f: f.can_id == cob & 0x7FF and not f.rtr, WATCH_S)
+    inhibit_s = INHIBIT_100US / 10000
+    if len(frames) < 2:
+        raise Failed(f"{where} (inhibit time {inhibit_s * 1000:.0f} ms, event timer {TIMER_MS} ms): "
+                     f"{len(frames)} frame(s) in {WATCH_S} s", list(ctx.log.trace[-20:]))
+    intervals = [b.time - a.time for a, b in zip(frames, frames[1:])]
+    close = [(i, t) for i, t in enumerate(intervals) if t < inhibit_s - INHIBIT_TOLERANCE_S]
+    shown = ", ".join(f"{t * 1000:.1f}" for t in intervals)
+    if close:
+        first = close[0][0]
+        raise Failed(f"{where}: inhibit time {inhibit_s * 1000:.0f} ms, event timer {TIMER_MS} ms: frames "
+                     f"{shown} ms apart", frames[first:first + 2])
+    return f"{where}: inhibit time {inhibit_s * 1000:.0f} ms, event timer {TIMER_MS} ms: intervals {shown} ms"

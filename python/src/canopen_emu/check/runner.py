@@ -20,7 +20,7 @@ from .registry import CHECKS, Check, Failed, NotApplicable, Result, Status
 from .sdo import SdoAbort, SdoClient, SdoError
 
 # The group modules register their checks when imported; their order is the order of the run.
-from . import od, sdo_protocol, nmt, pdo, emcy, lss  # noqa: E402,F401  (imported for their @check)
+from . import od, sdo_protocol, nmt, pdo, rpdo, emcy, store, lss  # noqa: E402,F401  (imported for their @check)
 
 NMT_COMMANDS = {"start": 0x01, "stop": 0x02, "pre-operational": 0x80, "reset-node": 0x81,
                 "reset-communication": 0x82}
