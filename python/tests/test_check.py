@@ -362,3 +362,91 @@ def test_store_and_restore_leave_the_values_the_node_runs_with_for_the_next_powe
     # and the restore is not tried: it could not be saved over again
     assert report["store.restore"].status is Status.FAILED
     assert "0x1010:01 = 'save': aborted with 0x06060000" in report["store.restore"].message
+
+
+class TpdoWithoutInhibitTime:
+    """Node 6 on python-can's virtual bus, wrong on purpose: its TPDO 0x1800 (event-driven, on 0x186) takes an
+    inhibit time and an event timer over SDO but goes out every 50 ms in Operational whatever they say. Expedited
+    SDO, NMT, a 100 ms heartbeat."""
+
+    NODE = 6
+
+    def __init__(self, channel):
+        import threading  # noqa: PLC0415
+        import can  # noqa: PLC0415
+        self.values = {(0x1000, 0): (0x20192, 4), (0x1017, 0): (100, 2), (0x1800, 1): (0x186, 4),
+                       (0x1800, 2): (254, 1), (0x1800, 3): (0, 2), (0x1800, 5): (0, 2), (0x1A00, 0): (0, 1)}
+        self.state = 0x7F
+        self.bus = can.Bus(interface="virtual", channel=channel)
+        self.running = True
+        self.thread = threading.Thread(target=self.serve, daemon=True)
+        self.thread.start()
+
+    def send(self, can_id, data):
+        import can  # noqa: PLC0415
+        self.bus.send(can.Message(arbitration_id=can_id, data=bytes(data), is_extended_id=False))
+
+    def serve(self):
+        import time
+        next_heartbeat = next_tpdo = time.monotonic()
+        while self.running:
+            now = time.monotonic()
+            if now >= next_heartbeat:
+                self.send(0x700 + self.NODE, [self.state])
+                next_heartbeat = now + 0.1
+            if now >= next_tpdo and self.state == 0x05:
+                self.send(0x186, [0x2A])
+                next_tpdo = now + 0.05
+            frame = self.bus.recv(0.005)
+            if frame is None:
+                continue
+            if frame.arbitration_id == 0 and frame.data[1] in (0, self.NODE):
+                self.state = {0x01: 0x05, 0x02: 0x04, 0x80: 0x7F}.get(frame.data[0], self.state)
+            elif frame.arbitration_id == 0x600 + self.NODE:
+                key = (int.from_bytes(frame.data[1:3], "little"), frame.data[3])
+                if frame.data[0] == 0x40 and key in self.values:
+                    value, size = self.values[key]
+                    self.send(0x580 + self.NODE, bytes([0x43 | (4 - size) << 2]) + frame.data[1:4]
+                              + value.to_bytes(4, "little"))
+                elif frame.data[0] & 0xE3 == 0x23 and key in self.values:  # an expedited download, size given
+                    size = 4 - (frame.data[0] >> 2 & 3)
+                    self.values[key] = (int.from_bytes(frame.data[4:4 + size], "little"), self.values[key][1])
+                    self.send(0x580 + self.NODE, b"\x60" + frame.data[1:4] + bytes(4))
+                else:
+                    self.send(0x580 + self.NODE, b"\x80" + frame.data[1:4] + (0x06020000).to_bytes(4, "little"))
+
+    def close(self):
+        self.running = False
+        self.thread.join()
+        self.bus.shutdown()
+
+
+def test_a_tpdo_closer_than_its_inhibit_time_fails_the_inhibit_check(tmp_path):
+    import can  # noqa: PLC0415
+    minimal = (SOURCE_DIR / "tests/eds/files/minimal.eds").read_text()
+    sub = "[1800sub{}]\nParameterName=Sub {}\nObjectType=0x7\nDataType={}\nAccessType={}\nDefaultValue={}\nPDOMapping=0\n\n"
+    device = minimal.replace("[OptionalObjects]\nSupportedObjects=1\n1=0x1017\n",
+                             "[OptionalObjects]\nSupportedObjects=3\n1=0x1017\n2=0x1800\n3=0x1A00\n") + (
+        "\n[1800]\nParameterName=TPDO 1\nObjectType=0x9\nSubNumber=5\n\n"
+        + sub.format(0, 0, "0x0005", "ro", 5) + sub.format(1, 1, "0x0007", "rw", "$NODEID+0x180")
+        + sub.format(2, 2, "0x0005", "rw", 254) + sub.format(3, 3, "0x0006", "rw", 0)
+        + sub.format(5, 5, "0x0006", "rw", 0)
+        + "[1A00]\nParameterName=TPDO 1 mapping\nObjectType=0x7\nDataType=0x0005\nAccessType=rw\nDefaultValue=0\n"
+          "PDOMapping=0\n")
+    (tmp_path / "no-inhibit.eds").write_text(device)
+    node = TpdoWithoutInhibitTime("no-inhibit")
+    check_bus = can.Bus(interface="virtual", channel="no-inhibit")
+    try:
+        report = run(check_bus, 6, tmp_path / "no-inhibit.eds", only=["pdo.tpdo-inhibit-time"], write=True,
+                     timeout=0.3)
+    finally:
+        check_bus.shutdown()
+        node.close()
+    result = report["pdo.tpdo-inhibit-time"]
+    assert result.status is Status.FAILED, result.message
+    assert result.message.startswith("TPDO 0x1800 on 0x186: inhibit time 200 ms, event timer 50 ms: frames "), \
+        result.message
+    assert [f.can_id for f in result.frames] == [0x186, 0x186]
+    assert result.frames[1].time - result.frames[0].time < 0.198
+    # put back: the inhibit time and timer as found, pre-operational
+    assert node.values[(0x1800, 3)][0] == 0 and node.values[(0x1800, 5)][0] == 0 and node.state == 0x7F

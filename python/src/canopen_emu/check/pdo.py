@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, List, Optional
 
-from .registry import Findings, NotApplicable, check
+from .registry import Failed, Findings, NotApplicable, check
 from .sdo import SdoError
 
 if TYPE_CHECKING:
