@@ -3,8 +3,10 @@ check, with --write too; a node made wrong on purpose (protocol faults, a file d
 fails the check that should catch it, with the frames; the command line's exit status and JUnit XML; the EDS reader.
 
 On the session's bus (udp_multicast inside tests/udp/netns-run in run-tests.sh's udp pass)."""
+import re
 import shutil
 import subprocess
+import threading
 import sys
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
@@ -12,8 +14,12 @@ from pathlib import Path
 
 import pytest
 
+import can
+
 from canopen_emu import Emulator, socketcand_bus
 from canopen_emu.check import CHECKS, Status, eds as eds_module, run
+from canopen_emu.check.frames import FrameLog
+from canopen_emu.check.sdo import SdoClient
 from canopen_emu.check.testing import assert_result, check_names, run_on
 
 from conftest import EDS, SOURCE_DIR
@@ -24,7 +30,8 @@ BUILT_IN = (("sds", 16), ("buerkert", 17), ("pro-ionizer", 18))
 #: mappings are static (read-only); the Bürkert
 #: device has no write-only entry and keeps no error history (no 0x1003).
 ELTEX = {"sdo.segmented-upload", "sdo.upload-toggle-error", "sdo.block-upload", "sdo.segmented-download",
-         "sdo.download-toggle-error", "nmt.node-guarding", "pdo.mapping-procedure"}
+         "sdo.download-toggle-error", "nmt.node-guarding", "pdo.mapping-procedure",
+         "sdo.server-timeout", "sdo.block-download", "sdo.block-sequence-error"}
 NOT_APPLICABLE = {"sds": ELTEX, "buerkert": {"od.write-only-refuses-read", "emcy.error-history"}, "pro-ionizer": ELTEX}
 #: The Eltex devices' RPDO maps a write-only entry (0x6200:01, the HV release: not read back, nor sent with its own
 #: value) and their TPDOs have no inhibit time (no sub-index 3).
@@ -54,6 +61,11 @@ def test_the_built_in_devices_pass_every_check(three_devices, canopen_emu_bus):
     assert reports["buerkert"]["od.readable-entries"].message == "307 entries"
     assert "0x1008:00" in reports["buerkert"]["sdo.segmented-upload"].message
     assert "(12 bytes, with CRC)" in reports["buerkert"]["sdo.block-upload"].message
+    assert "with CRC)" in reports["buerkert"]["sdo.block-download"].message
+    # canopen-emu's server gives up 1 s (CO_SDO_TIMEOUT_US) after the client's last frame
+    timeout = reports["buerkert"]["sdo.server-timeout"].message
+    timed_out = re.search(r"aborted with 0x05040000 ([0-9.]+) s after", timeout)
+    assert timed_out and 0.9 <= float(timed_out.group(1)) <= 1.5, timeout
 
 
 def test_read_only_runs_send_no_download_and_no_nmt_command(three_devices, canopen_emu_bus):
@@ -79,6 +91,105 @@ def test_an_sdo_abort_fault_fails_the_object_dictionary_checks_with_the_frames(t
     # the frames that show it: the request and the abort in the node's place
     assert [(f.can_id, f.data.hex()) for f in result.frames] == [
         (0x611, "4018100100000000"), (0x591, "8018100100000206")]
+
+
+class NeverTimingOutServer:
+    """An SDO server of node 5 on python-can's virtual bus, wrong on purpose: it serves uploads (0x1000
+    expedited, any other entry segmented, b"0123456789") and answers a block download initiate, but never times
+    out a transfer and takes a block segment with sequence number 0 silently."""
+
+    NODE, VALUE = 5, b"0123456789"
+
+    def __init__(self, channel):
+        self.bus = can.Bus(interface="virtual", channel=channel)
+        self.position = 0
+        self.running = True
+        self.thread = threading.Thread(target=self.serve, daemon=True)
+        self.thread.start()
+
+    def answer(self, data):
+        self.bus.send(can.Message(arbitration_id=0x580 + self.NODE, data=bytes(data).ljust(8, b"\0"),
+                                  is_extended_id=False))
+
+    def serve(self):
+        while self.running:
+            request = self.bus.recv(0.05)
+            if request is None or request.arbitration_id != 0x600 + self.NODE:
+                continue
+            command, mux = request.data[0], bytes(request.data[1:4])
+            if command == 0x40 and mux == b"\x00\x10\x00":
+                self.answer(b"\x43" + mux + (0x20192).to_bytes(4, "little"))
+            elif command == 0x40:
+                self.position = 0
+                self.answer(b"\x41" + mux + len(self.VALUE).to_bytes(4, "little"))
+            elif command & 0xEF == 0x60:  # an upload segment request
+                chunk = self.VALUE[self.position:self.position + 7]
+                self.position += len(chunk)
+                last = self.position >= len(self.VALUE)
+                self.answer(bytes([command & 0x10 | (7 - len(chunk)) << 1 | last]) + chunk)
+            elif command & 0xE1 == 0xC0:  # a block download initiate: block size 127
+                self.answer(b"\xa4" + mux + b"\x7f")
+
+    def close(self):
+        self.running = False
+        self.thread.join()
+        self.bus.shutdown()
+
+
+def minimal_with_label(value):
+    """tests/eds/files/minimal.eds with 0x2000 'Label', a rw VISIBLE_STRING of this value."""
+    minimal = (SOURCE_DIR / "tests/eds/files/minimal.eds").read_text()
+    return minimal.replace("[OptionalObjects]\nSupportedObjects=1\n1=0x1017\n",
+                           "[OptionalObjects]\nSupportedObjects=2\n1=0x1017\n2=0x2000\n") + (
+        "\n[2000]\nParameterName=Label\nObjectType=0x7\nDataType=0x0009\nAccessType=rw\nDefaultValue="
+        f"{value}\nPDOMapping=0\n")
+
+
+def test_a_server_without_a_timeout_nor_a_sequence_check_fails_those_checks(tmp_path):
+    device = tmp_path / "never-times-out.eds"
+    device.write_text(minimal_with_label("0123456789"))
+    server = NeverTimingOutServer("never-times-out")
+    check_bus = can.Bus(interface="virtual", channel="never-times-out")
+    try:
+        report = run(check_bus, 5, device, only=["sdo.server-timeout", "sdo.block-sequence-error"], write=True,
+                     timeout=0.3)
+    finally:
+        check_bus.shutdown()
+        server.close()
+    timeout = report["sdo.server-timeout"]
+    assert timeout.status is Status.FAILED
+    assert timeout.message.startswith("0x2000:00 'Label' (VISIBLE_STRING, rw): a segmented upload left open after "
+                                      "its initiate was not aborted by the server within 5.3 s: expected abort "
+                                      "0x05040000 (SDO protocol timed out)"), timeout.message
+    # the initiate, its answer, and the abort this side sent when it gave up
+    assert [f.data.hex() for f in timeout.frames] == ["4000200000000000", "410020000a000000", "8000200000000405"]
+    sequence = report["sdo.block-sequence-error"]
+    assert sequence.status is Status.FAILED
+    assert "a block download segment with sequence number 0 was not answered within 0.3 s, expected abort " \
+           "0x05040003 (invalid sequence number)" in sequence.message
+    assert [f.data.hex() for f in sequence.frames] == [
+        "c60020000a000000", "a40020007f000000", "0030313233343536", "8000200003000405"]
+
+
+def test_a_value_of_more_than_one_block_goes_by_block_both_ways(canopen_emu_factory, canopen_emu_bus, tmp_path):
+    # 1000 bytes, longer than canopen-emu's SDO buffer: a large object, taken in blocks of 127 segments (889 bytes)
+    value = "".join(chr(0x41 + i % 26) for i in range(1000)).encode()
+    device = tmp_path / "long-label.eds"
+    device.write_text(minimal_with_label(value.decode()))
+    canopen_emu_factory(f"{device}:0x63")  # not a node-ID of file_devices, which may be on the bus
+    report = run(canopen_emu_bus.can_kwargs(), 0x63, device, write=True,
+                 only=["sdo.block-upload", "sdo.block-download", "sdo.block-sequence-error", "sdo.server-timeout"])
+    assert report.ok, [(r.name, r.message) for r in report.failed]
+    assert report["sdo.block-download"].message == "0x2000:00 'Label' (VISIBLE_STRING, rw) (1000 bytes, with CRC)"
+    # the check's client, with another value: 143 segments in two blocks, each confirmed whole (ackseq 127, 16)
+    bus = can.Bus(**canopen_emu_bus.can_kwargs())
+    try:
+        client = SdoClient(FrameLog(bus), 0x63)
+        assert client.block_download(0x2000, 0, value[::-1]) is True
+        assert [f.data[:3].hex() for f in client.frames if not f.sent and f.data[0] == 0xA2] == ["a27f7f", "a2107f"]
+        assert client.upload(0x2000, 0) == value[::-1]
+    finally:
+        bus.shutdown()
 
 
 def test_a_wrong_state_in_the_heartbeat_fails_the_heartbeat_and_nmt_checks(three_devices, canopen_emu_bus):

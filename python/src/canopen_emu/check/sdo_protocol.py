@@ -12,8 +12,13 @@ if TYPE_CHECKING:
     from .runner import Context
 
 ABORT_TOGGLE, ABORT_COMMAND = 0x05030000, 0x05040001
+ABORT_TIMEOUT, ABORT_SEQUENCE = 0x05040000, 0x05040003
 #: How long a server that must stay silent is given to answer anyway.
 SILENCE_S = 0.2
+#: The longest SDO server timeout sdo.server-timeout waits for (plus --timeout for the abort to arrive): CiA 301
+#: leaves the time to the device; canopen-emu (CO_SDO_TIMEOUT_US) and CANopenNode abort after 1 s, CanFestival
+#: (SDO_TIMEOUT_MS) after 3 s.
+SERVER_TIMEOUT_MAX_S = 5.0
 
 
 def long_readable_entry(ctx: "Context") -> Tuple[eds_module.Entry, bytes]:
@@ -192,6 +197,36 @@ def block_upload(ctx: "Context") -> Optional[str]:
     return f"{entry} ({len(data)} bytes, {'with' if crc else 'without'} CRC)"
 
 
+@check("sdo.server-timeout", clause="CiA 301 v4.2.0 §7.2.4.3 (SDO upload segment), §7.2.4.3.17 (abort 0x05040000)",
+       summary="a segmented upload left open after its initiate (no segment request follows) is aborted by the "
+               f"server with 0x05040000, naming the entry, within {SERVER_TIMEOUT_MAX_S:g} s (CiA 301 leaves the "
+               "time to the device)")
+def server_timeout(ctx: "Context") -> Optional[str]:
+    entry, _ = long_readable_entry(ctx)
+    with ctx.exchange():
+        ctx.sdo.start_segmented_upload(entry.index, entry.sub)
+    opened = ctx.sdo.frames[-1].time  # the initiate's answer: the server's timeout runs from the request before it
+    wait = SERVER_TIMEOUT_MAX_S + ctx.options.timeout
+    answer = ctx.sdo.silence(wait)
+    if answer is None:
+        ctx.sdo.send_abort(entry.index, entry.sub, ABORT_TIMEOUT)  # the client's side of the timeout
+        raise Failed(f"{entry}: a segmented upload left open after its initiate was not aborted by the server within "
+                     f"{wait:g} s: expected abort {abort_text(ABORT_TIMEOUT)}", ctx.sdo.frames)
+    if len(answer.data) != 8 or answer.data[0] != 0x80:
+        ctx.sdo.send_abort(entry.index, entry.sub, ABORT_TIMEOUT)
+        raise Failed(f"{entry}: waiting for the server's timeout, it sent {answer.data.hex(' ')} unasked, not an "
+                     f"abort {abort_text(ABORT_TIMEOUT)}", ctx.sdo.frames)
+    code = struct.unpack_from("<I", answer.data, 4)[0]
+    named = struct.unpack_from("<HB", answer.data, 1)
+    after = answer.time - opened
+    if code != ABORT_TIMEOUT:
+        raise Failed(f"{entry}: aborted after {after:.2f} s with {abort_text(code)}, expected "
+                     f"{abort_text(ABORT_TIMEOUT)}", ctx.sdo.frames)
+    if named != (entry.index, entry.sub):
+        raise Failed(f"{entry}: the timeout abort names 0x{named[0]:04X}:{named[1]:02X}", ctx.sdo.frames)
+    return f"{entry}: aborted with 0x{ABORT_TIMEOUT:08X} {after:.2f} s after the initiate"
+
+
 def writable_entry(ctx: "Context", long: bool) -> Tuple[eds_module.Entry, bytes]:
     """A readable and writable entry with its current value (not empty): of a string type or over 4 bytes
     (``long``: a segmented download, which CiA 301 allows for any length) or of 1 to 4 bytes; one of the
@@ -262,3 +297,70 @@ def download_toggle_error(ctx: "Context") -> Optional[str]:
         raise Failed(f"{entry}: aborted with {abort_text(code)}, expected {abort_text(ABORT_TOGGLE)}", ctx.sdo.frames)
     return str(entry)
 
+
+def block_download_entry(ctx: "Context") -> Tuple[eds_module.Entry, bytes]:
+    """The entry the block download checks write back: a string or one over 4 bytes (more than one segment),
+    else one of 1..4 bytes (CiA 301 lets block transfer carry any length)."""
+    try:
+        return writable_entry(ctx, long=True)
+    except NotApplicable:
+        return writable_entry(ctx, long=False)
+
+
+def no_block_transfer(e: SdoAbort) -> NotApplicable:
+    return NotApplicable(f"the server has no block transfer (the block download initiate of 0x{e.index:04X}:"
+                         f"{e.sub:02X} is aborted with 0x05040001)")
+
+
+@check("sdo.block-download", clause="CiA 301 v4.2.0 §7.2.4.3.9-16 (SDO block download, CRC)",
+       summary="where the server has block transfer (it does not abort the initiate with 0x05040001): a writable "
+               "entry takes its own value by block download (size indicated, CRC offered, blocks of the size the "
+               "server asks for, sequence numbers 1.. in each, c=1 on the last segment, the CRC where the server "
+               "supports it) and reads it back", writes=True)
+def block_download(ctx: "Context") -> Optional[str]:
+    entry, data = block_download_entry(ctx)
+    try:
+        crc = ctx.sdo.block_download(entry.index, entry.sub, data)
+    except SdoAbort as e:
+        if e.code == ABORT_COMMAND and len(e.frames) <= 2:  # refused at the initiate
+            raise no_block_transfer(e) from None
+        raise Failed(str(e), e.frames) from None
+    except SdoError as e:
+        ctx.sdo.send_abort(entry.index, entry.sub, 0x08000000)  # end what the server may still hold open
+        raise Failed(str(e), e.frames + ctx.sdo.frames[-1:]) from None
+    frames = list(ctx.sdo.frames)
+    with ctx.exchange():
+        back = ctx.upload(entry.index, entry.sub)
+    if back != data:
+        raise Failed(f"{entry}: wrote {data.hex(' ')} by block, read back {back.hex(' ')}", frames + ctx.sdo.frames)
+    return f"{entry} ({len(data)} bytes, {'with' if crc else 'without'} CRC)"
+
+
+@check("sdo.block-sequence-error", clause="CiA 301 v4.2.0 §7.2.4.3.9-16 (SDO block download), §7.2.4.3.17 (abort "
+                                          "0x05040003)",
+       summary="where the server has block transfer: a block download of an entry's own value whose first segment "
+               "has sequence number 0 (a block's are 1..127) is aborted with 0x05040003 (nothing is written: the "
+               "transfer never completes)", writes=True)
+def block_sequence_error(ctx: "Context") -> Optional[str]:
+    entry, data = block_download_entry(ctx)
+    try:
+        ctx.sdo.start_block_download(entry.index, entry.sub, len(data))
+    except SdoAbort as e:
+        if e.code == ABORT_COMMAND:
+            raise no_block_transfer(e) from None
+        raise Failed(str(e), e.frames) from None
+    except SdoError as e:
+        raise Failed(str(e), e.frames) from None
+    ctx.sdo.frames.append(ctx.log.send(ctx.sdo.request_id, bytes([0x00]) + data[:7].ljust(7, b"\0")))  # c=0, seq 0
+    answer = ctx.sdo.silence(ctx.options.timeout)
+    if answer is None or len(answer.data) != 8 or answer.data[0] != 0x80:
+        ctx.sdo.send_abort(entry.index, entry.sub, ABORT_SEQUENCE)  # end the transfer it went on with
+        what = (f"not answered within {ctx.options.timeout:g} s" if answer is None
+                else f"answered with {answer.data.hex(' ')}")
+        raise Failed(f"{entry}: a block download segment with sequence number 0 was {what}, expected abort "
+                     f"{abort_text(ABORT_SEQUENCE)}", ctx.sdo.frames)
+    code = struct.unpack_from("<I", answer.data, 4)[0]
+    if code != ABORT_SEQUENCE:
+        raise Failed(f"{entry}: aborted with {abort_text(code)}, expected {abort_text(ABORT_SEQUENCE)}",
+                     ctx.sdo.frames)
+    return str(entry)
