@@ -561,3 +561,22 @@ def test_a_tpdo_closer_than_its_inhibit_time_fails_the_inhibit_check(tmp_path):
     assert result.frames[1].time - result.frames[0].time < 0.198
     # put back: the inhibit time and timer as found, pre-operational
     assert node.values[(0x1800, 3)][0] == 0 and node.values[(0x1800, 5)][0] == 0 and node.state == 0x7F
+
+
+def test_the_rpdo_length_error_is_logged_in_the_error_history(canopen_emu_factory, canopen_emu_bus, tmp_path):
+    # the SDS's RPDO maps its write-only 0x6200:01; as a file device whose EDS makes it rw, both RPDO checks apply,
+    # and the SDS keeps an error history
+    readable = tmp_path / "sds-rw.eds"
+    text = EDS["sds"].read_text(encoding="latin-1")
+    hv_release = "ParameterName=Write HV Release\nObjectType=0x7\nDataType=0x0005\nAccessType=wo\n"
+    assert hv_release in text
+    readable.write_text(text.replace(hv_release, hv_release.replace("=wo", "=rw")), encoding="latin-1")
+    emu = canopen_emu_factory(f"{readable}:0x63")  # not a node-ID of file_devices, which may be on the bus
+    report = run(canopen_emu_bus.can_kwargs(), 0x63, readable, only=["pdo.rpdo-write-read", "pdo.rpdo-length-error"],
+                 write=True)
+    assert report.ok, "\n".join(f"{r.name}: {r.message}" for r in report.failed)
+    assert report["pdo.rpdo-write-read"].message == "0x1400 (0x6200:01 changed)"
+    assert report["pdo.rpdo-length-error"].message == (
+        "RPDO 0x1400 on 0x263: EMCY 10 82 11 04 00 00 00 00, then 00 00 00 04 00 00 00 00; 0x1003:01 = 0x00048210")
+    # the history keeps the check's error; the output is put back
+    assert [r.value for r in emu.client.get_many(0x63, ["0x1003:00", "0x1003:01", "0x6200:01"])] == [1, 0x48210, 0]
