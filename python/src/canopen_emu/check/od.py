@@ -280,3 +280,52 @@ def write_limits(ctx: "Context") -> Optional[str]:
         raise NotApplicable("no writable integer entry has a limit inside its type's range")
     findings.raise_if_any("limits not kept")
     return f"{tried} limits"
+
+
+#: Objects whose writes have preconditions beyond the value (CiA 301: a PDO's parameters and mapping change only
+#: while it is invalid, an SDO server's COB-IDs likewise): a refusal of a limit there says nothing about the limit.
+STATEFUL_AREAS = ((0x1200, 0x12FF), (0x1400, 0x1BFF))
+#: Aborts that say the value is out of range: a refusal of the entry's own limit with one of these fails the check;
+#: another abort (the device's state, 0x0800002x; parameters that do not fit together, 0x06040043) is noted only.
+ABORT_VALUE_RANGE = (0x06090030, ABORT_TOO_HIGH, ABORT_TOO_LOW, 0x06090036)
+
+
+@check("od.takes-limits", clause="CiA 306 (LowLimit, HighLimit), CiA 301 v4.2.0 §7.2.4.3.17 (aborts 0x06090030..32)",
+       summary="every writable integer entry with a LowLimit or HighLimit in the EDS takes each limit itself (not "
+               "refused as out of range), and its value is put back after each (PDO and SDO parameters left out: "
+               "their writes have preconditions)", writes=True)
+def takes_limits(ctx: "Context") -> Optional[str]:
+    findings = Findings()
+    tried = 0
+    notes = []
+    for entry, original in _writable_with_value(ctx):
+        if entry.data_type not in eds_module.SIGNED_TYPES | eds_module.UNSIGNED_TYPES or entry.data_type == 0x01:
+            continue
+        if any(low <= entry.index <= high for low, high in STATEFUL_AREAS):
+            continue
+        size = entry.size or 0
+        signed = entry.data_type in eds_module.SIGNED_TYPES
+        type_low, type_high = (-(1 << (8 * size - 1)), (1 << (8 * size - 1)) - 1) if signed else (0, (1 << 8 * size) - 1)
+        for limit, what in ((entry.low, "LowLimit"), (entry.high, "HighLimit")):
+            if not isinstance(limit, int) or not type_low <= limit <= type_high:
+                continue
+            tried += 1
+            try:
+                ctx.sdo.download(entry.index, entry.sub, eds_module.encode(limit, entry.data_type))
+            except SdoAbort as e:
+                if e.code in ABORT_VALUE_RANGE:
+                    findings.add(f"{entry}: its {what} {limit} refused with {abort_text(e.code)}", e.frames)
+                else:
+                    notes.append(f"{entry}: {what} {limit} refused with {abort_text(e.code)} (not a range abort)")
+                continue
+            except SdoError as e:
+                findings.add(f"{entry}: its {what} {limit}: {e.reason}", e.frames)
+                continue
+            try:
+                ctx.sdo.download(entry.index, entry.sub, original)
+            except SdoError as e:
+                findings.add(f"{entry}: its value could not be put back after {what} {limit}: {e}", e.frames)
+    if not tried:
+        raise NotApplicable("no writable integer entry (but PDO and SDO parameters) has a limit in its type's range")
+    findings.raise_if_any("limits refused")
+    return f"{tried} limits taken" + (f"; {'; '.join(notes)}" if notes else "")
