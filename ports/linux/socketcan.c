@@ -303,25 +303,13 @@ static __attribute__((noinline)) int read_failed(socketcan_t *c, int e)
     return -1;
 }
 
-/* Points each message of the read-ahead at its frame; again whenever the struct moved since. */
-static void rx_setup(socketcan_t *c)
-{
-    for (unsigned i = 0U; i < SOCKETCAN_RX_BATCH; i++) {
-        c->rx_iov[i].iov_base = &c->rx_frames[i];
-        c->rx_iov[i].iov_len = sizeof c->rx_frames[i];
-        memset(&c->rx_msgs[i], 0, sizeof c->rx_msgs[i]);
-        c->rx_msgs[i].msg_hdr.msg_iov = &c->rx_iov[i];
-        c->rx_msgs[i].msg_hdr.msg_iovlen = 1U;
-    }
-}
-
 int socketcan_read_ahead(socketcan_t *c)
 {
     if (c->fd < 0) {
         return 0;
     }
     if (c->rx_msgs[0].msg_hdr.msg_iov != &c->rx_iov[0]) {
-        rx_setup(c);
+        socketcan_rx_setup(c);
     }
     /* Fewer than asked for: the queue ran empty (or an error came after the first frames, which the next call
      * returns). */

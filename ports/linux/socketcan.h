@@ -121,6 +121,19 @@ static inline short socketcan_poll_events(const socketcan_t *c, bool tx_pending)
     return (short)(POLLIN | (tx_pending && !c->tx_full ? POLLOUT : 0)); /* inline: the loop asks before every sleep */
 }
 
+/** Points each message of the read-ahead at its frame, for recvmmsg; again whenever the struct moved since (its
+ *  iovecs point into it). For socketcan_read_ahead, and for a test double of it. */
+static inline void socketcan_rx_setup(socketcan_t *c)
+{
+    for (unsigned i = 0U; i < SOCKETCAN_RX_BATCH; i++) {
+        c->rx_iov[i].iov_base = &c->rx_frames[i];
+        c->rx_iov[i].iov_len = sizeof c->rx_frames[i];
+        memset(&c->rx_msgs[i], 0, sizeof c->rx_msgs[i]);
+        c->rx_msgs[i].msg_hdr.msg_iov = &c->rx_iov[i];
+        c->rx_msgs[i].msg_hdr.msg_iovlen = 1U;
+    }
+}
+
 /** socketcan_read's call to the kernel, with nothing read ahead: reads ahead up to SOCKETCAN_RX_BATCH frames (one
  *  system call); their count, 0 when none waits, -1 when the interface went away (reported, reopened later). */
 int socketcan_read_ahead(socketcan_t *c);

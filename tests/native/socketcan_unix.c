@@ -84,13 +84,7 @@ int socketcan_read_ahead(socketcan_t *c)
         return 0;
     }
     if (c->rx_msgs[0].msg_hdr.msg_iov != &c->rx_iov[0]) {
-        for (unsigned i = 0U; i < SOCKETCAN_RX_BATCH; i++) {
-            c->rx_iov[i].iov_base = &c->rx_frames[i];
-            c->rx_iov[i].iov_len = sizeof c->rx_frames[i];
-            memset(&c->rx_msgs[i], 0, sizeof c->rx_msgs[i]);
-            c->rx_msgs[i].msg_hdr.msg_iov = &c->rx_iov[i];
-            c->rx_msgs[i].msg_hdr.msg_iovlen = 1U;
-        }
+        socketcan_rx_setup(c);
         c->rx_since_query = true;
     }
     const int n = recvmmsg(c->fd, c->rx_msgs, SOCKETCAN_RX_BATCH, MSG_DONTWAIT, NULL);

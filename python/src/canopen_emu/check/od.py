@@ -252,6 +252,21 @@ def _is_mapping(index: int) -> bool:
     return 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
 
 
+def _limited_integers(ctx: "Context") -> List[Tuple[eds_module.Entry, bytes, int, int]]:
+    """The readable and writable integer entries (not BOOLEAN) with their current bytes and their type's range: what
+    the limit checks write."""
+    found = []
+    for entry, original in _writable_with_value(ctx):
+        if entry.data_type not in eds_module.SIGNED_TYPES | eds_module.UNSIGNED_TYPES or entry.data_type == 0x01:
+            continue
+        bits = 8 * (entry.size or 0)
+        if entry.data_type in eds_module.SIGNED_TYPES:
+            found.append((entry, original, -(1 << (bits - 1)), (1 << (bits - 1)) - 1))
+        else:
+            found.append((entry, original, 0, (1 << bits) - 1))
+    return found
+
+
 @check("od.write-limits", clause="CiA 306 (LowLimit, HighLimit), CiA 301 v4.2.0 §7.2.4.3.17 (aborts 0x06090031, "
                                  "0x06090032)",
        summary="every writable integer entry with a HighLimit (LowLimit) in the EDS refuses one above it with "
@@ -260,12 +275,7 @@ def _is_mapping(index: int) -> bool:
 def write_limits(ctx: "Context") -> Optional[str]:
     findings = Findings()
     tried = 0
-    for entry, original in _writable_with_value(ctx):
-        if entry.data_type not in eds_module.SIGNED_TYPES | eds_module.UNSIGNED_TYPES or entry.data_type == 0x01:
-            continue
-        size = entry.size or 0
-        signed = entry.data_type in eds_module.SIGNED_TYPES
-        type_low, type_high = (-(1 << (8 * size - 1)), (1 << (8 * size - 1)) - 1) if signed else (0, (1 << 8 * size) - 1)
+    for entry, original, type_low, type_high in _limited_integers(ctx):
         for limit, step, code, what in ((entry.high, 1, ABORT_TOO_HIGH, "above HighLimit"),
                                         (entry.low, -1, ABORT_TOO_LOW, "below LowLimit")):
             if not isinstance(limit, int) or not type_low <= limit + step <= type_high:
@@ -298,14 +308,9 @@ def takes_limits(ctx: "Context") -> Optional[str]:
     findings = Findings()
     tried = 0
     notes = []
-    for entry, original in _writable_with_value(ctx):
-        if entry.data_type not in eds_module.SIGNED_TYPES | eds_module.UNSIGNED_TYPES or entry.data_type == 0x01:
-            continue
+    for entry, original, type_low, type_high in _limited_integers(ctx):
         if any(low <= entry.index <= high for low, high in STATEFUL_AREAS):
             continue
-        size = entry.size or 0
-        signed = entry.data_type in eds_module.SIGNED_TYPES
-        type_low, type_high = (-(1 << (8 * size - 1)), (1 << (8 * size - 1)) - 1) if signed else (0, (1 << 8 * size) - 1)
         for limit, what in ((entry.low, "LowLimit"), (entry.high, "HighLimit")):
             if not isinstance(limit, int) or not type_low <= limit <= type_high:
                 continue
