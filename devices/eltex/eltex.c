@@ -110,8 +110,9 @@ static uint64_t op_from_phase(const device_t *dev, uint64_t op_us)
 
 static uint64_t save_minute(const device_t *dev, uint64_t op_us) { return op_from_phase(dev, op_us) / MINUTE_US; }
 
-/* Writes the blob with these flags (the counters as they are) and commits it: on its own (flags 0) or as one
- * area of a store in progress (CO_NVM_MORE: the core commits the store's last area, E13/E15). */
+/* Writes the blob with these flags (the counters as they are) and commits it: on its own (commit_flags
+ * CO_NVM_BACKGROUND: the periodic save) or as one area of a store in progress (CO_NVM_MORE: the core commits the
+ * store's last area, E13/E15). */
 static co_status_t nvm_write_blob(device_t *dev, bool params_stored, bool can_off, uint32_t commit_flags)
 {
     const eltex_t *x = eltex_of(dev);
@@ -143,7 +144,9 @@ static void nvm_save(device_t *dev)
     if (p == NULL || p->nvm_write == NULL || p->nvm_commit == NULL) {
         return;
     }
-    if (nvm_write_blob(dev, x->params_stored, x->can_off, 0U) != CO_OK && !x->nvm_error_logged) {
+    /* In the background (co_port.h): the port may write it later, so its fsync never holds a bus of many nodes; a
+     * failure is then said by a later save, which is soon enough for a log line. */
+    if (nvm_write_blob(dev, x->params_stored, x->can_off, CO_NVM_BACKGROUND) != CO_OK && !x->nvm_error_logged) {
         x->nvm_error_logged = true;
         device_printf(dev, "%s: counters could not be stored (NVM error)", dev->cls->name);
     }

@@ -31,6 +31,11 @@ uint32_t co_crc32(uint32_t crc, const uint8_t *data, size_t len);
 
 /** nvm_commit() total_len flag: more areas of the same store follow (see co_port_t.nvm_commit). */
 #define CO_NVM_MORE ((uint32_t)0x80000000UL)
+/** nvm_commit() total_len flag: a save of the device model's own data that no answer waits for (see
+ *  co_port_t.nvm_commit); the port may make it durable later. */
+#define CO_NVM_BACKGROUND ((uint32_t)0x40000000UL)
+/** The flags of nvm_commit()'s total_len: total_len & ~CO_NVM_FLAGS is the blob's length. */
+#define CO_NVM_FLAGS (CO_NVM_MORE | CO_NVM_BACKGROUND)
 /** nvm_commit() total_len: the store in progress is abandoned; its pending areas keep their old blobs. */
 #define CO_NVM_DISCARD ((uint32_t)0xFFFFFFFFUL)
 
@@ -63,7 +68,17 @@ typedef struct co_port {
      * all or none (the result of the last commit is the store's). A store abandoned after CO_NVM_MORE commits
      * ends with total_len == CO_NVM_DISCARD: every pending area keeps its old blob. A port that cannot group
      * areas commits a CO_NVM_MORE area on its own (mask the flag off) and ignores CO_NVM_DISCARD; a store of
-     * several areas is then only atomic per area. NULL with nvm_write.
+     * several areas is then only atomic per area.
+     *
+     * CO_NVM_BACKGROUND in total_len (never with CO_NVM_MORE; the core never sets it): a device model's save of
+     * its own data (CO_NVM_DEVICE: an operating-time counter, a drag indicator) that no answer waits for. The port
+     * may return before the blob is durable and make it durable later (another thread, an idle moment), each
+     * area's blobs in the order committed; a later nvm_read() sees the newest blob at once, and a commit without
+     * the flag (a store someone waits for) of the same node lands after it. A background write that fails leaves
+     * the area's old blob and is reported by a later commit of that area (the port says which: the Linux files,
+     * the next background commit). A port that cannot write later masks the flag off and commits at once, as it
+     * does when a store of several areas is open (it then ends that store, as any commit without CO_NVM_MORE).
+     * NULL with nvm_write.
      */
     co_status_t (*nvm_commit)(void *ctx, co_nvm_area_t area, uint32_t total_len);
 

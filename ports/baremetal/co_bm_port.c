@@ -19,13 +19,14 @@ static co_status_t port_nvm_write(void *ctx, co_nvm_area_t area, uint32_t offset
 
 /* Two slots per area make each area's commit atomic, but not several areas together: a store of several areas
  * (co_port.h, CO_NVM_MORE) is committed area by area, and an abandoned one (CO_NVM_DISCARD) keeps the areas
- * already committed. A board that needs multi-area stores atomic keeps them in one area of its own layout. */
+ * already committed. A board that needs multi-area stores atomic keeps them in one area of its own layout. A
+ * background commit (CO_NVM_BACKGROUND) is committed at once: no thread here to do it later. */
 static co_status_t port_nvm_commit(void *ctx, co_nvm_area_t area, uint32_t total_len)
 {
     if (total_len == CO_NVM_DISCARD) {
         return CO_OK;
     }
-    return co_bm_nvm_commit(((co_bm_port_t *)ctx)->nvm, area, total_len & ~CO_NVM_MORE);
+    return co_bm_nvm_commit(((co_bm_port_t *)ctx)->nvm, area, total_len & ~CO_NVM_FLAGS);
 }
 
 static co_status_t port_nvm_read(void *ctx, co_nvm_area_t area, uint32_t offset, void *data, size_t len)

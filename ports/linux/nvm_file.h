@@ -16,6 +16,18 @@
  * per record (in User-Mode Linux each is a round trip to the host: a node's parameter load took 150-350 ms
  * and a CI run's last nodes booted after 10 s). Every load sees the file as it is then, even one replaced
  * by hand.
+ *
+ * A commit with CO_NVM_BACKGROUND (co_port.h: a model's own save no answer waits for) returns at once: a copy of the
+ * blob goes to the process's writer thread (nvm_writer.h), which writes it as a store of that one area (the same
+ * steps: .tmp, fsync, rename, directory fsync), so its fsyncs never hold the loop. Until it is on disk, a load of
+ * the area sees that blob (the newest handed over), not the file. Order per node is kept: a commit without the flag
+ * (a 0x1010 or LSS store, an answer waiting for it), a discard and nvm_file_close() first wait for the node's
+ * background commits; a newer blob of an area replaces one that has not started. A background write that fails
+ * leaves the file as it was and is answered CO_ERR_IO by the area's next background commit (that blob is not kept:
+ * the model saves again later); a commit without the flag of the area forgets it. A full writer queue, and a
+ * background commit while a store of several areas is open, commit at once as a port without the flag does. At exit
+ * the writer carries out every commit handed over; a SIGKILL or a crash loses the ones not yet done (each area is
+ * then its old blob or a newer one, never a mix).
  * Files: <dir>/<key>.params, .lss, .device.
  */
 #ifndef NVM_FILE_H
@@ -27,6 +39,7 @@
 #include <stdint.h>
 
 #include "co/co.h"
+#include "nvm_writer.h"
 
 /** A blob in memory: one being written (staging) or one loaded from its file (loaded). */
 typedef struct nvm_staging {
@@ -42,14 +55,19 @@ typedef struct nvm_file {
     nvm_staging_t staging[3];
     bool pending[3];         /**< committed to <file>.tmp with CO_NVM_MORE: waits for the store's last commit */
     nvm_staging_t loaded[3]; /**< the file as read by the load in progress (active: it was read) */
+    nvm_staging_t newest[3]; /**< the blob of the area's last background commit: loads see it until it is written */
     int dir_fd;
+    nvm_writer_client_t writer; /**< the node's background commits (its write function runs in the writer thread) */
 } nvm_file_t;
 
 /** Prepares the files of one node (key e.g. "pro-ionizer-99") in dir, creating dir if needed.
  *  Returns 0 or an errno value with a message for the user in err. */
 int nvm_file_open(nvm_file_t *n, const char *dir, const char *key, char *err, size_t errlen);
-/** Frees the node's buffers; a store without its last commit is dropped (it was never confirmed). */
+/** Waits for the node's background commits, then frees its buffers; a store without its last commit is dropped (it
+ *  was never confirmed). */
 void nvm_file_close(nvm_file_t *n);
+/** Waits until the node's background commits are done (on disk, or failed: the next one says so). */
+void nvm_file_flush(nvm_file_t *n);
 
 /** Checks that dir exists or can be created and that files can be written there. */
 int nvm_file_check_dir(const char *dir, char *err, size_t errlen);

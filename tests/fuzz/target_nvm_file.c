@@ -267,6 +267,11 @@ static void take(ent_t *e, const char *path)
 static void snapshot(snap_t *s)
 {
     bool seen[N_NAMES] = {false};
+    /* The models' own saves are background commits (co_port.h CO_NVM_BACKGROUND): the directory a step leaves is
+     * the one once they are written (and no edit by hand may race with them). */
+    if (g.nvm_open) {
+        nvm_file_flush(&g.nvm);
+    }
     DIR *d = opendir(g.dir);
     if (d == NULL) {
         fail("the NVM directory %s is gone", g.dir);

@@ -57,7 +57,10 @@ static co_status_t fake_nvm_commit(void *ctx, co_nvm_area_t area, uint32_t total
         return CO_OK;
     }
     const bool more = (total_len & CO_NVM_MORE) != 0U;
-    const uint32_t len = total_len & ~CO_NVM_MORE;
+    const uint32_t len = total_len & ~CO_NVM_FLAGS; /* a background commit is applied at once */
+    if ((total_len & CO_NVM_BACKGROUND) != 0U) {
+        fp->nvm[area].background_commits++;
+    }
     log_commit(fp, area, more ? '+' : '.');
     if (len > FAKE_NVM_SIZE || (fp->nvm_fail_area_mask & (1U << (unsigned)area)) != 0U) {
         drop_pending(fp);

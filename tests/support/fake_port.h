@@ -27,6 +27,7 @@ typedef struct fake_nvm_area {
     bool is_pending;
     uint32_t commits;       /* commits that replaced the stored blob */
     uint32_t more_commits;  /* CO_NVM_MORE commits of this area */
+    uint32_t background_commits; /* CO_NVM_BACKGROUND commits of this area (applied at once, counted in commits) */
 } fake_nvm_area_t;
 
 typedef struct fake_port {
