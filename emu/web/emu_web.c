@@ -16,12 +16,14 @@
 #include "web/emu_web_files.h"
 #include "web/emu_web_http.h"
 #include "web/emu_web_sessions.h"
+#include "web/emu_web_stream.h"
 
 /* In web/index.html, where the token goes. */
 #define TOKEN_PLACEHOLDER "@CANOPEN_EMU_TOKEN@"
 #define API_SESSION "/api/session"
+#define STREAM_SUFFIX "/stream"
 
-typedef enum api_route { ROUTE_OPEN, ROUTE_EXCHANGE } api_route_t;
+typedef enum api_route { ROUTE_OPEN, ROUTE_EXCHANGE, ROUTE_STREAM } api_route_t;
 
 /* An API request whose body is arriving (libmicrohttpd hands it over in pieces). */
 typedef struct web_request {
@@ -69,6 +71,10 @@ static enum MHD_Result exchange(emu_web_t *w, struct MHD_Connection *c, const we
                               "earlier requests of this session still wait to run: exchange with an empty body first",
                               NULL);
     }
+    if (s->stream != NULL) { /* everything goes on the stream, in order: the answers at the end of this pass */
+        s->send_now = s->send_now || q->len > 0U;
+        return MHD_queue_response(c, MHD_HTTP_OK, w->empty_exchange);
+    }
     size_t len = 0U;
     char *out = web_session_take_output(s, &len);
     if (out == NULL) { /* what an idle page gets four times a second: the answer made once, with its headers */
@@ -83,6 +89,23 @@ static enum MHD_Result exchange(emu_web_t *w, struct MHD_Connection *c, const we
     return web_send(c, MHD_HTTP_OK, r, true);
 }
 
+/* POST /api/session/ID/stream: the session's lines from now on, as they come (emu_web_stream.h). */
+static enum MHD_Result open_stream(emu_web_t *w, struct MHD_Connection *c, const web_request_t *q)
+{
+    web_session_t *s = web_session_find(w, q->id);
+    if (s == NULL || s->overflow || s->session.overflow) {
+        return web_send_error(c, MHD_HTTP_NOT_FOUND, true, "no such session (expired or dropped): open a new one",
+                              NULL);
+    }
+    struct MHD_Response *r = web_stream_open(s, c);
+    if (r == NULL) {
+        return MHD_NO;
+    }
+    const enum MHD_Result result = MHD_queue_response(c, MHD_HTTP_OK, r);
+    MHD_destroy_response(r);
+    return result;
+}
+
 /* The answer of an exchange with nothing to give (no body, every API header), made once by web_start. */
 static struct MHD_Response *make_empty_exchange(void)
 {
@@ -95,7 +118,8 @@ static struct MHD_Response *make_empty_exchange(void)
     return r;
 }
 
-/* /api/session or /api/session/ID (32 lowercase hex digits); false for any other path. */
+/* /api/session, /api/session/ID or /api/session/ID/stream (ID: 32 lowercase hex digits); false for any other
+ * path. */
 static bool api_route(const char *path, api_route_t *route, char *id)
 {
     if (strcmp(path, API_SESSION) == 0) {
@@ -103,12 +127,19 @@ static bool api_route(const char *path, api_route_t *route, char *id)
         return true;
     }
     const size_t prefix = sizeof API_SESSION; /* "/api/session/" */
-    if (strncmp(path, API_SESSION "/", prefix) != 0 || strlen(path + prefix) != WEB_ID_HEX ||
-        strspn(path + prefix, "0123456789abcdef") != WEB_ID_HEX) {
+    if (strncmp(path, API_SESSION "/", prefix) != 0 || strspn(path + prefix, "0123456789abcdef") != WEB_ID_HEX) {
         return false;
     }
-    *route = ROUTE_EXCHANGE;
-    memcpy(id, path + prefix, WEB_ID_HEX + 1);
+    const char *rest = path + prefix + WEB_ID_HEX;
+    if (*rest == '\0') {
+        *route = ROUTE_EXCHANGE;
+    } else if (strcmp(rest, STREAM_SUFFIX) == 0) {
+        *route = ROUTE_STREAM;
+    } else {
+        return false;
+    }
+    memcpy(id, path + prefix, WEB_ID_HEX);
+    id[WEB_ID_HEX] = '\0';
     return true;
 }
 
@@ -193,7 +224,15 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
         return web_send_error(c, MHD_HTTP_CONTENT_TOO_LARGE, true, "a request body has at most 16384 bytes", NULL);
     }
     const co_time_us_t now = socketcan_now_us();
-    return q->route == ROUTE_OPEN ? open_session(w, c, now) : exchange(w, c, q, now);
+    switch (q->route) {
+    case ROUTE_OPEN:
+        return open_session(w, c, now);
+    case ROUTE_STREAM:
+        return open_stream(w, c, q); /* its body, if any, means nothing */
+    case ROUTE_EXCHANGE:
+    default:
+        return exchange(w, c, q, now);
+    }
 }
 
 static void on_completed(void *cls, struct MHD_Connection *c, void **state, enum MHD_RequestTerminationCode why)
@@ -284,7 +323,8 @@ int web_start(emu_t *emu, emu_web_t *w, const char *host_port, char *err, size_t
     }
     /* No thread of its own (MHD_USE_INTERNAL_POLLING_THREAD not given): everything runs in MHD_run, called by the
      * main loop, so the callbacks touch the nodes on the loop's thread as every other control session does. */
-    w->daemon = MHD_start_daemon(MHD_USE_EPOLL | MHD_USE_ERROR_LOG, 0U, NULL, NULL, on_request, w,
+    /* Suspend and resume: a stream's connection waits out of the polling while nothing is to be sent. */
+    w->daemon = MHD_start_daemon(MHD_USE_EPOLL | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME, 0U, NULL, NULL, on_request, w,
                                  MHD_OPTION_EXTERNAL_LOGGER, on_log, w, /* first: it covers the options' messages */
                                  MHD_OPTION_LISTEN_SOCKET, (MHD_socket)w->listener.fd,
                                  MHD_OPTION_CONNECTION_LIMIT, (unsigned int)WEB_CONNECTIONS_MAX,
@@ -325,7 +365,7 @@ nfds_t web_poll_fds(emu_web_t *w, struct pollfd *pfd, co_time_us_t now, co_time_
         w->run_at = now + (co_time_us_t)(ms < 3600000U ? ms : 3600000U) * 1000U;
         *next = w->run_at < *next ? w->run_at : *next;
     }
-    const co_time_us_t sessions = web_sessions_deadline(w, now);
+    const co_time_us_t sessions = web_sessions_deadline(w, now); /* expiries, streams' batches and keep-alives */
     *next = sessions < *next ? sessions : *next;
     return 1U;
 }
@@ -341,7 +381,9 @@ void web_service(emu_t *emu, emu_web_t *w, const struct pollfd *pfd, nfds_t n, c
         w->run_at = CO_NEVER;
         (void)MHD_run(w->daemon); /* accepts, reads, answers: the callbacks above, without blocking */
     }
-    web_sessions_service(emu, w, now);
+    if (web_sessions_service(emu, w, now)) {
+        (void)MHD_run(w->daemon); /* the streams woken send now, not at the next wake-up */
+    }
     log_limit_tick(&w->refusals, now);
     log_limit_tick(&w->server_log, now);
 }
@@ -349,9 +391,10 @@ void web_service(emu_t *emu, emu_web_t *w, const struct pollfd *pfd, nfds_t n, c
 void web_stop(emu_t *emu, emu_web_t *w)
 {
     while (w->n_sessions > 0U) {
-        web_session_remove(emu, w, w->sessions[w->n_sessions - 1U], LOG_QUIET, NULL);
+        web_session_remove(emu, w, w->sessions[w->n_sessions - 1U], LOG_QUIET, NULL); /* streams ended, resumed */
     }
     if (w->daemon != NULL) {
+        (void)MHD_run(w->daemon); /* libmicrohttpd's rule: no connection suspended when it stops */
         MHD_stop_daemon(w->daemon); /* closes its connections and the listening socket */
         w->daemon = NULL;
         w->listener.fd = -1;

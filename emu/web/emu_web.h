@@ -9,7 +9,7 @@
  * the page).
  *
  * A web session is a control session (emu_session.h) whose output waits in a buffer of its own for the browser's
- * next exchange; commands take exactly the path of the control socket's, but a web session may not stop the
+ * next exchange, or goes out on the session's stream while one is open (emu_web_stream.h); commands take exactly the path of the control socket's, but a web session may not stop the
  * emulator or write a file (emu_session_t.restricted). Nothing a browser does blocks the nodes: sockets are
  * non-blocking, an exchange runs at most WEB_EXCHANGE_UNITS of its requests at once and the rest wait for the
  * main loop's budget of all sessions' work (emu_session_work.c), and the limits below bound what any number of
@@ -36,6 +36,11 @@ struct web_session;
 #define WEB_SESSIONS_MAX 8
 /** A session not exchanged with for this long is removed. */
 #define WEB_SESSION_IDLE_US (10U * 1000000U)
+/** How long lines wait for a session's stream before it is woken to send them (emu_web_stream.h): the events of a
+ *  busy trace go in batches, a few exchanges' worth of libmicrohttpd's work a second, not one write per frame. */
+#define WEB_STREAM_BATCH_US 50000U
+/** A stream silent for this long sends an empty line (a page gives a stream up after 15 s without a byte). */
+#define WEB_STREAM_KEEPALIVE_US (5U * 1000000U)
 /** Bytes of one request's body (request lines); more gets 413. */
 #define WEB_BODY_MAX (16U * 1024U)
 /** Units of work (request lines, pieces of a streamed answer) an exchange runs at once, so that its answers come
@@ -59,6 +64,7 @@ struct web_session;
 typedef struct emu_web {
     struct MHD_Daemon *daemon;      /* NULL: no --web */
     int epoll_fd;                   /* libmicrohttpd's: readable when it has work */
+    bool run_again;                 /* a stream ended outside libmicrohttpd's run: it must run to end its answer */
     co_time_us_t run_at;            /* when libmicrohttpd asked to run at the latest, without a wake-up of its
                                      * descriptor (a connection's timeout; now: work it holds); CO_NEVER: none */
     tcp_listener_t listener;        /* what was bound (fd owned by libmicrohttpd once it runs) */

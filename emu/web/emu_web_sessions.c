@@ -10,6 +10,7 @@
 #include "runtime/emu.h"
 #include "runtime/emu_events.h"
 #include "runtime/emu_output.h"
+#include "web/emu_web_stream.h"
 
 bool web_random_hex(char *out, size_t n)
 {
@@ -52,6 +53,8 @@ web_session_t *web_session_open(emu_t *emu, emu_web_t *w, co_time_us_t now, bool
     s->web = w;
     s->number = w->next_number++;
     s->last_exchange = now;
+    s->waiting_since = CO_NEVER;
+    s->quiet_since = now;
     char name[64];
     (void)snprintf(name, sizeof name, "web session %lu", s->number);
     session_init(&s->session, name, session_write, s);
@@ -104,6 +107,9 @@ void web_session_remove(emu_t *emu, emu_web_t *w, web_session_t *s, int log_leve
     if (why != NULL) {
         logline(log_level, "web: %s %s", s->session.name, why);
     }
+    if (s->stream != NULL && web_stream_end(s->stream)) {
+        w->run_again = true; /* the stream's answer ends when libmicrohttpd runs */
+    }
     events_remove_session(emu, &s->session);
     session_free(&s->session);
     for (size_t i = 0U; i < w->n_sessions; i++) {
@@ -116,32 +122,64 @@ void web_session_remove(emu_t *emu, emu_web_t *w, web_session_t *s, int log_leve
     free(s);
 }
 
-void web_sessions_service(emu_t *emu, emu_web_t *w, co_time_us_t now)
+/* A streamed session's lines due, or its keep-alive: its stream woken. true: libmicrohttpd must run. */
+static bool stream_due(web_session_t *s, co_time_us_t now)
 {
+    const bool lines = s->out.len > 0U;
+    if (lines ? !s->send_now && (s->waiting_since == CO_NEVER || now < s->waiting_since + WEB_STREAM_BATCH_US)
+              : now < s->quiet_since + WEB_STREAM_KEEPALIVE_US) {
+        return false;
+    }
+    s->keepalive = !lines;
+    s->send_now = false;
+    s->waiting_since = CO_NEVER;
+    s->quiet_since = now;
+    return web_stream_wake(s->stream);
+}
+
+bool web_sessions_service(emu_t *emu, emu_web_t *w, co_time_us_t now)
+{
+    bool run = false;
     for (size_t i = w->n_sessions; i > 0U; i--) {
         web_session_t *s = w->sessions[i - 1U];
         if (s->overflow || s->session.overflow) {
             char why[96];
             (void)snprintf(why, sizeof why, "dropped: more than %u bytes waited for its next exchange", WEB_OUTPUT_MAX);
             web_session_remove(emu, w, s, LOG_QUIET, why);
+        } else if (s->stream != NULL) {
+            s->last_exchange = now; /* in use while its stream is open: a page that does not post is idle, not gone */
+            run = stream_due(s, now) || run;
         } else if (now > s->last_exchange && now - s->last_exchange >= WEB_SESSION_IDLE_US) {
             char why[64]; /* (an exchange during this pass is stamped after now) */
             (void)snprintf(why, sizeof why, "removed: no exchange for %u s", WEB_SESSION_IDLE_US / 1000000U);
             web_session_remove(emu, w, s, LOG_NORMAL, why);
         }
     }
+    run = run || w->run_again;
+    w->run_again = false;
+    return run;
 }
 
-co_time_us_t web_sessions_deadline(const emu_web_t *w, co_time_us_t now)
+co_time_us_t web_sessions_deadline(emu_web_t *w, co_time_us_t now)
 {
     co_time_us_t next = CO_NEVER;
     for (size_t i = 0U; i < w->n_sessions; i++) {
-        const web_session_t *s = w->sessions[i];
+        web_session_t *s = w->sessions[i];
         if (s->overflow || s->session.overflow) {
             return now;
         }
-        const co_time_us_t expiry = s->last_exchange + WEB_SESSION_IDLE_US;
-        next = expiry < next ? expiry : next;
+        co_time_us_t due = s->last_exchange + WEB_SESSION_IDLE_US;
+        if (s->stream != NULL) {
+            if (s->out.len == 0U) {
+                due = s->quiet_since + WEB_STREAM_KEEPALIVE_US;
+            } else if (s->send_now) {
+                due = now;
+            } else {
+                s->waiting_since = s->waiting_since == CO_NEVER ? now : s->waiting_since;
+                due = s->waiting_since + WEB_STREAM_BATCH_US;
+            }
+        }
+        next = due < next ? due : next;
     }
     return next;
 }
