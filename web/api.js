@@ -1,7 +1,9 @@
 // The page's control session over HTTP (docs/web.md "HTTP API"): request lines of the control protocol
 // (docs/control-protocol.md) are queued, posted with the next exchange, and answered by a later one, matched by
-// their id; events come with the exchanges too. A session that expired or was dropped (404) is replaced by a new
-// one, and the page's onOpen runs again to subscribe anew. No DOM: tested with node --test (tests/web/js).
+// their id. While the session's stream is open (listen()), every answer and event comes on it as the emulator makes
+// them, and an exchange is made only when requests wait; without one, answers and events come with the exchanges.
+// A session that expired or was dropped (404) is replaced by a new one, and the page's onOpen runs again to
+// subscribe anew. No DOM: tested with node --test (tests/web/js).
 
 /** A POST that resolves to {status, text}; `fetchImpl` is the browser's fetch (a stand-in in the tests). */
 export function poster(token, fetchImpl = globalThis.fetch) {
@@ -16,6 +18,41 @@ export function poster(token, fetchImpl = globalThis.fetch) {
   };
 }
 
+/** A stream's text as it comes, decoded as UTF-8 across the pieces' boundaries. */
+async function* textOf(body) {
+  const reader = body.getReader();
+  const decoder = new TextDecoder();
+  try {
+    for (;;) {
+      const {value, done} = await reader.read();
+      if (done) {
+        return;
+      }
+      yield decoder.decode(value, {stream: true});
+    }
+  } finally {
+    reader.cancel().catch(() => {}); // an abandoned stream's connection is closed
+  }
+}
+
+/** A POST that opens a stream: resolves to {status: 200, chunks} (an async iterable of its text as it comes) or,
+ * refused, to {status, text}; `signal` (an AbortSignal) ends it. */
+export function streamer(token, fetchImpl = globalThis.fetch) {
+  return async (path, signal) => {
+    const answer = await fetchImpl(path, {
+      method: "POST",
+      headers: {"X-Canopen-Emu": token},
+      body: "",
+      cache: "no-store",
+      signal,
+    });
+    if (answer.status !== 200) {
+      return {status: answer.status, text: await answer.text()};
+    }
+    return {status: 200, chunks: textOf(answer.body)};
+  };
+}
+
 /** What an /api answer other than 200 says: its JSON "error", else its text. */
 function failure(answer) {
   let said = answer.text.trim();
@@ -27,27 +64,42 @@ function failure(answer) {
   return new Error(`HTTP ${answer.status}: ${said}`);
 }
 
+/** A stream that brings nothing for this long is given up (the emulator sends an empty line after 5 s of silence). */
+export const STREAM_QUIET_MS = 15000;
+
 export class Session {
   #post;
+  #openStream;
   #onOpen;
   #onEvent;
   #onStray;
+  #onData;
   #id = null; // the session's id; null: open one with the next exchange
+  #streamOf = null; // the id of the session whose stream is open; null: none
   #nextId = 1; // request ids go on across sessions, so that a late answer never matches a newer request
   #queue = []; // {id, line} of the requests not yet posted
   #waiting = new Map(); // request id -> {resolve, reject} until its answer comes
   #partial = ""; // the start of a line a later exchange completes (a long answer comes in pieces: `objects`)
 
   /**
-   * post: (path, body) => Promise<{status, text}> (poster()). onOpen(session): after each new session, before its
-   * first exchange: subscribe here. onEvent(event): each event, in order. onStray(line): a line that is neither an
-   * event nor the answer to a request waiting (a refusal of a line the emulator could not read).
+   * post: (path, body) => Promise<{status, text}> (poster()). openStream: (path, signal) => a stream (streamer());
+   * null: exchanges only. onOpen(session): after each new session, before its first exchange: subscribe here.
+   * onEvent(event): each event, in order. onStray(line): a line that is neither an event nor the answer to a request
+   * waiting (a refusal of a line the emulator could not read). onData(): after each piece of a stream was taken.
    */
-  constructor(post, {onOpen = () => {}, onEvent = () => {}, onStray = () => {}} = {}) {
+  constructor(post, {openStream = null, onOpen = () => {}, onEvent = () => {}, onStray = () => {},
+    onData = () => {}} = {}) {
     this.#post = post;
+    this.#openStream = openStream;
     this.#onOpen = onOpen;
     this.#onEvent = onEvent;
     this.#onStray = onStray;
+    this.#onData = onData;
+  }
+
+  /** Whether the session's stream is open: its answers and events come on it. */
+  get streaming() {
+    return this.#streamOf !== null && this.#streamOf === this.#id;
   }
 
   /** Queues a JSON request; resolves to its answer (ok true), rejects with its error (ok false) or when the
@@ -61,6 +113,9 @@ export class Session {
   /** One round trip: opens a session first if there is none, posts the queued requests, hands out what came back.
    * Rejects when the emulator cannot be reached or refuses the exchange; the next exchange tries again. */
   async exchange() {
+    if (this.streaming && this.#queue.length === 0) {
+      return; // nothing to ask: what the emulator has comes on the stream
+    }
     if (this.#id === null) {
       const opened = await this.#post("/api/session", "");
       if (opened.status !== 200) {
@@ -95,10 +150,56 @@ export class Session {
       this.#endPosted(failure(answer));
       throw failure(answer);
     }
-    const lines = (this.#partial + answer.text).split("\n");
+    this.#takeText(answer.text);
+  }
+
+  /**
+   * Opens the session's stream and takes what comes on it until it ends: the emulator ended it (the session
+   * ended), the connection broke, nothing came for quietMs, or a newer session replaced this one. Resolves then
+   * (the exchanges carry everything again); rejects when the stream was refused. Does nothing without a session or
+   * a way to stream, or when the stream is open already.
+   */
+  async listen({quietMs = STREAM_QUIET_MS} = {}) {
+    if (this.#openStream === null || this.#id === null || this.streaming) {
+      return;
+    }
+    const id = this.#id;
+    this.#streamOf = id;
+    const ending = new AbortController();
+    let quiet = setTimeout(() => ending.abort(), quietMs);
+    try {
+      const answer = await this.#openStream(`/api/session/${id}/stream`, ending.signal);
+      if (answer.status !== 200) {
+        throw failure(answer);
+      }
+      for await (const text of answer.chunks) {
+        if (this.#id !== id) {
+          break; // lines of a session that ended
+        }
+        clearTimeout(quiet);
+        quiet = setTimeout(() => ending.abort(), quietMs);
+        this.#takeText(text);
+        this.#onData();
+      }
+    } catch (error) {
+      if (!ending.signal.aborted) {
+        throw error;
+      }
+    } finally {
+      clearTimeout(quiet);
+      ending.abort();
+      if (this.#streamOf === id) {
+        this.#streamOf = null;
+      }
+    }
+  }
+
+  /** Text of an exchange or a stream: its whole lines taken, the start of a line a later piece completes kept. */
+  #takeText(text) {
+    const lines = (this.#partial + text).split("\n");
     this.#partial = lines.pop(); // "" when the text ended with a whole line
     for (const line of lines) {
-      if (line !== "") {
+      if (line !== "") { // "": the stream's keep-alive
         this.#take(line);
       }
     }

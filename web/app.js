@@ -1,10 +1,13 @@
 // The web view of canopen-emu (docs/web.md). The page is a control-protocol client (docs/control-protocol.md) over
-// one web session: it exchanges every 250 ms, asks `show all` once a second, and takes the events nmt, boot-up, emcy
-// and fault in between, so that a change shows with the next exchange. It asks `tables` once: the kinds of protocol
-// fault and the SDO abort texts, which the page has no copy of. The network view (the overview) is drawn here; the
-// other views are panels (below), each its own module, sharing the session and the exchange loop.
+// one web session: it asks `show all` once a second and takes the events nmt, boot-up, emcy and fault in between.
+// Answers and events come on the session's stream as the emulator makes them (drawn at the next animation frame);
+// every 250 ms the panels may queue requests, posted with an exchange only when some wait. Without a stream (it
+// broke, or was refused) the page exchanges every 250 ms and opens one again after STREAM_RETRY_MS. It asks
+// `tables` once: the kinds of protocol fault and the SDO abort texts, which the page has no copy of. The network
+// view (the overview) is drawn here; the other views are panels (below), each its own module, sharing the session
+// and the exchange loop.
 
-import {Session, poster} from "./api.js";
+import {Session, poster, streamer} from "./api.js";
 import {NodeTable} from "./nodes.js";
 import {Overview} from "./overview.js";
 import {makePlots} from "./plots.js";
@@ -14,15 +17,17 @@ import {makeTracePanel} from "./trace.js";
 
 const EXCHANGE_MS = 250;
 const SHOW_MS = 1000;
+const STREAM_RETRY_MS = 2000;
 const EVENTS = ["nmt", "boot-up", "emcy", "fault"];
 
 /*
  * A panel is an object with any of these members, all optional:
  *   events           the event kinds it needs, subscribed with every new session beside the overview's
  *   open(session)    a new session (the first, or one after an expiry): subscribe what else it needs, reload
- *   tick(session, ms)  before each exchange: queue the requests it wants now (session.request(...))
+ *   tick(session, ms)  every 250 ms, before the exchange: queue the requests it wants now (session.request(...))
  *   event(ev, ms)    each event that came (of every kind anyone subscribed: a panel filters)
- *   draw(ms)         in the animation frame after each exchange (and after select): update its DOM there
+ *   draw(ms)         in the animation frame after each exchange or piece of the stream (and after select): update
+ *                    its DOM there
  *   shown(visible)   its view was shown (true) or left (false)
  *   select(key)      the node `key` (nodes.js nodeKey) was picked in the network view
  *   tables(answer)   the emulator's tables came (the `tables` answer: `faults`, `aborts`; docs/control-protocol.md)
@@ -55,6 +60,8 @@ function askShow() {
 }
 
 const session = new Session(poster(token), {
+  openStream: streamer(token),
+  onData: () => scheduleDraw(),
   onOpen: (s) => {
     const events = new Set([...EVENTS, ...panels.flatMap((p) => p.events ?? [])]);
     s.request("subscribe", {events: [...events]}).catch((error) => { requestProblem = `subscribe: ${error.message}`; });
@@ -145,6 +152,20 @@ for (const p of panels) {
   }
 }
 
+let streamTried = -Infinity; // performance.now() when the stream was last opened
+
+/** Opens the session's stream if it has none (at most once per STREAM_RETRY_MS): from then on answers and events
+ * come as they are made, and an idle page posts nothing. */
+function listen(ms) {
+  if (session.streaming || ms - streamTried < STREAM_RETRY_MS) {
+    return;
+  }
+  streamTried = ms;
+  session.listen()
+    .catch((error) => console.warn("canopen-emu: no stream, exchanges only:", error.message))
+    .finally(scheduleDraw);
+}
+
 let running = null; // the exchange under way; null: none
 let again = false; // an exchange was asked for while one ran: one more right after it
 let timer = null;
@@ -166,6 +187,7 @@ async function exchangeNow() {
       }
       await session.exchange();
       exchangeProblem = null;
+      listen(ms);
     } catch (error) {
       // fetch's TypeError: no HTTP answer at all
       exchangeProblem = error instanceof TypeError ? "the emulator does not answer (stopped?)" : error.message;

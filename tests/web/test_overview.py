@@ -188,29 +188,85 @@ def test_127_nodes_are_127_rows_and_the_heartbeats_keep_their_time(page, start_e
     assert snapshot(driver)["status"] == "fakecan0 (socketcan): 127 nodes"
 
 
-def test_the_page_comes_back_after_its_session_expired(page, start_emulator):
-    """A page that could not exchange for over 10 s (the browser offline; as a hidden tab whose timers the browser
-    slowed) finds its session removed, opens a new one, and shows what happened meanwhile."""
+def test_answers_and_events_come_on_the_stream_and_exchanges_only_post(page, start_emulator):
+    """With the session's stream open, every answer and event comes on it: the exchanges the page makes for its
+    requests (`show all` once a second, the plots' samples) get empty answers, none is made without a request, and
+    a change on the bus shows at once."""
     emu = start_emulator(*NODES)
     driver = loaded(page, emu, 3)
-    # What the browser logs of the exchanges cut off, and of the one that found the session gone.
+    time.sleep(2.5)  # the stream opens after the first exchange
+    driver.execute_script("performance.clearResourceTimings()")
+    start = time.monotonic()
+    emu.bus.send(0x000, bytes([0x01, 16]))  # NMT start node 16
+    wait_for(driver, "node 16 OPERATIONAL", lambda s: s["rows"]["16"]["state"] == "OPERATIONAL", 1.0)
+    time.sleep(max(0.0, start + 3.0 - time.monotonic()))
+    shot = snapshot(driver)
+    fetches = driver.execute_script(
+        "return performance.getEntriesByType('resource').filter((e) => e.initiatorType === 'fetch')"
+        ".map((e) => [new URL(e.name).pathname, e.encodedBodySize])")
+    exchanges = [size for path, size in fetches if re.fullmatch(r"/api/session/[0-9a-f]{32}", path)]
+    assert 3 <= len(exchanges) <= 13, fetches  # at most one a tick (250 ms), each with requests
+    assert exchanges == [0] * len(exchanges), fetches  # their answers came on the stream
+    assert not any(path.endswith("/stream") for path, _ in fetches), fetches  # it did not end
+    assert shot["status"] == "fakecan0 (socketcan): 3 nodes"
+
+
+def test_a_page_that_cannot_post_keeps_its_session_through_its_stream(page, start_emulator):
+    """The browser offline for new requests (Chromium's emulation leaves an open connection as it is): the page's
+    exchanges fail and it says so, but its stream keeps its session (no expiry after 10 s) and brings what happened;
+    back online, it posts again in the same session."""
+    emu = start_emulator(*NODES)
+    driver = loaded(page, emu, 3)
+    time.sleep(2.5)  # the stream opens after the first exchange
     session_url = rf"^http://127\.0\.0\.1:{emu.port}/api/session/[0-9a-f]{{32}} - Failed to load resource: "
-    page.expected_errors += [session_url + "net::ERR_INTERNET_DISCONNECTED$",
-                             session_url + r"the server responded with a status of 404 \(Not Found\)$"]
+    page.expected_errors += [session_url + "net::ERR_INTERNET_DISCONNECTED$"]
     driver.set_network_conditions(offline=True, latency=0, throughput=0)
     try:
         wait_for(driver, "the problem in the status line",
                  lambda s: s["status"] == "the emulator does not answer (stopped?)", 2.0)
-        emu.bus.send(0x000, bytes([0x01, 0x00]))  # NMT start, all nodes, while the page sees nothing
-        emu.wait_log("web: web session 1 removed: no exchange for 10 s", timeout=20.0)
-        assert [r["state"] for r in snapshot(driver)["rows"].values()] == ["PRE-OPERATIONAL"] * 3
+        emu.bus.send(0x000, bytes([0x01, 0x00]))  # NMT start, all nodes: its events come on the stream
+        wait_for(driver, "OPERATIONAL for all three through the stream",
+                 lambda s: [r["state"] for r in s["rows"].values()] == ["OPERATIONAL"] * 3, 2.0)
+        time.sleep(11.0)
+        assert "removed" not in emu.log()
     finally:
         driver.delete_network_conditions()
-    shot = wait_for(driver, "OPERATIONAL for all three through a new session",
-                    lambda s: [r["state"] for r in s["rows"].values()] == ["OPERATIONAL"] * 3, 5.0)
-    assert shot["status"] == "fakecan0 (socketcan): 3 nodes"
-    command(emu, "emcy 16 0x3210 0x05")  # and its events come again
+    wait_for(driver, "the status line without a problem", lambda s: s["status"] == "fakecan0 (socketcan): 3 nodes", 3.0)
+    command(emu, "emcy 16 0x3210 0x05")
     wait_for(driver, "the EMCY of node 16", lambda s: s["rows"]["16"]["emcy"] == "0x3210 voltage inside the device, reg 0x05 info 0000000000", 2.0)
+    assert "removed" not in emu.log() and "dropped" not in emu.log()
+
+
+def test_without_a_stream_the_page_exchanges_and_comes_back_after_its_session_expired(page, start_emulator, driver):
+    """The stream refused (blocked: as a proxy that does not pass a streamed answer would): the page takes
+    everything with its exchanges. One that could not exchange for over 10 s (the browser offline; as a hidden tab
+    whose timers the browser slowed) finds its session removed, opens a new one, and shows what happened meanwhile."""
+    driver.execute_cdp_cmd("Network.enable", {})
+    driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["*/stream"]})
+    try:
+        emu = start_emulator(*NODES)
+        driver = loaded(page, emu, 3)
+        # What the browser logs of the streams blocked, the exchanges cut off, and the one that found the session gone.
+        session_url = rf"^http://127\.0\.0\.1:{emu.port}/api/session/[0-9a-f]{{32}}"
+        page.expected_errors += [session_url + "/stream - Failed to load resource: net::ERR_BLOCKED_BY_CLIENT$",
+                                 session_url + " - Failed to load resource: net::ERR_INTERNET_DISCONNECTED$",
+                                 session_url + r" - Failed to load resource: the server responded with a status of 404 \(Not Found\)$"]
+        driver.set_network_conditions(offline=True, latency=0, throughput=0)
+        try:
+            wait_for(driver, "the problem in the status line",
+                     lambda s: s["status"] == "the emulator does not answer (stopped?)", 2.0)
+            emu.bus.send(0x000, bytes([0x01, 0x00]))  # NMT start, all nodes, while the page sees nothing
+            emu.wait_log("web: web session 1 removed: no exchange for 10 s", timeout=20.0)
+            assert [r["state"] for r in snapshot(driver)["rows"].values()] == ["PRE-OPERATIONAL"] * 3
+        finally:
+            driver.delete_network_conditions()
+        shot = wait_for(driver, "OPERATIONAL for all three through a new session",
+                        lambda s: [r["state"] for r in s["rows"].values()] == ["OPERATIONAL"] * 3, 5.0)
+        assert shot["status"] == "fakecan0 (socketcan): 3 nodes"
+        command(emu, "emcy 16 0x3210 0x05")  # and its events come again
+        wait_for(driver, "the EMCY of node 16", lambda s: s["rows"]["16"]["emcy"] == "0x3210 voltage inside the device, reg 0x05 info 0000000000", 2.0)
+    finally:
+        driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": []})  # the browser serves the next tests
 
 
 def test_nodes_heard_on_the_bus_get_a_row_that_does_not_open(page, start_emulator):

@@ -2,7 +2,7 @@
 import {test} from "node:test";
 import assert from "node:assert/strict";
 
-import {Session, poster} from "../../../web/api.js";
+import {Session, poster, streamer} from "../../../web/api.js";
 
 /** A stand-in emulator: records every post; answers each with the next of `replies` (a function of the post, or a
  * {status, text}); an Error in replies is thrown as fetch throws when nothing answers. */
@@ -151,4 +151,138 @@ test("other refusals: the error the emulator gives, and a session that cannot be
   await assert.rejects(refused, {message: "HTTP 403: missing or wrong X-Canopen-Emu token: load the page again"});
   await assert.rejects(session.exchange(), {message: "HTTP 500: not json"});
   assert.deepEqual(api.posts.map((p) => p.path), ["/api/session", "/api/session", "/api/session/s1", "/api/session/s1"]);
+});
+
+/** A stand-in stream: the test pushes text pieces and ends it; records the path and the signal it was opened with. */
+function fakeStream() {
+  const pieces = [];
+  let wake = null;
+  let ended = false;
+  const opened = [];
+  const push = (text) => {
+    pieces.push(text);
+    wake?.();
+  };
+  const end = () => {
+    ended = true;
+    wake?.();
+  };
+  async function* chunks(signal) {
+    for (;;) {
+      while (pieces.length > 0) {
+        yield pieces.shift();
+      }
+      if (ended || signal.aborted) {
+        return;
+      }
+      await new Promise((resolve) => {
+        wake = resolve;
+        signal.addEventListener("abort", resolve, {once: true});
+      });
+      wake = null;
+    }
+  }
+  const open = async (path, signal) => {
+    opened.push({path, signal});
+    return {status: 200, chunks: chunks(signal)};
+  };
+  return {open, push, end, opened};
+}
+
+const tick = () => new Promise((resolve) => setTimeout(resolve, 0));
+
+test("streamer sends the token and an empty body with the signal, and gives the text as it comes", async () => {
+  const calls = [];
+  const euro = new TextEncoder().encode("€\n"); // three bytes: split across two pieces
+  const body = new ReadableStream({
+    start(controller) {
+      controller.enqueue(new TextEncoder().encode('{"event":"nmt"}\n'));
+      controller.enqueue(euro.slice(0, 2));
+      controller.enqueue(euro.slice(2));
+      controller.close();
+    },
+  });
+  const open = streamer("cd".repeat(16), async (path, options) => {
+    calls.push({path, options});
+    return {status: 200, body};
+  });
+  const signal = new AbortController().signal;
+  const answer = await open("/api/session/s1/stream", signal);
+  assert.equal(answer.status, 200);
+  const texts = [];
+  for await (const text of answer.chunks) {
+    texts.push(text);
+  }
+  assert.equal(texts.join(""), '{"event":"nmt"}\n€\n');
+  assert.deepEqual(calls, [{path: "/api/session/s1/stream", options: {
+    method: "POST", headers: {"X-Canopen-Emu": "cd".repeat(16)}, body: "", cache: "no-store", signal}}]);
+  const refused = streamer("cd".repeat(16), async () => ({status: 404, text: async () => '{"error":"gone"}'}));
+  assert.deepEqual(await refused("/api/session/s2/stream", signal), {status: 404, text: '{"error":"gone"}'});
+});
+
+test("with the stream open, answers and events come on it and an exchange posts only when requests wait", async () => {
+  const stream = fakeStream();
+  const api = fakeApi([opened("s1"), lines({id: 1, ok: true}), lines()]);
+  const seen = [];
+  let data = 0;
+  const session = new Session(api.post, {openStream: stream.open, onEvent: (e) => seen.push(e.node),
+    onData: () => { data++; }});
+  const first = session.request("hello");
+  await session.exchange(); // opens s1, posts hello: answered with the exchange (no stream yet)
+  assert.deepEqual(await first, {id: 1, ok: true});
+  const listening = session.listen();
+  assert.equal(session.streaming, true);
+  assert.deepEqual(stream.opened.map((o) => o.path), ["/api/session/s1/stream"]);
+  await session.exchange(); // nothing queued: nothing posted
+  assert.equal(api.posts.length, 2);
+  stream.push('{"event":"nmt","node":16}\n{"event":"nmt",');
+  stream.push('"node":17}\n\n'); // a line across two pieces; an empty line (the keep-alive)
+  await tick();
+  assert.deepEqual(seen, [16, 17]);
+  assert.equal(data, 2);
+  const second = session.request("show", {node: 16});
+  await session.exchange(); // a request waits: posted, answered empty, its answer comes on the stream
+  assert.deepEqual(api.posts.map((p) => p.body), ["", '{"id":1,"cmd":"hello"}', '{"id":2,"cmd":"show","node":16}']);
+  stream.push('{"id":2,"ok":true,"node":16}\n');
+  assert.deepEqual(await second, {id: 2, ok: true, node: 16});
+  stream.end(); // the emulator ended it: exchanges carry everything again
+  await listening;
+  assert.equal(session.streaming, false);
+  await assert.rejects(session.exchange(), /no reply left/); // posted although nothing was queued
+});
+
+test("a stream that brings nothing for quietMs is given up; one that is refused rejects", async () => {
+  const stream = fakeStream();
+  const api = fakeApi([opened("s1"), lines()]);
+  const session = new Session(api.post, {openStream: stream.open});
+  await session.exchange();
+  await session.listen({quietMs: 20}); // resolves once the watchdog aborted it
+  assert.equal(stream.opened[0].signal.aborted, true);
+  assert.equal(session.streaming, false);
+  const refused = new Session(fakeApi([opened("s2"), lines()]).post,
+    {openStream: async () => ({status: 404, text: '{"error":"no such session (expired or dropped): open a new one"}'})});
+  await refused.exchange();
+  await assert.rejects(refused.listen(), {message: "HTTP 404: no such session (expired or dropped): open a new one"});
+  assert.equal(refused.streaming, false);
+  const none = new Session(fakeApi([]).post); // no openStream: listen does nothing
+  await none.listen();
+  assert.equal(none.streaming, false);
+});
+
+test("a stream of a session that ended gives nothing more to the new one", async () => {
+  const stream = fakeStream();
+  const api = fakeApi([opened("s1"), lines(), {status: 404, text: '{"error":"no such session"}'}, opened("s2"),
+    lines()]);
+  const seen = [];
+  const session = new Session(api.post, {openStream: stream.open, onEvent: (e) => seen.push(e.node)});
+  await session.exchange();
+  const listening = session.listen();
+  const lost = session.request("hello");
+  await assert.rejects(session.exchange(), {message: "the session expired; opening a new one"});
+  await assert.rejects(lost, {message: "the session ended before it answered"});
+  assert.equal(session.streaming, false); // its stream was s1's
+  await session.exchange(); // s2
+  stream.push('{"event":"nmt","node":5}\n'); // a late line of s1's stream
+  await listening;
+  assert.deepEqual(seen, []);
 });
