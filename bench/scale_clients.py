@@ -131,9 +131,11 @@ class ControlWatcher:
 
 
 class WebWatcher:
-    """A web session with the trace's subscription (every 11-bit and 29-bit frame), drained by tick()."""
+    """A web session with the trace's subscription (every 11-bit and 29-bit frame), its events taken from the
+    session's stream as the page takes them (docs/web.md): a thread reads it; tick() has nothing to do."""
 
     def __init__(self, port):
+        self.lock = threading.Lock()
         deadline = time.monotonic() + 60
         while True:
             try:
@@ -155,6 +157,44 @@ class WebWatcher:
             answer = self.exchange("")
         if '"ok":true' not in answer:
             raise BenchError(f"web subscribe refused: {answer}")
+        self.stream = socket.create_connection(("127.0.0.1", port), timeout=600)
+        self.stream.sendall(f"POST /api/session/{self.session}/stream HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+                            f"X-Canopen-Emu: {self.token}\r\nContent-Length: 0\r\n\r\n".encode())
+        self.reader = threading.Thread(target=self._read_stream, daemon=True)
+        self.reader.start()
+
+    def _read_stream(self):
+        """The chunked answer's body, counted: every frame event in it (a line is never split by the count)."""
+        buf = b""
+        try:
+            while b"\r\n\r\n" not in buf:
+                piece = self.stream.recv(65536)
+                if not piece:
+                    return
+                buf += piece
+            head, buf = buf.split(b"\r\n\r\n", 1)
+            if not head.startswith(b"HTTP/1.1 200"):
+                return
+            body = b""
+            while True:
+                piece = self.stream.recv(65536)
+                if not piece:
+                    return
+                buf += piece
+                while b"\r\n" in buf:
+                    size_line, rest = buf.split(b"\r\n", 1)
+                    size = int(size_line.split(b";")[0], 16)
+                    if len(rest) < size + 2:
+                        break
+                    body += rest[:size]
+                    buf = rest[size + 2:]
+                    if size == 0:
+                        return
+                *lines, body = body.split(b"\n")
+                with self.lock:
+                    self.events += sum(line.count(b'"event":"frame"') for line in lines)
+        except OSError:
+            return
 
     def post(self, path, body):
         self.conn.request("POST", path, body=body.encode(), headers={"X-Canopen-Emu": self.token})
@@ -167,14 +207,18 @@ class WebWatcher:
     def exchange(self, body=""):
         data = self.post(f"/api/session/{self.session}", body)
         self.exchanges += 1
-        self.events += data.count('"event":"frame"')
+        with self.lock:
+            self.events += data.count('"event":"frame"')
         return data
 
     def tick(self):
-        self.exchange()
+        pass  # the events come on the stream: a page exchanges only when it asks something
 
     def close(self):
+        """After the program ended: its stream has ended too, every event of it counted."""
         self.conn.close()
+        self.reader.join(timeout=60)
+        self.stream.close()
 
 
 def free_port():

@@ -18,11 +18,11 @@ the idle exchange. Phases, in this order in every run:
 - heartbeat: 0x1017 = 10 ms x N on every node, written 10 ms apart (100 heartbeats a second in all, evenly; the
   run without writes 0 instead), a dump, the hold (the phase compared; the events are the heartbeats this script
   received in it), a dump, then 0x1017 = 0 on every node;
-- web: (web only) empty exchanges of the web session, what an idle page does every 250 ms.
+- web: (web only) exchanges that carry nothing, what a page without its stream makes every 250 ms.
 
-A web session is drained by exchanges whose number does not depend on the events (one per 25 steps of a phase, one
-per 250 ms of the heartbeat hold, in both runs), so that the difference is the events' own cost, their delivery
-included; a control-socket client is read by a thread (the bus and the watchers: bench/scale_clients.py).
+A web session takes its events from its stream (docs/web.md), as the page does, read by a thread; a control-socket
+client is read by a thread too (the bus and the watchers: bench/scale_clients.py). So the difference of a phase is
+the events' own cost, their delivery included.
 Standard library only.
 """
 import argparse
@@ -109,7 +109,7 @@ class Run:
     def pace(self, phase, step, steps):
         """The run without: step k of a phase waits until k/steps of the time the phase took in the run with. The
         program's own timers (a Bürkert node stores its operating time once a minute, at its own phase) then fall
-        alike into both runs' phases, and a web session is exchanged with as often, never left to expire."""
+        alike into both runs' phases."""
         if phase in self.paced:
             time.sleep(max(0.0, self.last + self.paced[phase] * step / steps - time.monotonic()))
 
