@@ -7,7 +7,8 @@
  * Two sockets: one joined to the group and bound to its port reads (as python-can's does), one on a port of its own
  * sends. A datagram whose source is the sending socket's address and port is this process's own (multicast loopback
  * is on, so that other processes on this machine hear the bus) and is skipped: the bus's nodes already had it from
- * the emulator's local queue. The group is joined on one interface, named in the log: the route to the group's, or
+ * the emulator's local queue. A socket filter has the kernel drop them before they are queued (where it cannot be
+ * attached, they are read and skipped). The group is joined on one interface, named in the log: the route to the group's, or
  * the one given with iface=; whoever is on that link is on the bus.
  *
  * Like socketcan.h: never blocks (a full send buffer answers CO_ERR_BUSY, the core retries), reads ahead up to
@@ -72,7 +73,8 @@ typedef struct udp_multicast {
     bool tx_failing;                /**< sends fail (reported once, and their end) */
     unsigned long tx_not_carried;   /**< error frames the nodes sent: not put on the bus */
     unsigned long rx_frames;        /**< frames read from the bus for the nodes */
-    unsigned long rx_own;           /**< this process's own datagrams, skipped */
+    unsigned long rx_own;           /**< this process's own datagrams, skipped (those the kernel did not drop) */
+    bool rx_own_filtered;           /**< the kernel drops this process's own datagrams (a socket filter) */
     unsigned long rx_fd_frames;     /**< CAN FD frames read: not for the nodes */
     unsigned long rx_error_frames;  /**< error frames read: not for the nodes */
     unsigned long malformed;        /**< datagrams that are not python-can messages, all */
