@@ -26,8 +26,8 @@ static bool sockets_in_use(const emu_sockets_t *k)
 int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
 {
     /* each bus's socket, stdin, stdout and stderr when output waits, the control listeners and clients, the web */
-    /* and the socketcand listener and clients */
-    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1 + 1 + SOCKETCAND_CLIENTS_MAX];
+    /* and the socketcand listener and clients, the web's WebSockets */
+    struct pollfd pfd[MAX_BUSES + 3 + 2 + MAX_CLIENTS + 1 + 1 + SOCKETCAND_CLIENTS_MAX + WEB_SOCKETS_MAX];
     for (size_t i = 0U; i < emu->n_buses; i++) {
         pfd[i].revents = 0; /* nothing woke the buses before the first pass */
     }

@@ -16,14 +16,16 @@
 #include "web/emu_web_files.h"
 #include "web/emu_web_http.h"
 #include "web/emu_web_sessions.h"
+#include "web/emu_web_socket.h"
 #include "web/emu_web_stream.h"
 
 /* In web/index.html, where the token goes. */
 #define TOKEN_PLACEHOLDER "@CANOPEN_EMU_TOKEN@"
 #define API_SESSION "/api/session"
 #define STREAM_SUFFIX "/stream"
+#define SOCKET_SUFFIX "/socket"
 
-typedef enum api_route { ROUTE_OPEN, ROUTE_EXCHANGE, ROUTE_STREAM } api_route_t;
+typedef enum api_route { ROUTE_OPEN, ROUTE_EXCHANGE, ROUTE_STREAM, ROUTE_SOCKET } api_route_t;
 
 /* An API request whose body is arriving (libmicrohttpd hands it over in pieces). */
 typedef struct web_request {
@@ -33,6 +35,8 @@ typedef struct web_request {
     bool too_large;             /* more than WEB_BODY_MAX came (a chunked body): the rest is discarded, then 413 */
     char body[WEB_BODY_MAX];
 } web_request_t;
+
+const char *web_request_id(const void *state) { return ((const web_request_t *)state)->id; }
 
 /* ---- The API -------------------------------------------------------------------------------------------------- */
 
@@ -106,6 +110,22 @@ static enum MHD_Result open_stream(emu_web_t *w, struct MHD_Connection *c, const
     return result;
 }
 
+/* GET /api/session/ID/socket, its handshake checked: the session's WebSocket (emu_web_socket.h). */
+static enum MHD_Result open_socket(emu_web_t *w, struct MHD_Connection *c, const web_request_t *q)
+{
+    if (web_session_find(w, q->id) == NULL) {
+        return web_send_error(c, MHD_HTTP_NOT_FOUND, true, "no such session (expired or dropped): open a new one",
+                              NULL);
+    }
+    struct MHD_Response *r = web_socket_answer(w, c);
+    if (r == NULL) {
+        return MHD_NO;
+    }
+    const enum MHD_Result result = MHD_queue_response(c, MHD_HTTP_SWITCHING_PROTOCOLS, r);
+    MHD_destroy_response(r);
+    return result;
+}
+
 /* The answer of an exchange with nothing to give (no body, every API header), made once by web_start. */
 static struct MHD_Response *make_empty_exchange(void)
 {
@@ -135,6 +155,8 @@ static bool api_route(const char *path, api_route_t *route, char *id)
         *route = ROUTE_EXCHANGE;
     } else if (strcmp(rest, STREAM_SUFFIX) == 0) {
         *route = ROUTE_STREAM;
+    } else if (strcmp(rest, SOCKET_SUFFIX) == 0) {
+        *route = ROUTE_SOCKET;
     } else {
         return false;
     }
@@ -165,16 +187,26 @@ static enum MHD_Result begin(emu_web_t *w, struct MHD_Connection *c, const char 
         *state = w; /* a GET that passed: it has no body to keep, its state is the web itself */
         return MHD_YES;
     }
-    if (strcmp(method, MHD_HTTP_METHOD_POST) != 0) {
+    api_route_t route;
+    char id[WEB_ID_HEX + 1] = "";
+    const bool routed = api_route(path, &route, id);
+    if (routed && route == ROUTE_SOCKET) { /* a WebSocket's handshake: a GET, its token in the subprotocol */
+        if (strcmp(method, MHD_HTTP_METHOD_GET) != 0) {
+            return web_send_error(c, MHD_HTTP_METHOD_NOT_ALLOWED, true, "the socket is opened with GET",
+                                  MHD_HTTP_METHOD_GET);
+        }
+        bool forbidden = false;
+        const char *why = web_socket_check(w, c, h.host, &forbidden);
+        if (why != NULL) {
+            return web_send_error(c, forbidden ? MHD_HTTP_FORBIDDEN : MHD_HTTP_BAD_REQUEST, true, why, NULL);
+        }
+    } else if (strcmp(method, MHD_HTTP_METHOD_POST) != 0) {
         return web_send_error(c, MHD_HTTP_METHOD_NOT_ALLOWED, true, "the API takes POST only", MHD_HTTP_METHOD_POST);
-    }
-    if (!web_token_ok(w, h.token)) {
+    } else if (!web_token_ok(w, h.token)) {
         return web_send_error(c, MHD_HTTP_FORBIDDEN, true,
                               "missing or wrong " WEB_TOKEN_HEADER " token: load the page again", NULL);
     }
-    api_route_t route;
-    char id[WEB_ID_HEX + 1] = "";
-    if (!api_route(path, &route, id)) {
+    if (!routed) {
         return web_send_error(c, MHD_HTTP_NOT_FOUND, true, "no such API path", NULL);
     }
     const char *length = h.content_length;
@@ -229,6 +261,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
         return open_session(w, c, now);
     case ROUTE_STREAM:
         return open_stream(w, c, q); /* its body, if any, means nothing */
+    case ROUTE_SOCKET:
+        return open_socket(w, c, q);
     case ROUTE_EXCHANGE:
     default:
         return exchange(w, c, q, now);
@@ -324,7 +358,7 @@ int web_start(emu_t *emu, emu_web_t *w, const char *host_port, char *err, size_t
     /* No thread of its own (MHD_USE_INTERNAL_POLLING_THREAD not given): everything runs in MHD_run, called by the
      * main loop, so the callbacks touch the nodes on the loop's thread as every other control session does. */
     /* Suspend and resume: a stream's connection waits out of the polling while nothing is to be sent. */
-    w->daemon = MHD_start_daemon(MHD_USE_EPOLL | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME, 0U, NULL, NULL, on_request, w,
+    w->daemon = MHD_start_daemon(MHD_USE_EPOLL | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME | MHD_ALLOW_UPGRADE, 0U, NULL, NULL, on_request, w,
                                  MHD_OPTION_EXTERNAL_LOGGER, on_log, w, /* first: it covers the options' messages */
                                  MHD_OPTION_LISTEN_SOCKET, (MHD_socket)w->listener.fd,
                                  MHD_OPTION_CONNECTION_LIMIT, (unsigned int)WEB_CONNECTIONS_MAX,
@@ -366,8 +400,10 @@ nfds_t web_poll_fds(emu_web_t *w, struct pollfd *pfd, co_time_us_t now, co_time_
         *next = w->run_at < *next ? w->run_at : *next;
     }
     const co_time_us_t sessions = web_sessions_deadline(w, now); /* expiries, streams' batches and keep-alives */
+    const co_time_us_t sockets = web_sockets_deadline(w, now);  /* closing ones, held lines */
     *next = sessions < *next ? sessions : *next;
-    return 1U;
+    *next = sockets < *next ? sockets : *next;
+    return 1U + web_sockets_poll_fds(w, pfd + 1);
 }
 
 void web_service(emu_t *emu, emu_web_t *w, const struct pollfd *pfd, nfds_t n, co_time_us_t now)
@@ -381,6 +417,9 @@ void web_service(emu_t *emu, emu_web_t *w, const struct pollfd *pfd, nfds_t n, c
         w->run_at = CO_NEVER;
         (void)MHD_run(w->daemon); /* accepts, reads, answers: the callbacks above, without blocking */
     }
+    if (n > 1U) {
+        web_sockets_service(w, pfd + 1, n - 1U, now);
+    }
     if (web_sessions_service(emu, w, now)) {
         (void)MHD_run(w->daemon); /* the streams woken send now, not at the next wake-up */
     }
@@ -393,6 +432,7 @@ void web_stop(emu_t *emu, emu_web_t *w)
     while (w->n_sessions > 0U) {
         web_session_remove(emu, w, w->sessions[w->n_sessions - 1U], LOG_QUIET, NULL); /* streams ended, resumed */
     }
+    web_sockets_close_all(w); /* their close frames sent as far as the sockets took them */
     if (w->daemon != NULL) {
         (void)MHD_run(w->daemon); /* libmicrohttpd's rule: no connection suspended when it stops */
         MHD_stop_daemon(w->daemon); /* closes its connections and the listening socket */

@@ -9,7 +9,8 @@
  * the page).
  *
  * A web session is a control session (emu_session.h) whose output waits in a buffer of its own for the browser's
- * next exchange, or goes out on the session's stream while one is open (emu_web_stream.h); commands take exactly the path of the control socket's, but a web session may not stop the
+ * next exchange, or goes out on the session's WebSocket (emu_web_socket.h) or stream (emu_web_stream.h) while one
+ * is open; commands take exactly the path of the control socket's, but a web session may not stop the
  * emulator or write a file (emu_session_t.restricted). Nothing a browser does blocks the nodes: sockets are
  * non-blocking, an exchange runs at most WEB_EXCHANGE_UNITS of its requests at once and the rest wait for the
  * main loop's budget of all sessions' work (emu_session_work.c), and the limits below bound what any number of
@@ -31,6 +32,7 @@ struct MHD_Daemon;
 struct MHD_Response;
 struct web_request;
 struct web_session;
+struct web_socket;
 
 /** Web sessions at once; one more gets 503. */
 #define WEB_SESSIONS_MAX 8
@@ -41,6 +43,8 @@ struct web_session;
 #define WEB_STREAM_BATCH_US 50000U
 /** A stream silent for this long sends an empty line (a page gives a stream up after 15 s without a byte). */
 #define WEB_STREAM_KEEPALIVE_US (5U * 1000000U)
+/** WebSockets at once: one per session, and as many closing. */
+#define WEB_SOCKETS_MAX (2U * WEB_SESSIONS_MAX)
 /** Bytes of one request's body (request lines); more gets 413. */
 #define WEB_BODY_MAX (16U * 1024U)
 /** Units of work (request lines, pieces of a streamed answer) an exchange runs at once, so that its answers come
@@ -74,6 +78,8 @@ typedef struct emu_web {
     struct MHD_Response *empty_exchange; /* the answer of an exchange with nothing to give, made once */
     struct web_request *spare_requests[WEB_CONNECTIONS_MAX]; /* API requests' states ended, kept for the next */
     size_t n_spare_requests;
+    struct web_socket *sockets[WEB_SOCKETS_MAX]; /* the sessions' WebSockets and those closing (emu_web_socket.h) */
+    size_t n_sockets;
     struct web_session *sessions[WEB_SESSIONS_MAX];
     size_t n_sessions;
     unsigned long next_number;      /* sessions are numbered from 1 in the log */
@@ -88,7 +94,7 @@ void web_init(emu_web_t *w);
  *  (name, remote). */
 int web_start(struct emu *emu, emu_web_t *w, const char *host_port, char *err, size_t errlen);
 
-/** Adds libmicrohttpd's descriptor to pfd (0 or 1 entries, returned) and brings *next forward to the web's next
+/** Adds libmicrohttpd's descriptor and the WebSockets' to pfd (0 .. 1 + WEB_SOCKETS_MAX entries, returned) and brings *next forward to the web's next
  *  deadline: libmicrohttpd's timeout, a session's expiry, now when requests of a session wait to run. */
 nfds_t web_poll_fds(emu_web_t *w, struct pollfd *pfd, co_time_us_t now, co_time_us_t *next);
 

@@ -44,6 +44,9 @@ enum MHD_Result web_send(struct MHD_Connection *c, unsigned status, struct MHD_R
 enum MHD_Result web_send_error(struct MHD_Connection *c, unsigned status, bool api, const char *text,
                                const char *allow);
 
+/** The session id of an API request's state (emu_web.c's; "" for a path without one). */
+const char *web_request_id(const void *state);
+
 /** GET of a static file: the embedded one with exactly this path ("/" is "/index.html", which carries the token),
  *  or 404. */
 enum MHD_Result web_serve_file(const emu_web_t *w, struct MHD_Connection *c, const char *path);

@@ -10,6 +10,7 @@
 #include "runtime/emu.h"
 #include "runtime/emu_events.h"
 #include "runtime/emu_output.h"
+#include "web/emu_web_socket.h"
 #include "web/emu_web_stream.h"
 
 bool web_random_hex(char *out, size_t n)
@@ -110,6 +111,9 @@ void web_session_remove(emu_t *emu, emu_web_t *w, web_session_t *s, int log_leve
     if (s->stream != NULL && web_stream_end(s->stream)) {
         w->run_again = true; /* the stream's answer ends when libmicrohttpd runs */
     }
+    if (s->socket != NULL) {
+        web_socket_end(s->socket);
+    }
     events_remove_session(emu, &s->session);
     session_free(&s->session);
     for (size_t i = 0U; i < w->n_sessions; i++) {
@@ -122,7 +126,8 @@ void web_session_remove(emu_t *emu, emu_web_t *w, web_session_t *s, int log_leve
     free(s);
 }
 
-/* A streamed session's lines due, or its keep-alive: its stream woken. true: libmicrohttpd must run. */
+/* A streamed session's lines due, or its keep-alive: its stream woken, or a message on its socket. true:
+ * libmicrohttpd must run. */
 static bool stream_due(web_session_t *s, co_time_us_t now)
 {
     const bool lines = s->out.len > 0U;
@@ -134,6 +139,11 @@ static bool stream_due(web_session_t *s, co_time_us_t now)
     s->send_now = false;
     s->waiting_since = CO_NEVER;
     s->quiet_since = now;
+    if (s->socket != NULL) {
+        web_socket_flush(s->socket, s->keepalive);
+        s->keepalive = false;
+        return false;
+    }
     return web_stream_wake(s->stream);
 }
 
@@ -146,7 +156,7 @@ bool web_sessions_service(emu_t *emu, emu_web_t *w, co_time_us_t now)
             char why[96];
             (void)snprintf(why, sizeof why, "dropped: more than %u bytes waited for its next exchange", WEB_OUTPUT_MAX);
             web_session_remove(emu, w, s, LOG_QUIET, why);
-        } else if (s->stream != NULL) {
+        } else if (s->stream != NULL || s->socket != NULL) {
             s->last_exchange = now; /* in use while its stream is open: a page that does not post is idle, not gone */
             run = stream_due(s, now) || run;
         } else if (now > s->last_exchange && now - s->last_exchange >= WEB_SESSION_IDLE_US) {
@@ -169,7 +179,7 @@ co_time_us_t web_sessions_deadline(emu_web_t *w, co_time_us_t now)
             return now;
         }
         co_time_us_t due = s->last_exchange + WEB_SESSION_IDLE_US;
-        if (s->stream != NULL) {
+        if (s->stream != NULL || s->socket != NULL) {
             if (s->out.len == 0U) {
                 due = s->quiet_since + WEB_STREAM_KEEPALIVE_US;
             } else if (s->send_now) {

@@ -26,6 +26,7 @@ typedef struct web_session {
     bool overflow;                  /* more than WEB_OUTPUT_MAX waited: dropped at the next pass */
     co_time_us_t last_exchange;     /* or the last pass, while it has a stream: it does not expire then */
     struct web_stream *stream;      /* its stream (emu_web_stream.h); NULL: none, the lines wait for an exchange */
+    struct web_socket *socket;      /* its WebSocket (emu_web_socket.h), instead of a stream; NULL: none */
     co_time_us_t waiting_since;     /* when lines began to wait for the stream; CO_NEVER: none wait */
     co_time_us_t quiet_since;       /* when the stream was last woken (its keep-alive counts from there) */
     bool send_now;                  /* an exchange ran requests: their answers go at once, not after the batch */

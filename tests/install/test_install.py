@@ -247,6 +247,8 @@ def test_deb_package_fields(deb):
     assert fields["Architecture"] == arch
     assert re.search(r"\blibc6 \(>= [0-9.]+\)", fields.get("Depends", "")), fields
     assert re.search(r"\blibmicrohttpd12 \(>= [0-9.]+\)", fields["Depends"]), fields  # --web's HTTP
+    assert re.search(r"\blibwslay1 \(>= [0-9.]+\)", fields["Depends"]), fields  # --web's WebSocket frames
+    assert re.search(r"\blibnettle8 \(>= [0-9.]+\)", fields["Depends"]), fields  # its handshake's SHA-1
 
 
 def test_deb_package_holds_exactly_the_installed_files(deb, prefix):
