@@ -1,7 +1,9 @@
 // The page's control session over HTTP (docs/web.md "HTTP API"): request lines of the control protocol
 // (docs/control-protocol.md) are queued, posted with the next exchange, and answered by a later one, matched by
-// their id. While the session's stream is open (listen()), every answer and event comes on it as the emulator makes
-// them, and an exchange is made only when requests wait; without one, answers and events come with the exchanges.
+// their id. While the session's WebSocket is open (listen()), requests go out on it as messages and every answer
+// and event comes on it as the emulator makes them: no exchange at all. Where no WebSocket opens, the session's
+// stream brings the answers and events, and an exchange is made only when requests wait; without either, answers
+// and events come with the exchanges.
 // A session that expired or was dropped (404) is replaced by a new one, and the page's onOpen runs again to
 // subscribe anew. No DOM: tested with node --test (tests/web/js).
 
@@ -69,27 +71,32 @@ export const STREAM_QUIET_MS = 15000;
 
 export class Session {
   #post;
+  #openSocket;
   #openStream;
   #onOpen;
   #onEvent;
   #onStray;
   #onData;
   #id = null; // the session's id; null: open one with the next exchange
-  #streamOf = null; // the id of the session whose stream is open; null: none
+  #streamOf = null; // the id of the session whose socket or stream is open (or opening); null: none
+  #socket = null; // the open WebSocket; null: none (requests go with exchanges)
+  #socketRefused = false; // a socket never opened: the stream is used instead
   #nextId = 1; // request ids go on across sessions, so that a late answer never matches a newer request
   #queue = []; // {id, line} of the requests not yet posted
   #waiting = new Map(); // request id -> {resolve, reject} until its answer comes
   #partial = ""; // the start of a line a later exchange completes (a long answer comes in pieces: `objects`)
 
   /**
-   * post: (path, body) => Promise<{status, text}> (poster()). openStream: (path, signal) => a stream (streamer());
-   * null: exchanges only. onOpen(session): after each new session, before its first exchange: subscribe here.
+   * post: (path, body) => Promise<{status, text}> (poster()). openSocket: path => a WebSocket (or an object with
+   * its send, close, onopen, onmessage, onclose); null: none. openStream: (path, signal) => a stream (streamer());
+   * null: none. onOpen(session): after each new session, before its first exchange: subscribe here.
    * onEvent(event): each event, in order. onStray(line): a line that is neither an event nor the answer to a request
    * waiting (a refusal of a line the emulator could not read). onData(): after each piece of a stream was taken.
    */
-  constructor(post, {openStream = null, onOpen = () => {}, onEvent = () => {}, onStray = () => {},
+  constructor(post, {openSocket = null, openStream = null, onOpen = () => {}, onEvent = () => {}, onStray = () => {},
     onData = () => {}} = {}) {
     this.#post = post;
+    this.#openSocket = openSocket;
     this.#openStream = openStream;
     this.#onOpen = onOpen;
     this.#onEvent = onEvent;
@@ -97,7 +104,7 @@ export class Session {
     this.#onData = onData;
   }
 
-  /** Whether the session's stream is open: its answers and events come on it. */
+  /** Whether the session's socket or stream is open (or opening): its answers and events come on it. */
   get streaming() {
     return this.#streamOf !== null && this.#streamOf === this.#id;
   }
@@ -113,6 +120,10 @@ export class Session {
   /** One round trip: opens a session first if there is none, posts the queued requests, hands out what came back.
    * Rejects when the emulator cannot be reached or refuses the exchange; the next exchange tries again. */
   async exchange() {
+    if (this.#socket !== null) {
+      this.#sendQueued();
+      return;
+    }
     if (this.streaming && this.#queue.length === 0) {
       return; // nothing to ask: what the emulator has comes on the stream
     }
@@ -122,6 +133,7 @@ export class Session {
         throw failure(opened);
       }
       this.#id = JSON.parse(opened.text).session;
+      this.#socketRefused = false; // a new session tries its WebSocket again
       const queued = this.#queue;
       this.#queue = [];
       this.#onOpen(this); // its requests (subscribe) go before those queued while there was no session
@@ -154,17 +166,22 @@ export class Session {
   }
 
   /**
-   * Opens the session's stream and takes what comes on it until it ends: the emulator ended it (the session
-   * ended), the connection broke, nothing came for quietMs, or a newer session replaced this one. Resolves then
-   * (the exchanges carry everything again); rejects when the stream was refused. Does nothing without a session or
-   * a way to stream, or when the stream is open already.
+   * Opens the session's WebSocket (or, where none opened before, its stream) and takes what comes on it until it
+   * ends: the emulator ended it (the session ended), the connection broke, nothing came for quietMs, or a newer
+   * session replaced this one. Resolves then (the exchanges carry everything again); rejects when it was refused.
+   * Does nothing without a session or a way to open either, or when one is open already.
    */
   async listen({quietMs = STREAM_QUIET_MS} = {}) {
-    if (this.#openStream === null || this.#id === null || this.streaming) {
+    const socket = this.#openSocket !== null && !this.#socketRefused;
+    if ((!socket && this.#openStream === null) || this.#id === null || this.streaming) {
       return;
     }
     const id = this.#id;
     this.#streamOf = id;
+    if (socket) {
+      await this.#listenSocket(id, quietMs);
+      return;
+    }
     const ending = new AbortController();
     let quiet = setTimeout(() => ending.abort(), quietMs);
     try {
@@ -191,6 +208,70 @@ export class Session {
       if (this.#streamOf === id) {
         this.#streamOf = null;
       }
+    }
+  }
+
+  /** The WebSocket's life: requests out as messages once it is open, lines in as they come. */
+  #listenSocket(id, quietMs) {
+    return new Promise((resolve, reject) => {
+      let socket;
+      try {
+        socket = this.#openSocket(`/api/session/${id}/socket`);
+      } catch (error) { // no WebSocket here (a policy forbids it)
+        this.#socketRefused = true;
+        this.#streamOf = null;
+        reject(error);
+        return;
+      }
+      let opened = false;
+      let quiet = null;
+      const rearm = () => {
+        clearTimeout(quiet);
+        quiet = setTimeout(() => socket.close(), quietMs);
+      };
+      rearm();
+      socket.onopen = () => {
+        opened = true;
+        if (this.#id !== id) {
+          socket.close();
+          return;
+        }
+        this.#socket = socket;
+        this.#sendQueued();
+      };
+      socket.onmessage = (message) => {
+        if (this.#id !== id) {
+          socket.close(); // lines of a session that ended
+          return;
+        }
+        rearm();
+        this.#takeText(message.data);
+        this.#onData();
+      };
+      socket.onclose = () => {
+        clearTimeout(quiet);
+        if (this.#socket === socket) {
+          this.#socket = null;
+          this.#endPosted(new Error("no answer: the socket closed")); // they may or may not have run
+        }
+        if (this.#streamOf === id) {
+          this.#streamOf = null;
+        }
+        if (opened) {
+          resolve();
+        } else {
+          this.#socketRefused = true;
+          reject(new Error("the WebSocket did not open"));
+        }
+      };
+    });
+  }
+
+  /** The queued requests as one message on the socket. */
+  #sendQueued() {
+    if (this.#queue.length > 0) {
+      this.#socket.send(this.#queue.map((r) => r.line).join("\n"));
+      this.#queue = [];
     }
   }
 

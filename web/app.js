@@ -1,8 +1,9 @@
 // The web view of canopen-emu (docs/web.md). The page is a control-protocol client (docs/control-protocol.md) over
 // one web session: it asks `show all` once a second and takes the events nmt, boot-up, emcy and fault in between.
-// Answers and events come on the session's stream as the emulator makes them (drawn at the next animation frame);
-// every 250 ms the panels may queue requests, posted with an exchange only when some wait. Without a stream (it
-// broke, or was refused) the page exchanges every 250 ms and opens one again after STREAM_RETRY_MS. It asks
+// Every 250 ms the panels may queue requests; they go out on the session's WebSocket, and answers and events come
+// on it as the emulator makes them (drawn at the next animation frame). Where no WebSocket opens, the session's
+// stream brings answers and events and the requests are posted with an exchange; without either (broken, refused)
+// the page exchanges every 250 ms and tries again after STREAM_RETRY_MS. It asks
 // `tables` once: the kinds of protocol fault and the SDO abort texts, which the page has no copy of. The network
 // view (the overview) is drawn here; the other views are panels (below), each its own module, sharing the session
 // and the exchange loop.
@@ -59,7 +60,15 @@ function askShow() {
     .finally(() => { showAsked = false; });
 }
 
+/** The page's WebSocket to path (ws: beside http:), the token as its subprotocol (a WebSocket sends no headers). */
+function openSocket(path) {
+  const url = new URL(path, location.href);
+  url.protocol = url.protocol === "https:" ? "wss:" : "ws:";
+  return new WebSocket(url.href, [`canopen-emu.${token}`]);
+}
+
 const session = new Session(poster(token), {
+  openSocket,
   openStream: streamer(token),
   onData: () => scheduleDraw(),
   onOpen: (s) => {
@@ -154,15 +163,15 @@ for (const p of panels) {
 
 let streamTried = -Infinity; // performance.now() when the stream was last opened
 
-/** Opens the session's stream if it has none (at most once per STREAM_RETRY_MS): from then on answers and events
- * come as they are made, and an idle page posts nothing. */
+/** Opens the session's WebSocket (or stream) if it has none (at most once per STREAM_RETRY_MS): from then on
+ * answers and events come as they are made, and an idle page sends nothing. */
 function listen(ms) {
   if (session.streaming || ms - streamTried < STREAM_RETRY_MS) {
     return;
   }
   streamTried = ms;
   session.listen()
-    .catch((error) => console.warn("canopen-emu: no stream, exchanges only:", error.message))
+    .catch((error) => console.warn("canopen-emu: no WebSocket or stream:", error.message))
     .finally(scheduleDraw);
 }
 

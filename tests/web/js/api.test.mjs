@@ -286,3 +286,88 @@ test("a stream of a session that ended gives nothing more to the new one", async
   await listening;
   assert.deepEqual(seen, []);
 });
+
+/** A stand-in WebSocket: records the paths opened and the messages sent; the test opens, feeds and closes it. */
+function fakeSockets() {
+  const made = [];
+  const open = (path) => {
+    const socket = {path, sent: [], closed: false, onopen: null, onmessage: null, onclose: null,
+      send(text) { this.sent.push(text); },
+      close() { if (!this.closed) { this.closed = true; this.onclose?.({code: 1000}); } }};
+    made.push(socket);
+    return socket;
+  };
+  return {open, made};
+}
+
+test("with the WebSocket open, requests go out on it, answers and events come on it, nothing is posted", async () => {
+  const sockets = fakeSockets();
+  const api = fakeApi([opened("s1"), lines(), lines(), lines()]);
+  const seen = [];
+  let data = 0;
+  const session = new Session(api.post, {openSocket: sockets.open, onEvent: (e) => seen.push(e.node),
+    onData: () => { data++; }});
+  await session.exchange(); // opens s1
+  const listening = session.listen();
+  assert.equal(session.streaming, true);
+  const socket = sockets.made[0];
+  assert.equal(socket.path, "/api/session/s1/socket");
+  const early = session.request("hello");
+  await session.exchange(); // not open yet: posted
+  assert.deepEqual(api.posts.map((p) => p.body), ["", "", '{"id":1,"cmd":"hello"}']);
+  const queued = session.request("show", {node: 16});
+  socket.onopen();
+  assert.deepEqual(socket.sent, ['{"id":2,"cmd":"show","node":16}']); // what waited goes at once
+  socket.onmessage({data: '{"id":1,"ok":true}\n{"event":"nmt","node":16}\n{"id":2,'});
+  socket.onmessage({data: '"ok":true}\n\n'});
+  assert.deepEqual(await early, {id: 1, ok: true});
+  assert.deepEqual(await queued, {id: 2, ok: true});
+  assert.deepEqual(seen, [16]);
+  assert.equal(data, 2);
+  const third = session.request("list");
+  const fourth = session.request("hello");
+  await session.exchange(); // on the socket, as one message; no post
+  assert.deepEqual(socket.sent.slice(1), ['{"id":3,"cmd":"list"}\n{"id":4,"cmd":"hello"}']);
+  assert.equal(api.posts.length, 3);
+  await session.exchange(); // nothing queued: nothing sent
+  assert.equal(socket.sent.length, 2);
+  socket.onmessage({data: '{"id":3,"ok":true}\n'});
+  assert.deepEqual(await third, {id: 3, ok: true});
+  socket.close(); // the emulator closed it: what it did not answer fails, the exchanges carry everything again
+  await assert.rejects(fourth, {message: "no answer: the socket closed"});
+  await listening;
+  assert.equal(session.streaming, false);
+  await session.exchange();
+  assert.equal(api.posts.length, 4);
+});
+
+test("a WebSocket that does not open: the stream is used instead, until a new session", async () => {
+  const sockets = fakeSockets();
+  const stream = fakeStream();
+  const api = fakeApi([opened("s1"), lines()]);
+  const session = new Session(api.post, {openSocket: sockets.open, openStream: stream.open});
+  await session.exchange();
+  const first = session.listen();
+  sockets.made[0].close(); // refused: closed before it opened
+  await assert.rejects(first, {message: "the WebSocket did not open"});
+  assert.equal(session.streaming, false);
+  const second = session.listen();
+  assert.deepEqual(stream.opened.map((o) => o.path), ["/api/session/s1/stream"]);
+  assert.equal(sockets.made.length, 1);
+  stream.end();
+  await second;
+});
+
+test("a WebSocket silent for quietMs is closed and the exchanges carry everything again", async () => {
+  const sockets = fakeSockets();
+  const api = fakeApi([opened("s1"), lines(), lines()]);
+  const session = new Session(api.post, {openSocket: sockets.open});
+  await session.exchange();
+  const quiet = session.listen({quietMs: 20});
+  sockets.made[0].onopen();
+  await quiet; // the watchdog closed it
+  assert.equal(sockets.made[0].closed, true);
+  assert.equal(session.streaming, false);
+  await session.exchange();
+  assert.equal(api.posts.length, 3);
+});
