@@ -3,8 +3,10 @@
 control-socket client subscribed to every frame, and a web session with the trace's subscription
 (docs/control-protocol.md, docs/web.md). Standard library only.
 """
+import base64
 import http.client
 import json
+import os
 import queue
 import re
 import socket
@@ -132,10 +134,12 @@ class ControlWatcher:
 
 class WebWatcher:
     """A web session with the trace's subscription (every 11-bit and 29-bit frame), its events taken from the
-    session's stream as the page takes them (docs/web.md): a thread reads it; tick() has nothing to do."""
+    session's WebSocket as the page takes them (docs/web.md): a thread reads it; tick() has nothing to do.
+    request(): a request over the socket, its answer awaited; exchange(): an HTTP exchange of the session."""
 
     def __init__(self, port):
-        self.lock = threading.Lock()
+        self.port = port
+        self.lock = threading.Condition()
         deadline = time.monotonic() + 60
         while True:
             try:
@@ -151,50 +155,81 @@ class WebWatcher:
         self.session = json.loads(self.post("/api/session", ""))["session"]
         self.events = 0
         self.exchanges = 0
+        self.answered = set()  # ids of the answers that came on the socket
         answer = self.exchange('{"id":1,"cmd":"subscribe","events":["frame"],'
                                '"frames":["0x000/0x000","0x00000000x/0x0"]}')
         while '"id":1' not in answer:
             answer = self.exchange("")
         if '"ok":true' not in answer:
             raise BenchError(f"web subscribe refused: {answer}")
-        self.stream = socket.create_connection(("127.0.0.1", port), timeout=600)
-        self.stream.sendall(f"POST /api/session/{self.session}/stream HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
-                            f"X-Canopen-Emu: {self.token}\r\nContent-Length: 0\r\n\r\n".encode())
-        self.reader = threading.Thread(target=self._read_stream, daemon=True)
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=600)
+        key = base64.b64encode(os.urandom(16)).decode()
+        self.sock.sendall(f"GET /api/session/{self.session}/socket HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+                          f"Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+                          f"Sec-WebSocket-Key: {key}\r\nOrigin: http://127.0.0.1:{port}\r\n"
+                          f"Sec-WebSocket-Protocol: canopen-emu.{self.token}\r\n\r\n".encode())
+        head = b""
+        while b"\r\n\r\n" not in head:
+            piece = self.sock.recv(1)  # byte by byte: the frames after the head are the reader's
+            if not piece:
+                raise BenchError("web: the socket closed during its handshake")
+            head += piece
+        if not head.startswith(b"HTTP/1.1 101 "):
+            raise BenchError(f"web: the socket was refused: {head[:200]!r}")
+        self.reader = threading.Thread(target=self._read_socket, daemon=True)
         self.reader.start()
 
-    def _read_stream(self):
-        """The chunked answer's body, counted: every frame event in it (a line is never split by the count)."""
-        buf = b""
+    def _recv_exact(self, n):
+        data = b""
+        while len(data) < n:
+            piece = self.sock.recv(n - len(data))
+            if not piece:
+                raise EOFError
+            data += piece
+        return data
+
+    def _read_socket(self):
+        """The server's frames (RFC 6455, never masked): text messages counted and their answers noted."""
+        text = b""
         try:
-            while b"\r\n\r\n" not in buf:
-                piece = self.stream.recv(65536)
-                if not piece:
-                    return
-                buf += piece
-            head, buf = buf.split(b"\r\n\r\n", 1)
-            if not head.startswith(b"HTTP/1.1 200"):
-                return
-            body = b""
             while True:
-                piece = self.stream.recv(65536)
-                if not piece:
+                b0, b1 = self._recv_exact(2)
+                n = b1 & 0x7F
+                if n == 126:
+                    n = struct.unpack(">H", self._recv_exact(2))[0]
+                elif n == 127:
+                    n = struct.unpack(">Q", self._recv_exact(8))[0]
+                payload = self._recv_exact(n)
+                opcode = b0 & 0x0F
+                if opcode == 0x8:
                     return
-                buf += piece
-                while b"\r\n" in buf:
-                    size_line, rest = buf.split(b"\r\n", 1)
-                    size = int(size_line.split(b";")[0], 16)
-                    if len(rest) < size + 2:
-                        break
-                    body += rest[:size]
-                    buf = rest[size + 2:]
-                    if size == 0:
-                        return
-                *lines, body = body.split(b"\n")
-                with self.lock:
-                    self.events += sum(line.count(b'"event":"frame"') for line in lines)
-        except OSError:
+                if opcode in (0x0, 0x1):
+                    text += payload
+                    if b0 & 0x80:
+                        lines = text.split(b"\n")
+                        text = b""
+                        with self.lock:
+                            self.events += sum(line.count(b'"event":"frame"') for line in lines)
+                            self.answered.update(int(m.group(1)) for line in lines
+                                                 for m in [re.match(rb'\{"id":(\d+),', line)] if m)
+                            self.lock.notify_all()
+        except (EOFError, OSError):
             return
+
+    def send(self, text):
+        """A text message as a browser sends it: masked."""
+        data = text.encode()
+        mask = os.urandom(4)
+        n = len(data)
+        head = bytes([0x81]) + (bytes([0x80 | n]) if n < 126 else bytes([0x80 | 126]) + struct.pack(">H", n))
+        self.sock.sendall(head + mask + bytes(b ^ mask[k % 4] for k, b in enumerate(data)))
+
+    def request(self, ident, line):
+        """line (a JSON request with this id) over the socket; returns once its answer came on it."""
+        self.send(line)
+        with self.lock:
+            if not self.lock.wait_for(lambda: ident in self.answered, timeout=120):
+                raise BenchError(f"web: no answer to request {ident} on the socket")
 
     def post(self, path, body):
         self.conn.request("POST", path, body=body.encode(), headers={"X-Canopen-Emu": self.token})
@@ -212,13 +247,13 @@ class WebWatcher:
         return data
 
     def tick(self):
-        pass  # the events come on the stream: a page exchanges only when it asks something
+        pass  # the events come on the socket: a page sends only when it asks something
 
     def close(self):
-        """After the program ended: its stream has ended too, every event of it counted."""
+        """After the program ended: its socket has ended too, every event of it counted."""
         self.conn.close()
         self.reader.join(timeout=60)
-        self.stream.close()
+        self.sock.close()
 
 
 def free_port():

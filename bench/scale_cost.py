@@ -18,9 +18,12 @@ the idle exchange. Phases, in this order in every run:
 - heartbeat: 0x1017 = 10 ms x N on every node, written 10 ms apart (100 heartbeats a second in all, evenly; the
   run without writes 0 instead), a dump, the hold (the phase compared; the events are the heartbeats this script
   received in it), a dump, then 0x1017 = 0 on every node;
-- web: (web only) exchanges that carry nothing, what a page without its stream makes every 250 ms.
+- web: (web only) HTTP exchanges that carry nothing, what a page without its WebSocket or stream makes every 250 ms;
+- web_message: (web only) empty messages on the session's WebSocket, 3 ms apart (a message with nothing to ask);
+- web_request: (web only) requests on the WebSocket, a `get` of one object (0x1017 of node 1) each, the next after
+  the answer came on it: what the page's views send every 250 ms.
 
-A web session takes its events from its stream (docs/web.md), as the page does, read by a thread; a control-socket
+A web session takes its events from its WebSocket (docs/web.md), as the page does, read by a thread; a control-socket
 client is read by a thread too (the bus and the watchers: bench/scale_clients.py). So the difference of a phase is
 the events' own cost, their delivery included.
 Standard library only.
@@ -41,12 +44,12 @@ NOBODY = 0x7F0  # a COB-ID no node of the Bürkert flow controller takes
 GAP_S = 0.003
 EXCHANGE_EVERY = 25  # steps of a phase between two exchanges of the web session
 SIZES = {"full": dict(sdo=1000, frame=1000, hold_s=5.0, web=200),
-         "quick": dict(sdo=100, frame=100, hold_s=3.0, web=40)}
+         "quick": dict(sdo=100, frame=100, hold_s=3.0, web=40)}  # web: also the messages and requests
 SETUPS = {  # name: (nodes, watcher)
     "n1": (1, None), "n32": (32, None), "n64": (64, None), "n127": (127, None),
     "n127_control": (127, "control"), "n127_web": (127, "web"),
 }
-COMPARED = ("sdo", "frame", "heartbeat", "web")  # the phases whose difference is a row
+COMPARED = ("sdo", "frame", "heartbeat", "web", "web_message", "web_request")  # the phases whose difference is a row
 
 
 def callgrind_totals(path):
@@ -182,6 +185,18 @@ class Run:
                 self.watcher.exchange("")
             self.pace("web", k + 1, self.sz["web"])
         self.dump("web", n)
+        for k in range(self.sz["web"]):
+            if k < n:
+                self.watcher.send("")
+                time.sleep(GAP_S)
+            self.pace("web_message", k + 1, self.sz["web"])
+        self.dump("web_message", n)
+        for k in range(self.sz["web"]):
+            if k < n:
+                ident = 1000 + k
+                self.watcher.request(ident, f'{{"id":{ident},"cmd":"get","node":1,"object":"0x1017"}}')
+            self.pace("web_request", k + 1, self.sz["web"])
+        self.dump("web_request", n)
 
     def finish(self):
         self.proc.send_signal(signal.SIGTERM)
@@ -226,7 +241,7 @@ def measure(emu, work, name, sz, log=print):
         tag = f"{name}_{'k' if with_events else '0'}"
         r = Run(emu, work, tag, nodes, watcher, with_events, sz)
         if not with_events:
-            r.paced = {p: took for p, took in paced.items() if p in ("sdo", "frame", "web")}
+            r.paced = {p: took for p, took in paced.items() if p in ("sdo", "frame", "web", "web_message", "web_request")}
         runs[with_events] = r.run()
         paced = r.took
         command = r.command

@@ -58,17 +58,21 @@ def test_one_node_rows(tmp_path):
 
 
 def test_web_watcher_rows(tmp_path, monkeypatch):
-    """Two nodes and a web session tracing every frame: the session got every frame as an event (the requests and
-    the answers), each costs the emulator a thousand instructions and more, and the idle exchange has its row."""
+    """Two nodes and a web session tracing every frame on its WebSocket: the session got every frame as an event
+    (the requests and the answers), each costs the emulator a thousand instructions and more; the empty HTTP
+    exchange, the empty message and the request on the socket have their rows, the message far below the exchange."""
     need_callgrind()
     monkeypatch.setitem(scale_cost.SETUPS, "n2_web", (2, "web"))
     res = scale_cost.measure(EMU, str(tmp_path), "n2_web", SMALL, log=lambda s: None)
     rows = res["rows"]
-    assert set(rows) == {"sdo", "frame", "heartbeat", "web"}
+    assert set(rows) == {"sdo", "frame", "heartbeat", "web", "web_message", "web_request"}
     assert res["watcher_frame_events"] >= 2 * SMALL["sdo"] + SMALL["frame"]
     assert rows["frame"]["ir_per_event"] > 1000, rows["frame"]  # the event's writing and delivery: thousands
-    assert rows["sdo"]["ir_per_event"] > 2 * rows["frame"]["ir_per_event"] * 0.8, rows
+    assert rows["sdo"]["ir_per_event"] > rows["frame"]["ir_per_event"], rows  # two events and the node's work
     assert rows["web"]["events"] == SMALL["web"] and rows["web"]["ir_per_event"] > 10000, rows["web"]
+    assert rows["web_message"]["events"] == SMALL["web"], rows["web_message"]
+    assert 300 < rows["web_message"]["ir_per_event"] < rows["web"]["ir_per_event"] / 4, rows
+    assert rows["web_request"]["ir_per_event"] > rows["web_message"]["ir_per_event"], rows  # a command's work more
 
 
 FIGURES = {"sizes": scale_cost.SIZES["full"], "setups": {
