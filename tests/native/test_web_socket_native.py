@@ -9,6 +9,7 @@ Environment (tests/native/CMakeLists.txt): CO_SOURCE_DIR, CO_EMU_FAKECAN, CO_SAN
 """
 
 import json
+import random
 import threading
 import time
 
@@ -83,10 +84,13 @@ class Socket:
         return self.closed
 
     def close(self):
+        """As a page closes it: a close frame, then the connection ends (websocket-client's close() leaves the
+        connection open when its reader saw the emulator's close frame first)."""
         try:
-            self.ws.close()
+            self.ws.close(timeout=1)
         except (websocket.WebSocketException, OSError):
             pass
+        self.ws.shutdown()
 
 
 def answered(lines, ident):
@@ -230,3 +234,33 @@ def test_a_second_socket_ends_the_first_and_a_socket_ends_the_stream(emu):
     assert answered(first.lines(), 1) == []
     for s in (stream, first, second):
         s.close()
+
+
+def test_hostile_frames_close_that_socket_and_harm_nothing_else(emu):
+    """Bytes that are no valid frames (random ones, an unmasked frame, a length of 2^63, a control frame of 200
+    bytes, a fragment without its start, a reserved opcode), each after a good handshake: the socket is closed (or
+    waits for more until the page closes it), the program goes on, no connection is left behind (afterwards 8
+    sockets, the limit of one address, open at once) and a socket of the same session works (the ASan+UBSan build
+    checks the memory)."""
+    rng = random.Random(36)
+    session = emu.open_session()
+    blobs = [bytes(rng.randrange(256) for _ in range(rng.randrange(1, 300))) for _ in range(40)]
+    blobs += [b"\x81\x05hello",  # unmasked: a client's frames must be masked
+              b"\x81\xff" + (1 << 63).to_bytes(8, "big") + b"\x00" * 4,  # a length beyond any bound
+              b"\x89\xfe\x00\xc8" + b"\x00" * 4 + b"p" * 200,  # a ping of 200 bytes (control frames: 125 at most)
+              b"\x80\x85" + b"\x00" * 4 + b"x" * 5,  # a continuation without a start
+              b"\x83\x80" + b"\x00" * 4]  # a reserved opcode
+    for k in range(0, len(blobs), 4):  # four at a time: one address may hold 8 connections
+        sockets = [Socket(emu, session) for _ in blobs[k:k + 4]]
+        for socket, blob in zip(sockets, blobs[k:k + 4]):
+            socket.ws.sock.sendall(blob)
+        for socket in sockets:
+            socket.wait_closed(timeout=0.3)  # closed, or still waiting for the rest of a frame
+            socket.close()
+        time.sleep(0.2)
+    assert emu.proc.poll() is None
+    sockets = [Socket(emu, emu.open_session()) for _ in range(7)] + [Socket(emu, session)]
+    sockets[-1].send('{"id":1,"cmd":"hello"}')
+    sockets[-1].wait(lambda ls: answered(ls, 1), what="the answer after the hostile frames")
+    for socket in sockets:
+        socket.close()
