@@ -133,16 +133,25 @@ static inline short can_channel_poll_events(const can_channel_t *c, bool tx_pend
     if (c->kind == CAN_CHANNEL_SOCKETCAN) {
         return socketcan_poll_events(&c->socketcan, tx_pending);
     }
+    if (c->kind == CAN_CHANNEL_UDP_MULTICAST && udp_multicast_poll_out(&c->udp)) {
+        return POLLIN | POLLOUT; /* the batch waits for room (a node's retried frame comes after it) */
+    }
     return POLLIN;
 }
 
-/** Once per pass of the main loop (socketcan_service, udp_multicast_service): the next time it wants to run. */
+/** Once per pass of the main loop, after the bus's nodes ran (socketcan_service; udp_multicast_tx_service, which sends
+ *  the pass's frames, and udp_multicast_service): the next time it wants to run. */
 static inline co_time_us_t can_channel_service(can_channel_t *c, co_time_us_t now)
 {
     if (c->kind == CAN_CHANNEL_SOCKETCAN) {
         return socketcan_service(&c->socketcan, now);
     }
-    return c->kind == CAN_CHANNEL_UDP_MULTICAST ? udp_multicast_service(&c->udp, now) : CO_NEVER;
+    if (c->kind != CAN_CHANNEL_UDP_MULTICAST) {
+        return CO_NEVER;
+    }
+    const co_time_us_t retry = udp_multicast_tx_service(&c->udp, now);
+    const co_time_us_t summary = udp_multicast_service(&c->udp, now);
+    return retry < summary ? retry : summary;
 }
 
 /** Logs what is counted and not reported yet (call before exit). */

@@ -423,6 +423,7 @@ int udp_multicast_open(udp_multicast_t *u, const udp_multicast_config_t *cfg, co
 
 void udp_multicast_close(udp_multicast_t *u)
 {
+    udp_multicast_flush(u); /* what the last pass sent, as far as the socket takes it */
     if (u->rx_fd >= 0) {
         (void)close(u->rx_fd);
         u->rx_fd = -1;
@@ -431,43 +432,6 @@ void udp_multicast_close(udp_multicast_t *u)
         (void)close(u->tx_fd);
         u->tx_fd = -1;
     }
-}
-
-co_status_t udp_multicast_send(udp_multicast_t *u, const co_frame_t *frame)
-{
-    uint8_t datagram[256];
-    struct timespec ts;
-    (void)clock_gettime(CLOCK_REALTIME, &ts); /* python-can's time stamps are time.time() */
-    const size_t n = udp_datagram_encode(frame, (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9, datagram,
-                                         sizeof datagram);
-    if (n == 0U) {
-        /* an error frame: the format has python-can's error messages only, and a node's error frame is not one */
-        if (u->tx_not_carried++ == 0U) {
-            logf_(u, "an error frame from a node is not put on the bus (it carries data frames only); such frames "
-                  "are counted, not logged again");
-        }
-        return CO_OK;
-    }
-    const ssize_t w = u->tx_fd >= 0 ? send(u->tx_fd, datagram, n, MSG_DONTWAIT | MSG_NOSIGNAL) : -1;
-    if (w == (ssize_t)n) {
-        u->tx_frames++;
-        if (u->tx_failing) {
-            u->tx_failing = false;
-            logf_(u, "sending works again (%lu frame(s) lost)", u->tx_lost);
-        }
-        return CO_OK;
-    }
-    const int e = u->tx_fd >= 0 ? errno : EBADF;
-    if (e == EAGAIN || e == EWOULDBLOCK || e == ENOBUFS || e == EINTR) {
-        return CO_ERR_BUSY; /* the socket's buffer is full: the core keeps the frame and retries */
-    }
-    u->tx_lost++;
-    if (!u->tx_failing) {
-        u->tx_failing = true;
-        logf_(u, "cannot send to group %s on %s: %s; frames are lost until it works again", u->cfg.group_text,
-              u->ifname, strerror(e));
-    }
-    return CO_ERR_IO;
 }
 
 /* Points each message of the read-ahead at its buffer, sender and control space; the kernel changes the lengths of

@@ -37,6 +37,12 @@
 
 /** Datagrams one system call reads ahead (recvmmsg), as SOCKETCAN_RX_BATCH. */
 #define UDP_MULTICAST_RX_BATCH 8U
+/** Datagrams one system call sends (sendmmsg): the frames a pass of the bus's nodes sent, at most this many a call. */
+#define UDP_MULTICAST_TX_BATCH 64U
+/** Room for one datagram of a classic CAN frame in python-can's format (about 150 bytes). */
+#define UDP_MULTICAST_TX_DATAGRAM 256U
+/** A batch the socket did not take for a reason POLLOUT does not report (ENOBUFS) is tried again this much later. */
+#define UDP_MULTICAST_TX_RETRY_US 1000U
 
 typedef void (*udp_multicast_log_fn)(void *ctx, const char *line);
 
@@ -69,7 +75,8 @@ typedef struct udp_multicast {
     udp_multicast_log_fn log;
     void *log_ctx;
     unsigned long tx_frames;        /**< datagrams sent */
-    unsigned long tx_lost;          /**< frames lost: a send failed other than for a full buffer */
+    unsigned long tx_lost;          /**< frames lost: a send failed other than for a full buffer (never counted
+                                         by the node: it failed after the node's send returned, in the flush) */
     bool tx_failing;                /**< sends fail (reported once, and their end) */
     unsigned long tx_not_carried;   /**< error frames the nodes sent: not put on the bus */
     unsigned long rx_frames;        /**< frames read from the bus for the nodes */
@@ -97,6 +104,13 @@ typedef struct udp_multicast {
     unsigned rx_next;
     unsigned rx_count;
     bool rx_drained;
+    /* The batch: tx_buf[0..tx_count) encoded and not sent yet, in the order sent; tx_blocked: the last flush found
+     * the socket's buffer full (EAGAIN: POLLOUT tells when to go on). */
+    uint8_t tx_buf[UDP_MULTICAST_TX_BATCH][UDP_MULTICAST_TX_DATAGRAM];
+    struct iovec tx_iov[UDP_MULTICAST_TX_BATCH];
+    struct mmsghdr tx_msgs[UDP_MULTICAST_TX_BATCH];
+    unsigned tx_count;
+    bool tx_blocked;
 } udp_multicast_t;
 
 /** Opens both sockets and joins the group; logs where (LOG through log). 0, or an errno with a message in err. */
@@ -104,8 +118,19 @@ int udp_multicast_open(udp_multicast_t *u, const udp_multicast_config_t *cfg, co
                        udp_multicast_log_fn log, void *log_ctx, char *err, size_t errlen);
 void udp_multicast_close(udp_multicast_t *u);
 
-/** co_port_t.send's work for this bus: one datagram. CO_ERR_BUSY when the send buffer is full (the core retries). */
+/** co_port_t.send's work for this bus: the frame's datagram joins the batch, which udp_multicast_tx_service sends at
+ *  the end of the pass (one sendmmsg for up to UDP_MULTICAST_TX_BATCH: a system call per frame was a seventh of the
+ *  emulator's time at 8 x 127 nodes). A full batch is sent first; CO_ERR_BUSY when the socket's buffer does not take
+ *  it either (the core keeps the frame and retries). A datagram the socket refuses for good (no route) is lost at
+ *  the flush, counted in tx_lost and logged. (udp_multicast_tx.c) */
 co_status_t udp_multicast_send(udp_multicast_t *u, const co_frame_t *frame);
+/** Sends the batch, in order, as far as the socket's buffer takes it. */
+void udp_multicast_flush(udp_multicast_t *u);
+/** Once per pass, after the bus's nodes ran: udp_multicast_flush; then the time to try again, CO_NEVER when all went
+ *  or POLLOUT is to tell (udp_multicast_poll_out). */
+co_time_us_t udp_multicast_tx_service(udp_multicast_t *u, co_time_us_t now);
+/** The batch waits for room in the socket's buffer: poll for POLLOUT. */
+static inline bool udp_multicast_poll_out(const udp_multicast_t *u) { return u->tx_blocked && u->tx_count > 0U; }
 
 /** Reads one frame for the nodes: 1 = a frame, 0 = none waiting. Datagrams that are not one are counted (above);
  *  `now` times the summary of malformed ones. */
