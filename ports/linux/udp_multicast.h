@@ -91,6 +91,7 @@ typedef struct udp_multicast {
     unsigned long rx_dropped;       /**< datagrams the kernel dropped (receive buffer full) */
     unsigned long rx_dropped_reported;
     uint32_t rx_overflow_socket;    /**< the socket's own count (SO_RXQ_OVFL), from 0 at open */
+    unsigned long rx_kernel_drops;  /**< all the kernel counted: rx_dropped and the own datagrams drop_own refused */
     /* Read ahead: rx_buf[rx_next..rx_count) not returned yet; rx_drained: the call that read them got fewer than a
      * batch. The messages point into this struct: set up again when it is found moved (as socketcan_t). */
     uint8_t rx_buf[UDP_MULTICAST_RX_BATCH][UDP_DATAGRAM_MAX];

@@ -149,6 +149,8 @@ static void test_ipv4_own_datagrams_are_dropped_by_the_kernel_others_arrive(void
     TEST_ASSERT_EQUAL_UINT32(0x601U + 0x602U, ids);
     TEST_ASSERT_EQUAL_UINT32(0U, (uint32_t)u.rx_own); /* none queued, read and skipped */
     TEST_ASSERT_EQUAL_UINT32(50U, (uint32_t)u.tx_frames);
+    /* the kernel counts the 50 as drops: not losses; the forged one, which this bus never sent, is one */
+    TEST_ASSERT_EQUAL_UINT32(1U, (uint32_t)u.rx_dropped);
     udp_multicast_close(&u);
 }
 
@@ -167,6 +169,34 @@ static void test_ipv6_own_datagrams_are_dropped_by_the_kernel_others_arrive(void
     TEST_ASSERT_EQUAL_UINT(1U, read_frames(&u, 1U, &ids));
     TEST_ASSERT_EQUAL_UINT32(0x603U, ids);
     TEST_ASSERT_EQUAL_UINT32(0U, (uint32_t)u.rx_own);
+    TEST_ASSERT_EQUAL_UINT32(0U, (uint32_t)u.rx_dropped);
+    udp_multicast_close(&u);
+}
+
+/* Datagrams the full receive buffer dropped are still counted as lost, the own ones the filter refused are not. */
+static void test_datagrams_lost_to_a_full_receive_buffer_are_counted_and_only_they(void)
+{
+    udp_multicast_t u;
+    open_bus(&u, ":239.74.165.8:43210,ttl=0");
+    const int tiny = 1; /* the kernel's least: a few datagrams */
+    TEST_ASSERT_EQUAL_INT(0, setsockopt(u.rx_fd, SOL_SOCKET, SO_RCVBUF, &tiny, sizeof tiny));
+    send_own(&u, 50U);
+    struct sockaddr_storage other_port;
+    memcpy(&other_port, &u.self, sizeof other_port);
+    ((struct sockaddr_in *)&other_port)->sin_port = 0U;
+    for (unsigned i = 0U; i < 40U; i++) {
+        send_foreign(&u, &other_port, sizeof(struct sockaddr_in), 0x100U + i); /* nobody reads: most are dropped */
+    }
+    uint32_t ids = 0U;
+    const unsigned first = read_frames(&u, 40U, &ids);
+    TEST_ASSERT_TRUE(first > 0U && first < 40U);
+    send_own(&u, 50U);
+    /* a drop is told with the next datagram queued after it */
+    send_foreign(&u, &other_port, sizeof(struct sockaddr_in), 0x200U);
+    const unsigned last = read_frames(&u, 1U, &ids);
+    TEST_ASSERT_EQUAL_UINT(1U, last);
+    TEST_ASSERT_EQUAL_UINT32(41U - first - last, (uint32_t)u.rx_dropped);
+    TEST_ASSERT_EQUAL_UINT32(100U, (uint32_t)u.tx_frames);
     udp_multicast_close(&u);
 }
 
@@ -175,5 +205,6 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_ipv4_own_datagrams_are_dropped_by_the_kernel_others_arrive);
     RUN_TEST(test_ipv6_own_datagrams_are_dropped_by_the_kernel_others_arrive);
+    RUN_TEST(test_datagrams_lost_to_a_full_receive_buffer_are_counted_and_only_they);
     return UNITY_END();
 }
