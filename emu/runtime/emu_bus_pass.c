@@ -9,6 +9,7 @@
 
 #include "runtime/emu_events.h"
 #include "runtime/emu_output.h"
+#include "nvm_writer.h"
 
 /* Gives a frame to the nodes of one word of the routing table (bits: the nodes base + 0..63 that take it). */
 static inline void deliver_word(emu_bus_t *b, const co_frame_t *f, size_t base, uint64_t bits, size_t sender,
@@ -217,6 +218,7 @@ int bus_run_alone(emu_t *emu, const volatile sig_atomic_t *stop, co_time_us_t *n
          * microsecond: the time it woke at serves, and spares a clock read per frame. */
         if (ran) {
             t = socketcan_now_us();
+            nvm_writer_poll(); /* a node may have saved: see loop_run */
         }
         struct timespec ts;
         if (ppoll(&pfd, 1U, emu_poll_timeout(deadline, t, &ts), NULL) < 0) {

@@ -16,6 +16,7 @@
 #include "control/emu_socket.h"
 #include "socketcand/emu_socketcand.h"
 #include "web/emu_web.h"
+#include "nvm_writer.h"
 
 /* Control sockets listening or connected: only then has a pass their flushing, polling and servicing to do. */
 static bool sockets_in_use(const emu_sockets_t *k)
@@ -109,6 +110,9 @@ int loop_run(emu_t *emu, const volatile sig_atomic_t *stop)
             pfd[i].revents = 0;
         }
         nfds = (nfds_t)emu->n_buses;
+        /* The NVM files' background commits the kernel finished: their files closed, a blob waiting for one started.
+         * Nothing in flight (nearly always): one counter read, no system call. */
+        nvm_writer_poll();
         const co_time_us_t script_at = script_next_at(&emu->script);
         if (script_at != CO_NEVER && emu->start + script_at < next) {
             next = emu->start + script_at;

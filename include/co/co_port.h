@@ -72,12 +72,13 @@ typedef struct co_port {
      *
      * CO_NVM_BACKGROUND in total_len (never with CO_NVM_MORE; the core never sets it): a device model's save of
      * its own data (CO_NVM_DEVICE: an operating-time counter, a drag indicator) that no answer waits for. The port
-     * may return before the blob is durable and make it durable later (another thread, an idle moment), each
-     * area's blobs in the order committed; a later nvm_read() sees the newest blob at once, and a commit without
-     * the flag (a store someone waits for) of the same node lands after it. A background write that fails leaves
-     * the area's old blob and is reported by a later commit of that area (the port says which: the Linux files,
-     * the next background commit). A port that cannot write later masks the flag off and commits at once, as it
-     * does when a store of several areas is open (it then ends that store, as any commit without CO_NVM_MORE).
+     * may return before the blob is durable and make it durable later (the kernel's asynchronous I/O, an idle
+     * moment), each area's blobs in the order committed; a later nvm_read() sees the newest blob at once, and a
+     * commit without the flag (a store someone waits for) of the same node lands after it. A background write that
+     * fails leaves the area's old blob and is reported by that commit when found before it returns, else by a
+     * later commit of that area (the port says which: the Linux files, the next background commit). A port that
+     * cannot write later masks the flag off and commits at once, as it does when a store of several areas is open
+     * (it then ends that store, as any commit without CO_NVM_MORE).
      * NULL with nvm_write.
      */
     co_status_t (*nvm_commit)(void *ctx, co_nvm_area_t area, uint32_t total_len);

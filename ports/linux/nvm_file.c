@@ -59,8 +59,6 @@ int nvm_file_check_dir(const char *dir, char *err, size_t errlen)
     return e;
 }
 
-static bool write_background(nvm_writer_client_t *c, int area, const uint8_t *blob, size_t len);
-
 /* Largest blob an area takes: the core's parameter blob is at most 16 + 64 KiB. */
 #define NVM_FILE_MAX (1UL << 20)
 
@@ -84,7 +82,10 @@ int nvm_file_open(nvm_file_t *n, const char *dir, const char *key, char *err, si
         return ENAMETOOLONG;
     }
     n->dir_fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    n->writer.write = write_background;
+    for (int a = 0; a < 3; a++) {
+        n->writer.path[a] = n->path[a];
+    }
+    n->writer.dir_fd = n->dir_fd;
     nvm_store_recover(n);
     return 0;
 }
@@ -143,18 +144,11 @@ co_status_t nvm_file_write(void *ctx, co_nvm_area_t area, uint32_t offset, const
     return CO_OK;
 }
 
-/* The writer thread's half of a background commit (nvm_store_replace): the loop's thread touches the node's
- * temporary files only after waiting for its jobs (nvm_file_flush). */
-static bool write_background(nvm_writer_client_t *c, int area, const uint8_t *blob, size_t len)
-{
-    return nvm_store_replace((const nvm_file_t *)(const void *)((const char *)c - offsetof(nvm_file_t, writer)), area,
-                             blob, len);
-}
-
 static bool store_open(const nvm_file_t *n) { return n->pending[0] || n->pending[1] || n->pending[2]; }
 
-/* Hands the staged blob to the writer thread. CO_ERR_BUSY: not handed over (the queue is full), the staged blob is
- * still there for a commit at once. */
+/* Hands the staged blob to the writer (nvm_writer.h). CO_ERR_BUSY: not handed over (no io_uring, or the queue is
+ * full), the staged blob is still there for a commit at once. The node's temporary files are the writer's until
+ * nvm_file_flush() has waited for its jobs. */
 static co_status_t commit_background(nvm_file_t *n, co_nvm_area_t area, uint32_t len)
 {
     nvm_staging_t *s = &n->staging[area];
@@ -170,7 +164,8 @@ static co_status_t commit_background(nvm_file_t *n, co_nvm_area_t area, uint32_t
     }
     s->active = false;
     if (r == NVM_WRITER_FAILED) {
-        return CO_ERR_IO; /* an earlier background write of the area failed: its file is the blob before it */
+        return CO_ERR_IO; /* an earlier background write of the area failed, or this one could not start: its file is
+                             the blob before it */
     }
     memcpy(n->newest[area].buf, s->buf, len);
     n->newest[area].len = len;

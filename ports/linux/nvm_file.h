@@ -17,17 +17,21 @@
  * and a CI run's last nodes booted after 10 s). Every load sees the file as it is then, even one replaced
  * by hand.
  *
- * A commit with CO_NVM_BACKGROUND (co_port.h: a model's own save no answer waits for) returns at once: a copy of the
- * blob goes to the process's writer thread (nvm_writer.h), which writes it as a store of that one area (the same
- * steps: .tmp, fsync, rename, directory fsync), so its fsyncs never hold the loop. Until it is on disk, a load of
- * the area sees that blob (the newest handed over), not the file. Order per node is kept: a commit without the flag
- * (a 0x1010 or LSS store, an answer waiting for it), a discard and nvm_file_close() first wait for the node's
- * background commits; a newer blob of an area replaces one that has not started. A background write that fails
- * leaves the file as it was and is answered CO_ERR_IO by the area's next background commit (that blob is not kept:
- * the model saves again later); a commit without the flag of the area forgets it. A full writer queue, and a
- * background commit while a store of several areas is open, commit at once as a port without the flag does. At exit
- * the writer carries out every commit handed over; a SIGKILL or a crash loses the ones not yet done (each area is
- * then its old blob or a newer one, never a mix).
+ * A commit with CO_NVM_BACKGROUND (co_port.h: a model's own save no answer waits for) returns before the blob is
+ * durable: it hands a copy to the process's io_uring (nvm_writer.h), and the kernel's workers do the same steps as a
+ * store of that one area ("<file>.tmp" created fresh, written, fsynced, renamed over the file, the directory
+ * fsynced), in order, a failed step cancelling the rest; so the loop waits for no disk and the process stays
+ * single-threaded, and after a crash or power loss the area is its old blob or the new one. Until the rename is done,
+ * a load of the area sees that blob (the newest handed over), not the file. Order per node is kept: a commit without
+ * the flag (a 0x1010 or LSS store, an answer waiting for it), a discard and nvm_file_close() first wait for the
+ * node's background commits; one job per area is in flight, and a newer blob replaces one waiting for it. A
+ * background commit whose file cannot be replaced (a directory or FIFO has its name) answers CO_ERR_IO at once; a
+ * failure the kernel finds later (creation, write, fsync, rename) leaves the file as it was and is answered CO_ERR_IO
+ * by the area's next background commit (that blob is not kept: the model saves again later); a commit without the
+ * flag of the area forgets it. Where no io_uring can be set up (an old kernel, a seccomp filter, User-Mode Linux),
+ * with NVM_WRITER_QUEUE jobs in flight, and while a store of several areas is open, a background commit commits at
+ * once, as a port without the flag does. At a normal exit every commit handed over is carried out; a SIGKILL or a
+ * crash loses the ones not yet done (each area is then its old blob or a newer one, never a mix).
  * Files: <dir>/<key>.params, .lss, .device.
  */
 #ifndef NVM_FILE_H
@@ -57,7 +61,7 @@ typedef struct nvm_file {
     nvm_staging_t loaded[3]; /**< the file as read by the load in progress (active: it was read) */
     nvm_staging_t newest[3]; /**< the blob of the area's last background commit: loads see it until it is written */
     int dir_fd;
-    nvm_writer_client_t writer; /**< the node's background commits (its write function runs in the writer thread) */
+    nvm_writer_client_t writer; /**< the node's background commits (nvm_writer.h) */
 } nvm_file_t;
 
 /** Prepares the files of one node (key e.g. "pro-ionizer-99") in dir, creating dir if needed.

@@ -205,17 +205,3 @@ void nvm_store_recover(nvm_file_t *n)
         sync_dir(n);
     }
 }
-
-bool nvm_store_replace(const nvm_file_t *n, int area, const uint8_t *blob, size_t len)
-{
-    char tmp[PATH_MAX + 8];
-    tmp_path(n, area, tmp, sizeof tmp);
-    if (!replaceable(n, area) || !write_synced(tmp, blob, len)) {
-        return false;
-    }
-    if (rename(tmp, n->path[area]) != 0) {
-        (void)unlink(tmp);
-        return false;
-    }
-    return sync_dir(n);
-}

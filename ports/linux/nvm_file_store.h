@@ -1,7 +1,7 @@
 /**
  * @file nvm_file_store.h
  * @brief The NVM files' transactions, for nvm_file.c only: temporary files, the journal of a store of several
- *        areas, the recovery at open, and the writer thread's replacement of one area (nvm_file.h: the guarantees).
+ *        areas, the recovery at open (nvm_file.h: the guarantees; nvm_writer.c replaces one area in the background).
  */
 #ifndef NVM_FILE_STORE_H
 #define NVM_FILE_STORE_H
@@ -17,8 +17,5 @@ void nvm_store_discard(nvm_file_t *n);
 int nvm_store_finish(nvm_file_t *n);
 /** At open: finishes a transaction a journal decided, removes the leftovers of undecided ones. */
 void nvm_store_recover(nvm_file_t *n);
-/** A store of one area from blob (the writer thread's: it reads only the paths and the directory of n, which stay
- *  as nvm_file_open() set them, and touches nothing else of n). true when durable; false: the file is as it was. */
-bool nvm_store_replace(const nvm_file_t *n, int area, const uint8_t *blob, size_t len);
 
 #endif
