@@ -13,7 +13,10 @@
  * files' fsyncs, a creation, a write (the file's times) or a rename can wait for the journal, tens of ms. Completions
  * are taken without a system call (a look at the completion ring) by nvm_writer_poll() (the loop calls it once a
  * pass: one load of a counter when nothing is in flight), by every submit and by nvm_writer_pending();
- * nvm_writer_wait() waits for them in the kernel.
+ * nvm_writer_wait() waits for them in the kernel. The kernel runs one worker of each kind for them, as one writer
+ * thread would, and its task work (posting a completion, issuing a linked request) waits for the loop's own next
+ * system call instead of interrupting it (IORING_SETUP_COOP_TASKRUN; when the ring's flag says task work waits, the
+ * poll enters the kernel once).
  *
  * One job per area is in flight (its temporary file has one name): a blob of an area whose job is in flight waits
  * in the client, and a newer blob replaces a waiting one (the older would only be overwritten); it is written when
