@@ -52,9 +52,10 @@ struct web_socket;
 #define WEB_EXCHANGE_UNITS 16U
 /** Bytes of answers and events one session may have waiting; more and it is dropped (as CLIENT_OUTPUT_MAX). */
 #define WEB_OUTPUT_MAX (1024U * 1024U)
-/** HTTP connections at once, and from one address. */
-#define WEB_CONNECTIONS_MAX 16U
-#define WEB_CONNECTIONS_PER_ADDRESS 8U
+/** HTTP connections at once, and from one address (a WebSocket counts: a browser holds up to 6 HTTP connections to
+ *  a host and one WebSocket per page, and a reloaded page's old socket may still be closing). */
+#define WEB_CONNECTIONS_MAX 24U
+#define WEB_CONNECTIONS_PER_ADDRESS 12U
 /** Seconds an idle HTTP connection stays open. */
 #define WEB_CONNECTION_TIMEOUT_S 30U
 /** Memory of one HTTP connection (request line, headers, the body as it arrives, the answer's headers):

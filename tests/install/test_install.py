@@ -248,7 +248,7 @@ def test_deb_package_fields(deb):
     assert re.search(r"\blibc6 \(>= [0-9.]+\)", fields.get("Depends", "")), fields
     assert re.search(r"\blibmicrohttpd12 \(>= [0-9.]+\)", fields["Depends"]), fields  # --web's HTTP
     assert re.search(r"\blibwslay1 \(>= [0-9.]+\)", fields["Depends"]), fields  # --web's WebSocket frames
-    assert re.search(r"\blibnettle8 \(>= [0-9.]+\)", fields["Depends"]), fields  # its handshake's SHA-1
+    assert re.search(r"\blibnettle8\b", fields["Depends"]), fields  # its handshake's SHA-1 (no version asked)
     assert re.search(r"\bliburing2 \(>= [0-9.]+\)", fields["Depends"]), fields  # the NVM files' background commits
 
 
