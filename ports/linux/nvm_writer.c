@@ -268,7 +268,9 @@ static void reap(void)
 void nvm_writer_take_completions(void)
 {
     submit_prepared();
-    if ((IO_URING_READ_ONCE(*w.ring.sq.kflags) & IORING_SQ_TASKRUN) != 0U) {
+    /* The kernel's flag word, read as liburing's IO_URING_READ_ONCE does, by the builtin: the macro casts to
+     * _Atomic, which clang refuses in C99 (-Wc11-extensions). */
+    if ((__atomic_load_n(w.ring.sq.kflags, __ATOMIC_RELAXED) & IORING_SQ_TASKRUN) != 0U) {
         (void)io_uring_get_events(&w.ring);
     }
     reap();
